@@ -1,0 +1,110 @@
+//! Assembly of the app, windowed or headless, in one place.
+
+use crate::controls::ControlsPlugin;
+use crate::raster::RasterPlugin;
+use crate::scene::{ScenePlugin, register_scene_source};
+use crate::schedule::SchedulePlugin;
+use crate::shape::ShapePlugin;
+use crate::ui::{UiPlugin, WindowCapture};
+use crate::view::ViewPlugin;
+use bevy::app::PluginGroupBuilder;
+use bevy::asset::AssetMetaCheck;
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use std::path::{Path, PathBuf};
+
+/// The fixed simulation rate, steps per second.
+pub const FIXED_HZ: f64 = 60.0;
+
+/// Where frames go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Display {
+    /// A window with the egui panel; frames follow the window's size.
+    Window,
+    /// No window: frames of `size` pixels, drawn when asked for.
+    Headless {
+        /// Framebuffer size in pixels.
+        size: UVec2,
+    },
+}
+
+/// Every Canopy plugin, for an app that already has Bevy's base plugins (and, for
+/// [`Display::Window`], a window and `bevy_egui`'s `EguiPlugin`). The scene's asset source
+/// must be registered first with [`register_scene_source`].
+pub struct CanopyPlugins {
+    /// The scene file to play.
+    pub scene: PathBuf,
+    /// Where frames go.
+    pub display: Display,
+}
+
+impl PluginGroup for CanopyPlugins {
+    fn build(self) -> PluginGroupBuilder {
+        let (size, every_frame) = match self.display {
+            Display::Window => (UVec2::new(1280, 720), true),
+            Display::Headless { size } => (size, false),
+        };
+        let group = PluginGroupBuilder::start::<Self>()
+            .add(SchedulePlugin)
+            .add(ControlsPlugin)
+            .add(ScenePlugin { path: self.scene })
+            .add(ViewPlugin)
+            .add(ShapePlugin)
+            .add(RasterPlugin { size, every_frame });
+        match self.display {
+            Display::Window => group.add(UiPlugin),
+            Display::Headless { .. } => group,
+        }
+    }
+}
+
+/// The base plugins of asset loading with our settings: no `.meta` files, watching as asked.
+fn asset_plugin(watch: bool) -> AssetPlugin {
+    AssetPlugin { meta_check: AssetMetaCheck::Never, watch_for_changes_override: Some(watch), ..default() }
+}
+
+/// A headless app playing `scene`: no window, no GPU, one fixed step per `update()`.
+///
+/// With `log`, warnings and errors are printed (Bevy's logger can be installed only once per
+/// process, so tests leave it out).
+pub fn headless_app(scene: &Path, size: UVec2, log: bool) -> std::io::Result<App> {
+    let mut app = App::new();
+    register_scene_source(&mut app, scene)?;
+    app.add_plugins((
+        bevy::app::TaskPoolPlugin::default(),
+        bevy::time::TimePlugin,
+        bevy::transform::TransformPlugin,
+        bevy::input::InputPlugin,
+        asset_plugin(false),
+    ));
+    if log {
+        app.add_plugins(bevy::log::LogPlugin { level: bevy::log::Level::WARN, ..default() });
+    }
+    app.insert_resource(Time::<Fixed>::from_hz(FIXED_HZ))
+        .insert_resource(TimeUpdateStrategy::FixedTimesteps(1))
+        .add_plugins(CanopyPlugins { scene: scene.to_path_buf(), display: Display::Headless { size } });
+    Ok(app)
+}
+
+/// A windowed app playing `scene`, hot-reloading it on change; with `capture`, it saves a
+/// screenshot of the window and exits.
+pub fn window_app(scene: &Path, capture: Option<WindowCapture>) -> std::io::Result<App> {
+    let mut app = App::new();
+    register_scene_source(&mut app, scene)?;
+    let title = format!("Canopy: {}", scene.display());
+    app.add_plugins(
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: Some(Window { title, resolution: (1280, 720).into(), ..default() }),
+                ..default()
+            })
+            .set(asset_plugin(true)),
+    )
+    .add_plugins(bevy_egui::EguiPlugin::default())
+    .insert_resource(Time::<Fixed>::from_hz(FIXED_HZ))
+    .add_plugins(CanopyPlugins { scene: scene.to_path_buf(), display: Display::Window });
+    if let Some(capture) = capture {
+        app.insert_resource(capture);
+    }
+    Ok(app)
+}

@@ -1,0 +1,187 @@
+//! The `canopy` command: play a scene in a window, run it headless, or check scene files.
+
+use bevy::math::UVec2;
+use canopy::app::{FIXED_HZ, window_app};
+use canopy::run::{RunOptions, run_headless};
+use canopy::scene::schema::SceneDef;
+use canopy::ui::WindowCapture;
+use clap::{Args, Parser, Subcommand};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// The scene played when none is named.
+const DEFAULT_SCENE: &str = "scenes/demo.yaml";
+
+/// Canopy plays interactive 3D scenes described in YAML files, drawn by a CPU rasterizer.
+#[derive(Parser, Debug)]
+#[command(name = "canopy", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Play a scene in a window with keyboard controls (the default). Without a display,
+    /// render it headless to a PNG and print where.
+    Play {
+        /// The scene file [default: scenes/demo.yaml]
+        scene: Option<PathBuf>,
+        /// Save a screenshot of the whole window to this file after `--frames` frames, then
+        /// exit.
+        #[arg(long, value_name = "OUT.png")]
+        screenshot: Option<PathBuf>,
+        /// Frames to show before the `--screenshot`.
+        #[arg(long, default_value_t = 30, requires = "screenshot")]
+        frames: u32,
+    },
+    /// Run a scene headless at a fixed 60 Hz step and write its state and last frame.
+    Run(RunArgs),
+    /// Check scene files without running them; exit 0 only if all are valid.
+    Check {
+        /// The scene files.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+    },
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Fixed steps to run [default: 60, one second].
+    #[arg(long, conflicts_with = "seconds")]
+    frames: Option<u64>,
+    /// Simulated seconds to run (rounded to whole steps).
+    #[arg(long, value_parser = parse_seconds)]
+    seconds: Option<f64>,
+    /// A timeline of scripted key presses and parameter settings (YAML).
+    #[arg(long, value_name = "TIMELINE.yaml")]
+    input: Option<PathBuf>,
+    /// Write the final state as JSON to this file.
+    #[arg(long, value_name = "STATE.json")]
+    dump: Option<PathBuf>,
+    /// Write the last frame as PNG to this file.
+    #[arg(long, value_name = "OUT.png")]
+    screenshot: Option<PathBuf>,
+    /// Frame size in pixels, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", default_value = "1280x720", value_parser = parse_size)]
+    size: UVec2,
+}
+
+fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(seconds) if seconds.is_finite() && (0.0..=1.0e6).contains(&seconds) => Ok(seconds),
+        _ => Err(format!("expected seconds from 0 to 1000000, found `{text}`")),
+    }
+}
+
+fn parse_size(text: &str) -> Result<UVec2, String> {
+    let error = || format!("expected WIDTHxHEIGHT with each from 1 to 8192, e.g. 1280x720; found `{text}`");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(error)?;
+    let (w, h) = (w.parse::<u32>().map_err(|_| error())?, h.parse::<u32>().map_err(|_| error())?);
+    if (1..=8192).contains(&w) && (1..=8192).contains(&h) { Ok(UVec2::new(w, h)) } else { Err(error()) }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command.unwrap_or(Command::Play { scene: None, screenshot: None, frames: 0 }) {
+        Command::Play { scene, screenshot, frames } => {
+            let capture = screenshot.map(|path| WindowCapture { path, after_frames: frames });
+            play(scene.unwrap_or_else(default_scene), capture)
+        }
+        Command::Run(args) => run(args),
+        Command::Check { scenes } => check(&scenes),
+    }
+}
+
+/// `scenes/demo.yaml` from the working directory, else from the source tree.
+fn default_scene() -> PathBuf {
+    let local = PathBuf::from(DEFAULT_SCENE);
+    if local.exists() { local } else { Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE) }
+}
+
+fn play(scene: PathBuf, capture: Option<WindowCapture>) -> ExitCode {
+    if !scene.is_file() {
+        eprintln!("{}: no such scene file", scene.display());
+        return ExitCode::from(1);
+    }
+    if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+        let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let out = capture.map_or_else(|| std::env::temp_dir().join(format!("canopy-{stem}.png")), |c| c.path);
+        eprintln!("no display available (DISPLAY is not set): rendering {} headless instead", scene.display());
+        let options =
+            RunOptions { scene, frames: FIXED_HZ as u64, timeline: None, size: UVec2::new(1280, 720), log: true };
+        return match run_headless(&options)
+            .map_err(|e| e.to_string())
+            .and_then(|output| output.framebuffer.save_png(&out).map_err(|e| format!("{}: {e}", out.display())))
+        {
+            Ok(()) => {
+                println!("{}", out.display());
+                ExitCode::SUCCESS
+            }
+            Err(error) => {
+                eprintln!("{error}");
+                ExitCode::from(1)
+            }
+        };
+    }
+    if let Err(error) = SceneDef::load(&scene) {
+        // The window opens anyway and shows the error until the file is fixed.
+        eprintln!("{error}");
+    }
+    match window_app(&scene, capture) {
+        Ok(mut app) => match app.run() {
+            bevy::app::AppExit::Success => ExitCode::SUCCESS,
+            bevy::app::AppExit::Error(code) => ExitCode::from(code.get()),
+        },
+        Err(error) => {
+            eprintln!("{}: {error}", scene.display());
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn run(args: RunArgs) -> ExitCode {
+    let frames = match (args.frames, args.seconds) {
+        (Some(frames), _) => frames,
+        (None, Some(seconds)) => (seconds * FIXED_HZ).round() as u64,
+        (None, None) => FIXED_HZ as u64,
+    };
+    let options = RunOptions { scene: args.scene, frames, timeline: args.input, size: args.size, log: true };
+    let output = match run_headless(&options) {
+        Ok(output) => output,
+        Err(error) => {
+            eprintln!("{error}");
+            return ExitCode::from(1);
+        }
+    };
+    if let Some(path) = &args.dump {
+        let text = serde_json::to_string_pretty(&output.dump).expect("a JSON value always serializes") + "\n";
+        if let Err(error) = std::fs::write(path, text) {
+            eprintln!("{}: cannot write the dump: {error}", path.display());
+            return ExitCode::from(1);
+        }
+    }
+    if let Some(path) = &args.screenshot
+        && let Err(error) = output.framebuffer.save_png(path)
+    {
+        eprintln!("{}: cannot write the screenshot: {error}", path.display());
+        return ExitCode::from(1);
+    }
+    ExitCode::SUCCESS
+}
+
+fn check(scenes: &[PathBuf]) -> ExitCode {
+    let mut valid = true;
+    for scene in scenes {
+        match SceneDef::load(scene) {
+            Ok(def) => println!("{}: ok ({} entities)", scene.display(), def.entities.len()),
+            Err(error) => {
+                eprintln!("{error}");
+                valid = false;
+            }
+        }
+    }
+    if valid { ExitCode::SUCCESS } else { ExitCode::from(1) }
+}

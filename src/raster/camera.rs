@@ -1,0 +1,93 @@
+//! The perspective camera and the directional light the rasterizer draws with.
+
+use bevy::math::{Mat4, Vec3};
+
+/// A perspective camera looking from `eye` towards `target`, with +y up (or +z when looking
+/// straight up or down).
+///
+/// Its projection maps the view volume to normalized device depth in `[0, 1]`: 0 at `near`,
+/// 1 at `far` (see [`FAR_DEPTH`](super::framebuffer::FAR_DEPTH)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position in world units (metres).
+    pub eye: Vec3,
+    /// The point looked at, in world units.
+    pub target: Vec3,
+    /// Vertical field of view in radians.
+    pub fov_y: f32,
+    /// Distance to the near clipping plane, > 0.
+    pub near: f32,
+    /// Distance to the far clipping plane, > `near`.
+    pub far: f32,
+}
+
+impl Camera {
+    /// The world-to-view matrix (right-handed, looking down -z).
+    pub fn view(&self) -> Mat4 {
+        let mut forward = self.target - self.eye;
+        if forward.length_squared() < 1e-12 {
+            forward = Vec3::NEG_Z;
+        }
+        let forward = forward.normalize();
+        let up = if forward.y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
+        Mat4::look_at_rh(self.eye, self.eye + forward, up)
+    }
+
+    /// The view-to-clip matrix for an image of the given width / height ratio.
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        Mat4::perspective_rh(self.fov_y, aspect, self.near, self.far)
+    }
+
+    /// The world-to-clip matrix.
+    pub fn view_projection(&self, aspect: f32) -> Mat4 {
+        self.projection(aspect) * self.view()
+    }
+}
+
+/// A directional light with Lambert diffuse reflection and an ambient floor: a surface with
+/// unit normal `n` receives `max(diffuse * max(n . -direction, 0), ambient)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Light {
+    /// Unit vector along which the light travels (from the light towards the scene).
+    pub direction: Vec3,
+    /// Diffuse coefficient `I0 * K` in `[0, 1]`.
+    pub diffuse: f32,
+    /// The least intensity any surface receives, in `[0, 1]`.
+    pub ambient: f32,
+}
+
+impl Light {
+    /// Light intensity on a surface with unit normal `normal`.
+    pub fn intensity(&self, normal: Vec3) -> f32 {
+        (self.diffuse * normal.dot(-self.direction).max(0.0)).max(self.ambient)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn near_and_far_map_to_zero_and_one() {
+        let camera = Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.5, far: 20.0 };
+        let clip = camera.view_projection(1.5);
+        let near = clip.project_point3(Vec3::new(0.0, 0.0, 4.5));
+        let far = clip.project_point3(Vec3::new(0.0, 0.0, -15.0));
+        assert!(near.z.abs() < 1e-5 && (far.z - 1.0).abs() < 1e-5, "{near} {far}");
+    }
+
+    #[test]
+    fn looking_straight_down_is_well_defined() {
+        let camera = Camera { eye: Vec3::new(0.0, 10.0, 0.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 };
+        let centre = camera.view_projection(1.0).project_point3(Vec3::ZERO);
+        assert!(centre.is_finite() && centre.x.abs() < 1e-5 && centre.y.abs() < 1e-5);
+    }
+
+    #[test]
+    fn intensity_never_drops_below_ambient() {
+        let light = Light { direction: -Vec3::Y, diffuse: 0.9, ambient: 0.2 };
+        assert!((light.intensity(Vec3::Y) - 0.9).abs() < 1e-6);
+        assert_eq!(light.intensity(-Vec3::Y), 0.2);
+        assert_eq!(light.intensity(Vec3::X), 0.2);
+    }
+}

@@ -1,0 +1,151 @@
+//! Polygon clipping in homogeneous clip space.
+//!
+//! Triangles are clipped against the near plane (`z >= 0` for the `[0, 1]` depth range) so that
+//! a triangle crossing it is cut, never dropped or stretched, and against a guard band at
+//! [`GUARD_BAND`] times the viewport in x and y so that projected coordinates stay small enough
+//! for exact fixed-point edge functions. Far-plane and viewport clipping are left to the depth
+//! test and the screen bounds.
+
+use bevy::math::{Vec3, Vec4};
+
+/// How far outside the viewport, in viewport half-sizes, vertices may lie before x/y clipping
+/// cuts the triangle.
+pub const GUARD_BAND: f32 = 4.0;
+
+/// The most vertices a clipped triangle can have: three plus one per clipping plane.
+pub const MAX_CLIPPED: usize = 3 + PLANES.len();
+
+/// Clipping planes as `p` such that a vertex is inside when `p . position >= 0`.
+const PLANES: [Vec4; 5] = [
+    Vec4::new(0.0, 0.0, 1.0, 0.0),
+    Vec4::new(1.0, 0.0, 0.0, GUARD_BAND),
+    Vec4::new(-1.0, 0.0, 0.0, GUARD_BAND),
+    Vec4::new(0.0, 1.0, 0.0, GUARD_BAND),
+    Vec4::new(0.0, -1.0, 0.0, GUARD_BAND),
+];
+
+/// A vertex after the vertex stage: its clip-space position and its lit colour.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ClipVertex {
+    /// Homogeneous clip-space position.
+    pub position: Vec4,
+    /// Linear RGB colour after lighting.
+    pub color: Vec3,
+}
+
+impl ClipVertex {
+    fn lerp(self, other: Self, t: f32) -> Self {
+        Self { position: self.position.lerp(other.position, t), color: self.color.lerp(other.color, t) }
+    }
+}
+
+/// A convex polygon of at most [`MAX_CLIPPED`] vertices, stored inline.
+#[derive(Debug, Clone, Copy)]
+pub struct Polygon {
+    vertices: [ClipVertex; MAX_CLIPPED],
+    len: usize,
+}
+
+impl Polygon {
+    /// The polygon's vertices, in order.
+    pub fn vertices(&self) -> &[ClipVertex] {
+        &self.vertices[..self.len]
+    }
+}
+
+/// Whether the triangle needs clipping at all: false when every vertex is inside every plane.
+pub fn needs_clipping(triangle: &[ClipVertex; 3]) -> bool {
+    triangle.iter().any(|v| PLANES.iter().any(|plane| plane.dot(v.position) < 0.0))
+}
+
+/// Whether the triangle lies entirely outside one of the view volume's planes (near, left,
+/// right, bottom, top or far), so that nothing of it can be visible.
+pub fn outside_view(triangle: &[ClipVertex; 3]) -> bool {
+    let outside = |test: fn(Vec4) -> bool| triangle.iter().all(|v| test(v.position));
+    outside(|p| p.z < 0.0)
+        || outside(|p| p.z > p.w)
+        || outside(|p| p.x < -p.w)
+        || outside(|p| p.x > p.w)
+        || outside(|p| p.y < -p.w)
+        || outside(|p| p.y > p.w)
+}
+
+/// Clips a triangle against the near plane and the guard band (Sutherland-Hodgman), keeping
+/// the vertex order. The result has fewer than three vertices when nothing is left.
+pub fn clip_triangle(triangle: &[ClipVertex; 3]) -> Polygon {
+    let mut current = Polygon { vertices: [ClipVertex::default(); MAX_CLIPPED], len: 3 };
+    current.vertices[..3].copy_from_slice(triangle);
+    for plane in PLANES {
+        let mut next = Polygon { vertices: current.vertices, len: 0 };
+        let input = current.vertices();
+        for (i, &a) in input.iter().enumerate() {
+            let b = input[(i + 1) % input.len()];
+            let (da, db) = (plane.dot(a.position), plane.dot(b.position));
+            if da >= 0.0 {
+                next.vertices[next.len] = a;
+                next.len += 1;
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                next.vertices[next.len] = a.lerp(b, da / (da - db));
+                next.len += 1;
+            }
+        }
+        if next.len < 3 {
+            next.len = 0;
+            return next;
+        }
+        current = next;
+    }
+    current
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(x: f32, y: f32, z: f32, w: f32) -> ClipVertex {
+        ClipVertex { position: Vec4::new(x, y, z, w), color: Vec3::splat(z) }
+    }
+
+    #[test]
+    fn a_triangle_inside_is_left_alone() {
+        let tri = [vertex(0.0, 0.0, 0.5, 1.0), vertex(0.5, 0.0, 0.5, 1.0), vertex(0.0, 0.5, 0.5, 1.0)];
+        assert!(!needs_clipping(&tri));
+        assert_eq!(clip_triangle(&tri).vertices(), &tri);
+    }
+
+    #[test]
+    fn crossing_the_near_plane_cuts_into_a_quad_on_the_plane() {
+        // One vertex behind the near plane (z < 0).
+        let tri = [vertex(0.0, 0.0, -1.0, 1.0), vertex(1.0, 0.0, 1.0, 2.0), vertex(0.0, 1.0, 1.0, 2.0)];
+        assert!(needs_clipping(&tri));
+        let polygon = clip_triangle(&tri);
+        assert_eq!(polygon.vertices().len(), 4);
+        for v in polygon.vertices() {
+            assert!(v.position.z >= -1e-6, "{v:?} behind the near plane");
+        }
+        let on_plane = polygon.vertices().iter().filter(|v| v.position.z.abs() < 1e-6).count();
+        assert_eq!(on_plane, 2);
+        // Attributes are interpolated with the position: colour was set to z.
+        for v in polygon.vertices() {
+            assert!((v.color.x - v.position.z).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn a_triangle_behind_the_eye_vanishes() {
+        let tri = [vertex(0.0, 0.0, -1.0, 1.0), vertex(1.0, 0.0, -0.5, 1.0), vertex(0.0, 1.0, -2.0, 1.0)];
+        assert!(outside_view(&tri));
+        assert!(clip_triangle(&tri).vertices().is_empty());
+    }
+
+    #[test]
+    fn far_outside_the_guard_band_is_cut_back_to_it() {
+        let tri = [vertex(-100.0, 0.0, 0.5, 1.0), vertex(100.0, 0.0, 0.5, 1.0), vertex(0.0, 1.0, 0.5, 1.0)];
+        let polygon = clip_triangle(&tri);
+        assert!(polygon.vertices().len() >= 3);
+        for v in polygon.vertices() {
+            assert!(v.position.x.abs() <= GUARD_BAND * v.position.w + 1e-4);
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! The colour and depth targets the rasterizer draws into.
+
+use std::path::Path;
+
+/// Depth of an empty pixel: the far plane. Depth values are normalized device depth in
+/// `[0, 1]` (0 at the near plane, 1 at the far plane); a fragment wins only if it is strictly
+/// nearer than what the pixel holds, so nothing beyond the far plane is ever drawn.
+pub const FAR_DEPTH: f32 = 1.0;
+
+/// An RGBA8 colour buffer and an `f32` depth buffer of the same size, stored row by row from the
+/// top-left pixel.
+///
+/// Colours are stored as sRGB-encoded bytes: the window shows them with an `Rgba8UnormSrgb`
+/// texture and PNG files hold them unchanged, so both show the same pixels.
+#[derive(Debug, Clone, Default)]
+pub struct Framebuffer {
+    width: u32,
+    height: u32,
+    /// Four bytes per pixel, `width * height * 4` in all.
+    color: Vec<u8>,
+    depth: Vec<f32>,
+}
+
+impl Framebuffer {
+    /// A framebuffer of `width` x `height` pixels, cleared to opaque black and the far depth.
+    pub fn new(width: u32, height: u32) -> Self {
+        let mut framebuffer = Self::default();
+        framebuffer.resize(width, height);
+        framebuffer
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Changes the size; the contents are cleared. Keeps the allocation when shrinking, so
+    /// resizing back and forth does not allocate.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.width = width;
+        self.height = height;
+        let pixels = width as usize * height as usize;
+        self.color.clear();
+        self.color.resize(pixels * 4, 0);
+        self.depth.clear();
+        self.depth.resize(pixels, FAR_DEPTH);
+    }
+
+    /// Fills every pixel with `rgba` and every depth with [`FAR_DEPTH`].
+    pub fn clear(&mut self, rgba: [u8; 4]) {
+        for pixel in self.color.chunks_exact_mut(4) {
+            pixel.copy_from_slice(&rgba);
+        }
+        self.depth.fill(FAR_DEPTH);
+    }
+
+    /// The RGBA8 bytes, row by row.
+    pub fn color(&self) -> &[u8] {
+        &self.color
+    }
+
+    /// The depth values, row by row.
+    pub fn depth(&self) -> &[f32] {
+        &self.depth
+    }
+
+    /// The colour of pixel (`x`, `y`), counted from the top-left corner.
+    ///
+    /// # Panics
+    /// If the pixel is outside the framebuffer.
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside the framebuffer");
+        let i = (y as usize * self.width as usize + x as usize) * 4;
+        [self.color[i], self.color[i + 1], self.color[i + 2], self.color[i + 3]]
+    }
+
+    /// Splits the targets into horizontal bands of `rows` rows each (the last may be shorter),
+    /// so that bands can be drawn in parallel without sharing memory.
+    pub(crate) fn bands_mut(&mut self, rows: u32) -> impl Iterator<Item = Band<'_>> {
+        let row_pixels = self.width as usize;
+        let band_pixels = row_pixels * rows as usize;
+        let width = self.width;
+        self.color
+            .chunks_mut(band_pixels * 4)
+            .zip(self.depth.chunks_mut(band_pixels))
+            .enumerate()
+            .map(move |(index, (color, depth))| Band { y0: index as u32 * rows, width, color, depth })
+    }
+
+    /// Writes the colour buffer to a PNG file.
+    pub fn save_png(&self, path: &Path) -> image::ImageResult<()> {
+        image::save_buffer(path, &self.color, self.width, self.height, image::ExtendedColorType::Rgba8)
+    }
+}
+
+/// A horizontal band of a [`Framebuffer`]: rows `y0..y0 + rows` of both targets.
+pub(crate) struct Band<'a> {
+    /// First row of the band in framebuffer coordinates.
+    pub y0: u32,
+    /// Row length in pixels.
+    pub width: u32,
+    /// RGBA8 bytes of the band's rows.
+    pub color: &'a mut [u8],
+    /// Depth of the band's rows.
+    pub depth: &'a mut [f32],
+}
+
+impl Band<'_> {
+    /// Number of rows in the band.
+    pub fn rows(&self) -> u32 {
+        (self.depth.len() / self.width.max(1) as usize) as u32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clear_sets_colour_and_far_depth() {
+        let mut fb = Framebuffer::new(3, 2);
+        fb.clear([1, 2, 3, 4]);
+        assert_eq!(fb.pixel(2, 1), [1, 2, 3, 4]);
+        assert!(fb.depth().iter().all(|&d| d == FAR_DEPTH));
+        assert_eq!(fb.color().len(), 3 * 2 * 4);
+    }
+
+    #[test]
+    fn bands_cover_every_row_once() {
+        let mut fb = Framebuffer::new(5, 37);
+        let bands: Vec<(u32, u32)> = fb.bands_mut(16).map(|b| (b.y0, b.rows())).collect();
+        assert_eq!(bands, vec![(0, 16), (16, 16), (32, 5)]);
+    }
+}

@@ -1,0 +1,213 @@
+//! Triangle meshes as the rasterizer consumes them, and the primitive shapes.
+
+use bevy::math::Vec3;
+use std::f32::consts::{PI, TAU};
+
+/// An indexed triangle mesh in model space.
+///
+/// Front faces wind counter-clockwise seen from outside (the right-handed convention of
+/// `glam`); `normals` has one unit normal per position.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions in model units.
+    pub positions: Vec<Vec3>,
+    /// Unit vertex normals, one per position.
+    pub normals: Vec<Vec3>,
+    /// Triangles as indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl MeshData {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Appends a vertex and returns its index.
+    fn push_vertex(&mut self, position: Vec3, normal: Vec3) -> u32 {
+        self.positions.push(position);
+        self.normals.push(normal);
+        (self.positions.len() - 1) as u32
+    }
+
+    /// Appends the quad `a b c d` (counter-clockwise seen from the side `normal` points to).
+    fn push_quad(&mut self, corners: [Vec3; 4], normal: Vec3) {
+        let [a, b, c, d] = corners.map(|p| self.push_vertex(p, normal));
+        self.triangles.push([a, b, c]);
+        self.triangles.push([a, c, d]);
+    }
+
+    /// An axis-aligned cube of edge 1 centred on the origin, with flat faces.
+    pub fn cube() -> Self {
+        let mut mesh = Self::default();
+        for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+            for normal in [axis, -axis] {
+                // Two tangents such that (u, v, normal) is right-handed.
+                let u = normal.any_orthonormal_vector();
+                let v = normal.cross(u);
+                let centre = normal * 0.5;
+                let (u, v) = (u * 0.5, v * 0.5);
+                mesh.push_quad([centre - u - v, centre + u - v, centre + u + v, centre - u + v], normal);
+            }
+        }
+        mesh
+    }
+
+    /// A sphere of diameter 1 centred on the origin, as `stacks` rings of `slices` quads with
+    /// smooth normals.
+    pub fn sphere(stacks: u32, slices: u32) -> Self {
+        let (stacks, slices) = (stacks.max(2), slices.max(3));
+        let mut mesh = Self::default();
+        for i in 0..=stacks {
+            let polar = PI * i as f32 / stacks as f32;
+            for j in 0..=slices {
+                // The seam column and the poles repeat positions exactly, so the surface
+                // is closed to the bit.
+                let azimuth = TAU * (j % slices) as f32 / slices as f32;
+                let normal = match i {
+                    0 => Vec3::Y,
+                    i if i == stacks => -Vec3::Y,
+                    _ => Vec3::new(polar.sin() * azimuth.cos(), polar.cos(), -polar.sin() * azimuth.sin()),
+                };
+                mesh.push_vertex(normal * 0.5, normal);
+            }
+        }
+        let row = slices + 1;
+        for i in 0..stacks {
+            for j in 0..slices {
+                let (a, b) = (i * row + j, (i + 1) * row + j);
+                if i != 0 {
+                    mesh.triangles.push([a, b, a + 1]);
+                }
+                if i != stacks - 1 {
+                    mesh.triangles.push([a + 1, b, b + 1]);
+                }
+            }
+        }
+        mesh
+    }
+
+    /// A cylinder of diameter 1 and height 1 along the y axis, centred on the origin: a smooth
+    /// side of `slices` quads and two flat caps.
+    pub fn cylinder(slices: u32) -> Self {
+        let slices = slices.max(3);
+        let mut mesh = Self::default();
+        let ring = |j: u32| {
+            let azimuth = TAU * (j % slices) as f32 / slices as f32;
+            Vec3::new(azimuth.cos(), 0.0, -azimuth.sin())
+        };
+        for j in 0..=slices {
+            let radial = ring(j);
+            mesh.push_vertex(radial * 0.5 - Vec3::Y * 0.5, radial);
+            mesh.push_vertex(radial * 0.5 + Vec3::Y * 0.5, radial);
+        }
+        for j in 0..slices {
+            let (bottom, top) = (2 * j, 2 * j + 1);
+            mesh.triangles.push([bottom, bottom + 2, top]);
+            mesh.triangles.push([top, bottom + 2, top + 2]);
+        }
+        for (normal, y) in [(Vec3::Y, 0.5), (-Vec3::Y, -0.5)] {
+            let centre = mesh.push_vertex(Vec3::Y * y, normal);
+            let first = mesh.positions.len() as u32;
+            for j in 0..slices {
+                mesh.push_vertex(ring(j) * 0.5 + Vec3::Y * y, normal);
+            }
+            for j in 0..slices {
+                let (a, b) = (first + j, first + (j + 1) % slices);
+                // The ring runs counter-clockwise seen from +y.
+                mesh.triangles.push(if y > 0.0 { [centre, a, b] } else { [centre, b, a] });
+            }
+        }
+        mesh
+    }
+
+    /// A square of edge 1 in the xz plane, facing +y, split into `cells` x `cells` quads so
+    /// that per-vertex lighting and near-plane clipping stay smooth on large planes.
+    pub fn plane(cells: u32) -> Self {
+        let cells = cells.max(1);
+        let mut mesh = Self::default();
+        let row = cells + 1;
+        for i in 0..=cells {
+            for j in 0..=cells {
+                let x = j as f32 / cells as f32 - 0.5;
+                let z = i as f32 / cells as f32 - 0.5;
+                mesh.push_vertex(Vec3::new(x, 0.0, z), Vec3::Y);
+            }
+        }
+        for i in 0..cells {
+            for j in 0..cells {
+                let (a, b) = (i * row + j, (i + 1) * row + j);
+                mesh.triangles.push([a, b, b + 1]);
+                mesh.triangles.push([a, b + 1, a + 1]);
+            }
+        }
+        mesh
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    fn all_primitives() -> Vec<(&'static str, MeshData)> {
+        vec![
+            ("cube", MeshData::cube()),
+            ("sphere", MeshData::sphere(12, 24)),
+            ("cylinder", MeshData::cylinder(24)),
+            ("plane", MeshData::plane(4)),
+        ]
+    }
+
+    #[test]
+    fn triangles_wind_counter_clockwise_seen_from_their_normals() {
+        for (name, mesh) in all_primitives() {
+            for &[a, b, c] in &mesh.triangles {
+                let [pa, pb, pc] = [a, b, c].map(|i| mesh.positions[i as usize]);
+                let face = (pb - pa).cross(pc - pa);
+                assert!(face.length() > 1e-7, "{name}: degenerate triangle");
+                let mean = mesh.normals[a as usize] + mesh.normals[b as usize] + mesh.normals[c as usize];
+                assert!(face.dot(mean) > 0.0, "{name}: triangle {a} {b} {c} faces inwards");
+            }
+        }
+    }
+
+    #[test]
+    fn normals_are_unit_and_indices_valid() {
+        for (name, mesh) in all_primitives() {
+            assert_eq!(mesh.positions.len(), mesh.normals.len());
+            for n in &mesh.normals {
+                assert!((n.length() - 1.0).abs() < 1e-5, "{name}: normal {n}");
+            }
+            let count = mesh.positions.len() as u32;
+            assert!(mesh.triangles.iter().flatten().all(|&i| i < count), "{name}");
+        }
+    }
+
+    /// Every edge of a closed mesh is shared by exactly two triangles, once in each direction
+    /// (positions compared exactly, since flat faces duplicate vertices).
+    #[test]
+    fn closed_primitives_are_watertight() {
+        for (name, mesh) in all_primitives().into_iter().filter(|(n, _)| *n != "plane") {
+            let key = |i: u32| mesh.positions[i as usize].to_array().map(|c| (c + 0.0).to_bits());
+            let mut edges: HashMap<_, i32> = HashMap::new();
+            for &[a, b, c] in &mesh.triangles {
+                for (from, to) in [(a, b), (b, c), (c, a)] {
+                    *edges.entry((key(from), key(to))).or_default() += 1;
+                }
+            }
+            for (&(from, to), &count) in &edges {
+                let back = edges.get(&(to, from)).copied().unwrap_or(0);
+                assert_eq!((count, back), (1, 1), "{name}: open or doubled edge");
+            }
+        }
+    }
+
+    #[test]
+    fn primitives_fit_the_unit_box() {
+        for (name, mesh) in all_primitives() {
+            let max = mesh.positions.iter().fold(Vec3::ZERO, |m, p| m.max(p.abs()));
+            assert!((max.max_element() - 0.5).abs() < 1e-6, "{name}: extent {max}");
+        }
+    }
+}

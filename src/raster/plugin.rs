@@ -1,0 +1,203 @@
+//! The rasterizer as a Bevy plugin: every entity with a [`RasterMesh`] and a
+//! `GlobalTransform` is drawn into the [`RasterTarget`] framebuffer after transform
+//! propagation.
+//!
+//! | set (`PostUpdate`) | system | what it does |
+//! |---|---|---|
+//! | [`RenderSystems::Collect`] | `collect_meshes` | gathers meshes and transforms into [`RenderQueue`]; other plugins write [`RenderView`] here |
+//! | [`RenderSystems::Raster`] | `rasterize` | draws the frame on the compute task pool |
+//! | [`RenderSystems::Present`] | `save_screenshots` | writes requested screenshots; a window plugin shows the framebuffer |
+//!
+//! Drawing runs every frame, or only when asked ([`RenderPolicy`]) in headless runs that need
+//! just their last frame.
+
+use super::{Camera, Framebuffer, Instance, Light, MeshData, RenderStats, Renderer};
+use crate::controls::SaveScreenshot;
+use crate::schedule::ControlSystems;
+use bevy::prelude::*;
+use bevy::tasks::{ComputeTaskPool, TaskPool};
+use bevy::transform::TransformSystems;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The geometry and colour an entity is drawn with; its `GlobalTransform` places it.
+///
+/// Domain plugins feed the rasterizer only through this component: write a new mesh when the
+/// shape changes, move the transform when it only moves.
+#[derive(Component, Debug, Clone)]
+#[require(Transform)]
+pub struct RasterMesh {
+    /// The triangles, shareable between entities.
+    pub mesh: Arc<MeshData>,
+    /// Surface colour, RGB from 0 to 1.
+    pub color: Vec3,
+}
+
+/// The ordered sets of `PostUpdate` in which a frame is drawn.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RenderSystems {
+    /// Gather what to draw and from where.
+    Collect,
+    /// Draw the frame.
+    Raster,
+    /// Hand the frame to the window or to files.
+    Present,
+}
+
+/// The camera, light and background of the next frame.
+#[derive(Resource, Debug, Clone, Copy)]
+pub struct RenderView {
+    /// The viewpoint.
+    pub camera: Camera,
+    /// The directional light.
+    pub light: Light,
+    /// Colour where no surface is, RGBA8.
+    pub background: [u8; 4],
+}
+
+impl Default for RenderView {
+    fn default() -> Self {
+        Self {
+            camera: Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 },
+            light: Light { direction: Vec3::NEG_Y, diffuse: 1.0, ambient: 0.2 },
+            background: [0, 0, 0, 255],
+        }
+    }
+}
+
+/// The instances of the next frame, in a stable order.
+#[derive(Resource, Debug, Default)]
+pub struct RenderQueue(pub Vec<Instance>);
+
+/// The framebuffer, its wanted size and the figures of the last frame drawn.
+#[derive(Resource, Debug)]
+pub struct RasterTarget {
+    /// The last frame drawn.
+    pub framebuffer: Framebuffer,
+    /// The size the next frame is drawn at, in pixels.
+    pub size: UVec2,
+    /// Counts from the last frame.
+    pub stats: RenderStats,
+    /// Wall-clock time the last frame took to draw (for display only).
+    pub raster_time: Duration,
+}
+
+impl RasterTarget {
+    /// An empty target that draws at `size` pixels.
+    pub fn new(size: UVec2) -> Self {
+        Self { framebuffer: Framebuffer::default(), size, stats: RenderStats::default(), raster_time: Duration::ZERO }
+    }
+}
+
+/// When frames are drawn.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RenderPolicy {
+    /// Draw every frame (windows); otherwise only frames asked for with `requested`.
+    pub every_frame: bool,
+    /// Draw this frame; cleared once drawn.
+    pub requested: bool,
+}
+
+impl RenderPolicy {
+    fn wants_frame(policy: Res<RenderPolicy>) -> bool {
+        policy.every_frame || policy.requested
+    }
+}
+
+/// Screenshots asked for and the folder they go to.
+#[derive(Resource, Debug, Clone)]
+pub struct Screenshots {
+    /// Folder screenshots are written to (created when needed).
+    pub folder: PathBuf,
+    /// A screenshot is due after the next frame.
+    pending: bool,
+}
+
+/// Draws [`RasterMesh`] entities into a [`RasterTarget`].
+pub struct RasterPlugin {
+    /// Size of the framebuffer until something resizes it, in pixels.
+    pub size: UVec2,
+    /// Whether to draw every frame, or only on request.
+    pub every_frame: bool,
+}
+
+impl Plugin for RasterPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<RenderView>()
+            .init_resource::<RenderQueue>()
+            .insert_resource(RasterTarget::new(self.size))
+            .insert_resource(RenderPolicy { every_frame: self.every_frame, requested: false })
+            .insert_resource(Screenshots { folder: PathBuf::from("screenshots"), pending: false })
+            .configure_sets(
+                PostUpdate,
+                (RenderSystems::Collect, RenderSystems::Raster, RenderSystems::Present)
+                    .chain()
+                    .after(TransformSystems::Propagate)
+                    .run_if(RenderPolicy::wants_frame),
+            )
+            .add_systems(Update, request_screenshots.in_set(ControlSystems::Apply))
+            .add_systems(PostUpdate, collect_meshes.in_set(RenderSystems::Collect))
+            .add_systems(PostUpdate, rasterize.in_set(RenderSystems::Raster))
+            .add_systems(PostUpdate, save_screenshots.in_set(RenderSystems::Present));
+    }
+}
+
+fn request_screenshots(
+    mut requests: MessageReader<SaveScreenshot>,
+    mut screenshots: ResMut<Screenshots>,
+    mut policy: ResMut<RenderPolicy>,
+) {
+    if requests.read().count() > 0 {
+        screenshots.pending = true;
+        policy.requested = true;
+    }
+}
+
+fn collect_meshes(meshes: Query<(&RasterMesh, &GlobalTransform)>, mut queue: ResMut<RenderQueue>) {
+    queue.0.clear();
+    queue.0.extend(meshes.iter().map(|(raster, transform)| Instance {
+        mesh: raster.mesh.clone(),
+        model: transform.to_matrix(),
+        color: raster.color,
+    }));
+}
+
+fn rasterize(
+    view: Res<RenderView>,
+    queue: Res<RenderQueue>,
+    mut target: ResMut<RasterTarget>,
+    mut policy: ResMut<RenderPolicy>,
+    mut renderer: Local<Renderer>,
+) {
+    let started = Instant::now();
+    let target = &mut *target;
+    if target.framebuffer.width() != target.size.x || target.framebuffer.height() != target.size.y {
+        target.framebuffer.resize(target.size.x, target.size.y);
+    }
+    let frame =
+        super::Frame { camera: view.camera, light: view.light, background: view.background, instances: &queue.0 };
+    let pool = ComputeTaskPool::get_or_init(TaskPool::default);
+    target.stats = renderer.render(&mut target.framebuffer, pool, &frame);
+    target.raster_time = started.elapsed();
+    policy.requested = false;
+}
+
+fn save_screenshots(mut screenshots: ResMut<Screenshots>, target: Res<RasterTarget>) {
+    if !screenshots.pending {
+        return;
+    }
+    screenshots.pending = false;
+    let saved = std::fs::create_dir_all(&screenshots.folder).map_err(|e| e.to_string()).and_then(|()| {
+        // The first free name: an earlier screenshot is never overwritten.
+        let path = (1..)
+            .map(|n| screenshots.folder.join(format!("canopy-{n:04}.png")))
+            .find(|path| !path.exists())
+            .expect("an unbounded range always yields a free name");
+        target.framebuffer.save_png(&path).map(|()| path).map_err(|e| e.to_string())
+    });
+    match saved {
+        Ok(path) => info!("screenshot saved to {}", path.display()),
+        Err(error) => error!("could not save the screenshot in {}: {error}", screenshots.folder.display()),
+    }
+}

@@ -1,0 +1,111 @@
+//! Headless runs: load a scene, optionally play a timeline, take a number of fixed steps, and
+//! return the state dump and the last frame. Used by `canopy run`, by the `play` fallback
+//! without a display, and by the system tests.
+
+use crate::app::headless_app;
+use crate::controls::timeline::Timeline;
+use crate::dump::dump_state;
+use crate::params::ParamError;
+use crate::raster::Framebuffer;
+use crate::raster::plugin::{RasterTarget, RenderPolicy};
+use crate::scene::schema::SceneDef;
+use crate::scene::{ActiveScene, SceneStatus};
+use crate::schedule::SimControl;
+use crate::yaml::FileError;
+use bevy::math::UVec2;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// How long a scene may take to load before the run gives up (wall-clock).
+const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Fixed steps to take.
+    pub frames: u64,
+    /// A timeline file of scripted input.
+    pub timeline: Option<PathBuf>,
+    /// Framebuffer size in pixels.
+    pub size: UVec2,
+    /// Print warnings and errors from the app (once per process).
+    pub log: bool,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct RunOutput {
+    /// The state dump after the last step (see [`crate::dump`]).
+    pub dump: serde_json::Value,
+    /// The frame drawn after the last step.
+    pub framebuffer: Framebuffer,
+}
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The scene or the timeline file is invalid.
+    #[error("{0}")]
+    Invalid(#[from] FileError),
+    /// The timeline sets a parameter the scene does not have.
+    #[error("{path}: {error}")]
+    Parameter {
+        /// The timeline file.
+        path: PathBuf,
+        /// What is wrong.
+        error: ParamError,
+    },
+    /// The scene could not be read or loaded.
+    #[error("{0}")]
+    Load(String),
+}
+
+/// Runs a scene headless.
+pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
+    // Check the files first, so that errors come out before any app is built.
+    SceneDef::load(&options.scene)?;
+    let timeline = options.timeline.as_deref().map(Timeline::load).transpose()?;
+
+    let mut app = headless_app(&options.scene, options.size, options.log)
+        .map_err(|error| RunError::Load(format!("{}: {error}", options.scene.display())))?;
+    let started = Instant::now();
+    loop {
+        app.update();
+        let scene = app.world().resource::<ActiveScene>();
+        match scene.status {
+            SceneStatus::Live => break,
+            SceneStatus::Failed => return Err(RunError::Load(scene.error.clone().unwrap_or_default())),
+            SceneStatus::Loading if started.elapsed() > LOAD_TIMEOUT => {
+                return Err(RunError::Load(format!(
+                    "{}: the scene did not load within a minute",
+                    options.scene.display()
+                )));
+            }
+            SceneStatus::Loading => std::thread::yield_now(),
+        }
+    }
+
+    if let Some(timeline) = timeline {
+        timeline
+            .check(app.world_mut())
+            .map_err(|error| RunError::Parameter { path: options.timeline.clone().unwrap_or_default(), error })?;
+        app.insert_resource(timeline);
+    }
+    for frame in 0..options.frames {
+        if frame + 1 == options.frames {
+            app.world_mut().resource_mut::<RenderPolicy>().requested = true;
+        }
+        app.update();
+    }
+    if options.frames == 0 {
+        // Draw the initial state without stepping.
+        app.world_mut().resource_mut::<SimControl>().paused = true;
+        app.world_mut().resource_mut::<RenderPolicy>().requested = true;
+        app.update();
+    }
+    let dump = dump_state(app.world_mut());
+    let framebuffer = app.world().resource::<RasterTarget>().framebuffer.clone();
+    Ok(RunOutput { dump, framebuffer })
+}

@@ -1,0 +1,249 @@
+//! The scene file format: serde types for the camera, the light, the background and the
+//! entities, and the checks that span several fields.
+//!
+//! Every entity is a mapping with an optional `name` and exactly one kind key; the kind's
+//! value is that kind's definition. The kinds are listed in [`EntityKind`].
+
+use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
+use crate::shape::ShapeDef;
+use crate::yaml::{FileError, parse_yaml, read_yaml_file};
+use bevy::color::Srgba;
+use bevy::math::Vec3;
+use serde::Deserialize;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use std::fmt;
+use std::path::Path;
+
+/// The keys of an entity mapping: its name, then every kind.
+const ENTITY_FIELDS: &[&str] = &["name", "shape"];
+
+/// Names that refer to the scene's camera and light in parameter names and dumps.
+pub const RESERVED_NAMES: [&str; 2] = ["camera", "light"];
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDef {
+    /// The viewpoint; a default camera looks at the origin from the front and above.
+    #[serde(default)]
+    pub camera: CameraDef,
+    /// The directional light; the default comes from above, in front and to the right.
+    #[serde(default)]
+    pub light: LightDef,
+    /// Colour of pixels showing no surface (the sky); light blue by default.
+    #[serde(default = "default_background")]
+    pub background: Color,
+    /// What the scene holds, in order.
+    #[serde(default)]
+    pub entities: Vec<EntityDef>,
+}
+
+/// The camera of a scene file.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraDef {
+    /// Eye position in metres.
+    pub position: Point,
+    /// The point looked at, in metres; must differ from `position`.
+    pub look_at: Point,
+    /// Vertical field of view in degrees.
+    pub fov_deg: FieldOfView,
+    /// Near clipping distance in metres.
+    pub near: PositiveMetres,
+    /// Far clipping distance in metres, beyond `near`.
+    pub far: PositiveMetres,
+}
+
+impl Default for CameraDef {
+    fn default() -> Self {
+        Self {
+            position: Point(Vec3::new(0.0, 2.0, 6.0)),
+            look_at: Point(Vec3::ZERO),
+            fov_deg: FieldOfView(60.0),
+            near: PositiveMetres(0.1),
+            far: PositiveMetres(1000.0),
+        }
+    }
+}
+
+/// The directional light of a scene file.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LightDef {
+    /// The direction the light travels in (from the light into the scene); any non-zero
+    /// length.
+    pub direction: Point,
+    /// Diffuse coefficient (light intensity times surface reflectance), 0 to 1.
+    pub diffuse: UnitInterval,
+    /// The least intensity any surface receives, 0 to 1.
+    pub ambient: UnitInterval,
+}
+
+impl Default for LightDef {
+    fn default() -> Self {
+        Self { direction: Point(Vec3::new(-0.4, -1.0, -0.3)), diffuse: UnitInterval(0.85), ambient: UnitInterval(0.15) }
+    }
+}
+
+fn default_background() -> Color {
+    Color(Srgba::rgb(0.62, 0.76, 0.92))
+}
+
+/// One entity: an optional name and its kind.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EntityDef {
+    /// The name used in parameter names and dumps; unnamed entities go by their kind.
+    pub name: Option<String>,
+    /// What the entity is.
+    pub kind: EntityKind,
+}
+
+/// The kinds of entity a scene can hold, one key each in the entity's mapping.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EntityKind {
+    /// A primitive solid (`shape:`).
+    Shape(ShapeDef),
+}
+
+impl EntityKind {
+    /// Every kind key, for messages.
+    pub const KEYS: &'static [&'static str] = match ENTITY_FIELDS.split_first() {
+        Some((_name, kinds)) => kinds,
+        None => &[],
+    };
+
+    /// The kind's key in the file, which is also its name in dumps and parameters.
+    pub fn key(&self) -> &'static str {
+        match self {
+            EntityKind::Shape(_) => "shape",
+        }
+    }
+}
+
+impl EntityDef {
+    /// The name parameters and dumps use: the given name, else the kind.
+    pub fn display_name(&self) -> &str {
+        self.name.as_deref().unwrap_or(self.kind.key())
+    }
+}
+
+/// Checks an entity name: letters, digits, `_` and `-` (a `.` would split parameter names),
+/// not one of [`RESERVED_NAMES`].
+fn check_name<E: de::Error>(name: &str) -> Result<(), E> {
+    let valid_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if name.is_empty() || name.len() > 64 || !valid_chars {
+        return Err(E::custom(format_args!(
+            "expected a name of 1 to 64 letters, digits, `_` or `-`, found \"{name}\""
+        )));
+    }
+    if RESERVED_NAMES.contains(&name) {
+        return Err(E::custom(format_args!("the name \"{name}\" is reserved for the scene's {name}")));
+    }
+    Ok(())
+}
+
+impl<'de> Deserialize<'de> for EntityDef {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct EntityVisitor;
+
+        impl<'de> Visitor<'de> for EntityVisitor {
+            type Value = EntityDef;
+
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "an entity: a mapping with an optional `name` and one kind ({})", EntityKind::KEYS.join(", "))
+            }
+
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<EntityDef, A::Error> {
+                let mut name: Option<String> = None;
+                let mut kind: Option<EntityKind> = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    let value = match key.as_str() {
+                        "name" => {
+                            if name.is_some() {
+                                return Err(de::Error::duplicate_field("name"));
+                            }
+                            let value: String = map.next_value()?;
+                            check_name(&value)?;
+                            name = Some(value);
+                            continue;
+                        }
+                        "shape" => EntityKind::Shape(map.next_value()?),
+                        other => return Err(de::Error::unknown_field(other, ENTITY_FIELDS)),
+                    };
+                    if let Some(first) = &kind {
+                        return Err(de::Error::custom(format_args!(
+                            "an entity has exactly one kind, found both `{}` and `{}`",
+                            first.key(),
+                            value.key()
+                        )));
+                    }
+                    kind = Some(value);
+                }
+                let kind = kind.ok_or_else(|| {
+                    de::Error::custom(format_args!("an entity needs a kind: one of {}", EntityKind::KEYS.join(", ")))
+                })?;
+                Ok(EntityDef { name, kind })
+            }
+        }
+
+        deserializer.deserialize_map(EntityVisitor)
+    }
+}
+
+impl SceneDef {
+    /// Reads and checks a scene file.
+    pub fn load(path: &Path) -> Result<Self, FileError> {
+        let scene: Self = read_yaml_file(path, "a scene")?;
+        scene.check(path, &std::fs::read_to_string(path).unwrap_or_default())?;
+        Ok(scene)
+    }
+
+    /// Parses and checks scene text read from `path`.
+    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+        let scene: Self = parse_yaml(path, bytes, "a scene")?;
+        scene.check(path, &String::from_utf8_lossy(bytes))?;
+        Ok(scene)
+    }
+
+    /// The checks that involve several fields, located by their key in `text`.
+    fn check(&self, path: &Path, text: &str) -> Result<(), FileError> {
+        let at_key = |key: &str, nth: usize, message: String| match crate::yaml::find_nth_key(text, key, nth) {
+            Some((line, column)) => FileError::at(path, line, column, message),
+            None => FileError::whole_file(path, message),
+        };
+        let camera = &self.camera;
+        if (camera.position.0 - camera.look_at.0).length() < 1e-6 {
+            return Err(at_key("look_at", 0, "camera.look_at: expected a point different from camera.position".into()));
+        }
+        if camera.far.0 <= camera.near.0 {
+            return Err(at_key(
+                "far",
+                0,
+                format!(
+                    "camera.far: expected a distance beyond camera.near ({}), found {}",
+                    camera.near.0, camera.far.0
+                ),
+            ));
+        }
+        if self.light.direction.0.length() < 1e-6 {
+            return Err(at_key("direction", 0, "light.direction: expected a non-zero vector".into()));
+        }
+        let mut seen: Vec<&str> = Vec::new();
+        for (index, entity) in self.entities.iter().enumerate() {
+            let Some(name) = entity.name.as_deref() else { continue };
+            if seen.contains(&name) {
+                // The key of this entity's name is the nth `name:` of the file.
+                let nth = self.entities[..index].iter().filter(|e| e.name.is_some()).count();
+                return Err(at_key(
+                    "name",
+                    nth,
+                    format!(
+                        "entities[{index}].name: the name \"{name}\" is used by an earlier entity; names must be unique"
+                    ),
+                ));
+            }
+            seen.push(name);
+        }
+        Ok(())
+    }
+}

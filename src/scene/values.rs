@@ -1,0 +1,229 @@
+//! Checked value types for scene files: each refuses what makes no sense where it is used and
+//! says what was expected, so that `serde_yaml` reports the error at the offending value.
+
+use bevy::color::Srgba;
+use bevy::math::Vec3;
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use std::fmt;
+
+/// Largest magnitude accepted for lengths and coordinates, in metres: far beyond any scene,
+/// small enough that `f32` arithmetic on it stays meaningful.
+pub const MAX_METRES: f64 = 1.0e6;
+
+/// Defines an `f32` newtype whose deserializer accepts only finite numbers passing a check.
+macro_rules! checked_number {
+    ($(#[$doc:meta])* $name:ident, $expected:literal, |$v:ident| $valid:expr) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub struct $name(pub f32);
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                let $v = f64::deserialize(deserializer)?;
+                if $v.is_finite() && $valid {
+                    Ok(Self($v as f32))
+                } else {
+                    Err(de::Error::custom(format_args!("expected {}, found {}", $expected, $v)))
+                }
+            }
+        }
+    };
+}
+
+checked_number!(
+    /// A coordinate or signed length in metres, finite and within [`MAX_METRES`].
+    Metres,
+    "a coordinate in metres between -1e6 and 1e6",
+    |v| v.abs() <= MAX_METRES
+);
+checked_number!(
+    /// A positive length in metres, at most [`MAX_METRES`].
+    PositiveMetres,
+    "a length in metres greater than 0 and at most 1e6",
+    |v| v > 0.0 && v <= MAX_METRES
+);
+checked_number!(
+    /// An angle in degrees, finite and within one hundred turns either way.
+    Degrees,
+    "an angle in degrees between -36000 and 36000",
+    |v| v.abs() <= 36_000.0
+);
+checked_number!(
+    /// A vertical field of view in degrees, strictly between 0 and 180.
+    FieldOfView,
+    "a field of view in degrees greater than 0 and less than 180",
+    |v| v > 0.0 && v < 180.0
+);
+checked_number!(
+    /// A fraction in `[0, 1]`: a coefficient or a colour channel.
+    UnitInterval,
+    "a number from 0 to 1",
+    |v| (0.0..=1.0).contains(&v)
+);
+
+/// Deserializes `[x, y, z]` into a [`Vec3`] through the checked type `T`.
+fn vec3_from<'de, T, D>(deserializer: D) -> Result<Vec3, D::Error>
+where
+    T: Deserialize<'de> + Into<f32>,
+    D: Deserializer<'de>,
+{
+    let [x, y, z] = <[T; 3]>::deserialize(deserializer)?;
+    Ok(Vec3::new(x.into(), y.into(), z.into()))
+}
+
+impl From<Metres> for f32 {
+    fn from(value: Metres) -> f32 {
+        value.0
+    }
+}
+
+impl From<Degrees> for f32 {
+    fn from(value: Degrees) -> f32 {
+        value.0
+    }
+}
+
+impl From<PositiveMetres> for f32 {
+    fn from(value: PositiveMetres) -> f32 {
+        value.0
+    }
+}
+
+/// A point or displacement `[x, y, z]` in metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Point(pub Vec3);
+
+impl<'de> Deserialize<'de> for Point {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        vec3_from::<Metres, D>(deserializer).map(Self)
+    }
+}
+
+/// Three angles `[x, y, z]` in degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Angles(pub Vec3);
+
+impl<'de> Deserialize<'de> for Angles {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        vec3_from::<Degrees, D>(deserializer).map(Self)
+    }
+}
+
+/// A size along x, y and z in metres, all positive: written `[x, y, z]`, or one number for
+/// the same size along every axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Size(pub Vec3);
+
+impl<'de> Deserialize<'de> for Size {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct SizeVisitor;
+
+        impl<'de> Visitor<'de> for SizeVisitor {
+            type Value = Size;
+
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a size in metres: one positive number or [x, y, z]")
+            }
+
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Size, E> {
+                let length = PositiveMetres::deserialize(de::value::F64Deserializer::<E>::new(v))?;
+                Ok(Size(Vec3::splat(length.0)))
+            }
+
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Size, E> {
+                self.visit_f64(v as f64)
+            }
+
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Size, E> {
+                self.visit_f64(v as f64)
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Size, A::Error> {
+                let de = de::value::SeqAccessDeserializer::new(seq);
+                vec3_from::<PositiveMetres, _>(de).map(Size)
+            }
+        }
+
+        deserializer.deserialize_any(SizeVisitor)
+    }
+}
+
+/// An sRGB colour: `[r, g, b]` with channels from 0 to 1, or `"#rrggbb"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Color(pub Srgba);
+
+impl<'de> Deserialize<'de> for Color {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct ColorVisitor;
+
+        impl<'de> Visitor<'de> for ColorVisitor {
+            type Value = Color;
+
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a colour: [r, g, b] with channels from 0 to 1, or \"#rrggbb\"")
+            }
+
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Color, E> {
+                let hex = v.strip_prefix('#').filter(|h| h.len() == 6);
+                hex.and_then(|h| Srgba::hex(h).ok()).map(Color).ok_or_else(|| {
+                    E::custom(format_args!("expected a colour \"#rrggbb\" (six hex digits), found \"{v}\""))
+                })
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Color, A::Error> {
+                let de = de::value::SeqAccessDeserializer::new(seq);
+                let [r, g, b] = <[UnitInterval; 3]>::deserialize(de)?;
+                Ok(Color(Srgba::rgb(r.0, g.0, b.0)))
+            }
+        }
+
+        deserializer.deserialize_any(ColorVisitor)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse<T: for<'de> Deserialize<'de>>(text: &str) -> Result<T, String> {
+        serde_yaml::from_str(text).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn sizes_are_uniform_or_per_axis_and_positive() {
+        assert_eq!(parse::<Size>("2").unwrap().0, Vec3::splat(2.0));
+        assert_eq!(parse::<Size>("[1, 2.5, 3]").unwrap().0, Vec3::new(1.0, 2.5, 3.0));
+        assert!(parse::<Size>("-1").unwrap_err().contains("greater than 0"));
+        assert!(parse::<Size>("[1, 0, 3]").unwrap_err().contains("greater than 0"));
+        assert!(parse::<Size>("[1, 2]").unwrap_err().contains("length 2"));
+        assert!(parse::<Size>("big").is_err());
+    }
+
+    #[test]
+    fn non_finite_and_huge_numbers_are_refused() {
+        for text in ["[.nan, 0, 0]", "[0, .inf, 0]", "[0, 0, 1e300]", "[0, 0, 2e6]"] {
+            let error = parse::<Point>(text).unwrap_err();
+            assert!(error.contains("expected a coordinate in metres"), "{text}: {error}");
+        }
+        // Beyond f64, YAML reads the number as a string.
+        let error = parse::<Point>("[0, 0, 1e400]").unwrap_err();
+        assert!(error.contains("invalid type: string \"1e400\", expected f64"), "{error}");
+        assert_eq!(parse::<Point>("[1, -2, 3]").unwrap().0, Vec3::new(1.0, -2.0, 3.0));
+    }
+
+    #[test]
+    fn colours_from_channels_or_hex() {
+        assert_eq!(parse::<Color>("[1, 0.5, 0]").unwrap().0, Srgba::rgb(1.0, 0.5, 0.0));
+        assert_eq!(parse::<Color>("\"#ff0000\"").unwrap().0, Srgba::rgb(1.0, 0.0, 0.0));
+        assert!(parse::<Color>("\"#ff00\"").unwrap_err().contains("six hex digits"));
+        assert!(parse::<Color>("[1, 2, 0]").unwrap_err().contains("from 0 to 1"));
+    }
+
+    #[test]
+    fn field_of_view_is_open_interval() {
+        assert!(parse::<FieldOfView>("0").is_err());
+        assert!(parse::<FieldOfView>("180").is_err());
+        assert_eq!(parse::<FieldOfView>("60").unwrap().0, 60.0);
+    }
+}

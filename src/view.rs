@@ -1,0 +1,282 @@
+//! The scene's camera and light as entities with parameters, their keyboard controls, and the
+//! [`RenderView`] they produce for the rasterizer.
+//!
+//! The camera orbits its target: arrows turn it around the target, PageUp/PageDown move it
+//! nearer or farther. The light is set by azimuth (degrees about +y, 0 = from +z, 90 = from +x)
+//! and elevation (degrees above the horizon); I/K and J/L turn it.
+//!
+//! Parameters: `camera.{target.x|y|z, yaw_deg, pitch_deg, distance, fov_deg}` and
+//! `light.{azimuth_deg, elevation_deg, diffuse, ambient}`.
+
+use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
+use crate::dump::{DumpState, RegisterDump};
+use crate::params::RegisterParams;
+use crate::raster::{Camera, Light, RenderSystems, RenderView};
+use crate::scene::schema::{CameraDef, LightDef};
+use crate::schedule::ControlSystems;
+use bevy::color::{ColorToPacked, Srgba};
+use bevy::prelude::*;
+use serde_json::{Map, Value, json};
+
+/// Orbit speed of the camera keys, degrees per second.
+const ORBIT_DEG_PER_S: f32 = 60.0;
+/// Zoom speed of the camera keys: the distance changes by this factor per second.
+const ZOOM_PER_S: f32 = 2.0;
+/// Turning speed of the light keys, degrees per second.
+const LIGHT_DEG_PER_S: f32 = 60.0;
+/// The camera never pitches past this, in degrees, so that it never flips over the pole.
+const MAX_PITCH_DEG: f32 = 89.0;
+
+/// Camera keys: (key, action, yaw sign, pitch sign, zoom sign).
+const CAMERA_KEYS: [(KeyCode, &str, f32, f32, f32); 6] = [
+    (KeyCode::ArrowLeft, "orbit the camera left", -1.0, 0.0, 0.0),
+    (KeyCode::ArrowRight, "orbit the camera right", 1.0, 0.0, 0.0),
+    (KeyCode::ArrowUp, "orbit the camera up", 0.0, 1.0, 0.0),
+    (KeyCode::ArrowDown, "orbit the camera down", 0.0, -1.0, 0.0),
+    (KeyCode::PageUp, "move the camera nearer", 0.0, 0.0, -1.0),
+    (KeyCode::PageDown, "move the camera farther", 0.0, 0.0, 1.0),
+];
+
+/// Light keys: (key, action, azimuth sign, elevation sign).
+const LIGHT_KEYS: [(KeyCode, &str, f32, f32); 4] = [
+    (KeyCode::KeyJ, "turn the light left", -1.0, 0.0),
+    (KeyCode::KeyL, "turn the light right", 1.0, 0.0),
+    (KeyCode::KeyI, "raise the light", 0.0, 1.0),
+    (KeyCode::KeyK, "lower the light", 0.0, -1.0),
+];
+
+/// The orbiting camera of the scene.
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct CameraParams {
+    /// The point orbited and looked at, metres.
+    pub target: Vec3,
+    /// Angle about +y from +z to the eye, degrees.
+    pub yaw_deg: f32,
+    /// Angle of the eye above the target's horizontal plane, degrees, within +-89.
+    pub pitch_deg: f32,
+    /// Distance from target to eye, metres.
+    pub distance: f32,
+    /// Vertical field of view, degrees.
+    pub fov_deg: f32,
+    /// Near clipping distance, metres.
+    pub near: f32,
+    /// Far clipping distance, metres.
+    pub far: f32,
+}
+
+impl From<&CameraDef> for CameraParams {
+    fn from(def: &CameraDef) -> Self {
+        let offset = def.position.0 - def.look_at.0;
+        let distance = offset.length();
+        Self {
+            target: def.look_at.0,
+            yaw_deg: offset.x.atan2(offset.z).to_degrees(),
+            pitch_deg: (offset.y / distance).clamp(-1.0, 1.0).asin().to_degrees().clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG),
+            distance,
+            fov_deg: def.fov_deg.0,
+            near: def.near.0,
+            far: def.far.0,
+        }
+    }
+}
+
+impl CameraParams {
+    /// The eye position, metres.
+    pub fn eye(&self) -> Vec3 {
+        self.target
+            + self.distance * unit_from_angles(self.yaw_deg, self.pitch_deg.clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG))
+    }
+
+    /// The rasterizer's camera, with edited values brought back into their valid ranges.
+    pub fn camera(&self) -> Camera {
+        let near = self.near.max(1e-4);
+        Camera {
+            eye: self.eye(),
+            target: self.target,
+            fov_y: self.fov_deg.clamp(1.0, 179.0).to_radians(),
+            near,
+            far: self.far.max(near * 2.0),
+        }
+    }
+}
+
+/// The unit vector at `azimuth_deg` about +y (0 = +z, 90 = +x) and `elevation_deg` above the
+/// xz plane.
+fn unit_from_angles(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
+    let (a, e) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+    Vec3::new(e.cos() * a.sin(), e.sin(), e.cos() * a.cos())
+}
+
+/// The directional light of the scene.
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct LightParams {
+    /// Where the light comes from: degrees about +y, 0 = from +z, 90 = from +x.
+    pub azimuth_deg: f32,
+    /// Where the light comes from: degrees above the horizon.
+    pub elevation_deg: f32,
+    /// Diffuse coefficient, 0 to 1.
+    pub diffuse: f32,
+    /// Least intensity, 0 to 1.
+    pub ambient: f32,
+}
+
+impl From<&LightDef> for LightParams {
+    fn from(def: &LightDef) -> Self {
+        let towards_light = -def.direction.0.normalize();
+        Self {
+            azimuth_deg: towards_light.x.atan2(towards_light.z).to_degrees(),
+            elevation_deg: towards_light.y.clamp(-1.0, 1.0).asin().to_degrees(),
+            diffuse: def.diffuse.0,
+            ambient: def.ambient.0,
+        }
+    }
+}
+
+impl LightParams {
+    /// The rasterizer's light, with coefficients brought back into `[0, 1]`.
+    pub fn light(&self) -> Light {
+        Light {
+            direction: -unit_from_angles(self.azimuth_deg, self.elevation_deg),
+            diffuse: self.diffuse.clamp(0.0, 1.0),
+            ambient: self.ambient.clamp(0.0, 1.0),
+        }
+    }
+}
+
+impl DumpState for CameraParams {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("position".into(), json!(self.eye().to_array()));
+        out.insert("target".into(), json!(self.target.to_array()));
+        out.insert("fov_deg".into(), json!(self.fov_deg));
+    }
+}
+
+impl DumpState for LightParams {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let light = self.light();
+        out.insert("direction".into(), json!(light.direction.to_array()));
+        out.insert("azimuth_deg".into(), json!(self.azimuth_deg));
+        out.insert("elevation_deg".into(), json!(self.elevation_deg));
+        out.insert("diffuse".into(), json!(light.diffuse));
+        out.insert("ambient".into(), json!(light.ambient));
+    }
+}
+
+/// The colour of pixels showing no surface.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct Background(pub Srgba);
+
+impl Default for Background {
+    fn default() -> Self {
+        Self(Srgba::BLACK)
+    }
+}
+
+/// Camera and light parameters, controls and the render view.
+pub struct ViewPlugin;
+
+impl Plugin for ViewPlugin {
+    fn build(&self, app: &mut App) {
+        let camera_help = CAMERA_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Global });
+        let light_help = LIGHT_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Global });
+        app.init_resource::<Background>()
+            .register_params::<CameraParams>()
+            .register_params::<LightParams>()
+            .register_dump::<CameraParams>()
+            .register_dump::<LightParams>()
+            .register_keys(&camera_help)
+            .register_keys(&light_help)
+            .add_systems(Update, (orbit_camera, turn_light).in_set(ControlSystems::Input))
+            .add_systems(PostUpdate, write_render_view.in_set(RenderSystems::Collect));
+    }
+}
+
+fn orbit_camera(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut cameras: Query<&mut CameraParams>) {
+    let dt = time.delta_secs();
+    let (mut yaw, mut pitch, mut zoom) = (0.0, 0.0, 0.0);
+    for (key, _, dy, dp, dz) in CAMERA_KEYS {
+        if keys.pressed(key) {
+            (yaw, pitch, zoom) = (yaw + dy, pitch + dp, zoom + dz);
+        }
+    }
+    if (yaw, pitch, zoom) == (0.0, 0.0, 0.0) {
+        return;
+    }
+    for mut camera in &mut cameras {
+        camera.yaw_deg = wrap_degrees(camera.yaw_deg + yaw * ORBIT_DEG_PER_S * dt);
+        camera.pitch_deg = (camera.pitch_deg + pitch * ORBIT_DEG_PER_S * dt).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
+    }
+}
+
+fn turn_light(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut lights: Query<&mut LightParams>) {
+    let step = LIGHT_DEG_PER_S * time.delta_secs();
+    let (mut azimuth, mut elevation) = (0.0, 0.0);
+    for (key, _, da, de) in LIGHT_KEYS {
+        if keys.pressed(key) {
+            (azimuth, elevation) = (azimuth + da, elevation + de);
+        }
+    }
+    if (azimuth, elevation) == (0.0, 0.0) {
+        return;
+    }
+    for mut light in &mut lights {
+        light.azimuth_deg = wrap_degrees(light.azimuth_deg + azimuth * step);
+        light.elevation_deg = (light.elevation_deg + elevation * step).clamp(-90.0, 90.0);
+    }
+}
+
+/// An angle brought into `[-180, 180)` degrees.
+fn wrap_degrees(angle: f32) -> f32 {
+    (angle + 180.0).rem_euclid(360.0) - 180.0
+}
+
+fn write_render_view(
+    cameras: Query<&CameraParams>,
+    lights: Query<&LightParams>,
+    background: Res<Background>,
+    mut view: ResMut<RenderView>,
+) {
+    if let Some(camera) = cameras.iter().next() {
+        view.camera = camera.camera();
+    }
+    if let Some(light) = lights.iter().next() {
+        view.light = light.light();
+    }
+    view.background = background.0.to_u8_array();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::values::{FieldOfView, Point, PositiveMetres, UnitInterval};
+
+    #[test]
+    fn camera_params_reproduce_the_file_camera() {
+        let def = CameraDef {
+            position: Point(Vec3::new(3.0, 2.0, -4.0)),
+            look_at: Point(Vec3::new(0.5, 0.5, 0.5)),
+            fov_deg: FieldOfView(50.0),
+            near: PositiveMetres(0.1),
+            far: PositiveMetres(100.0),
+        };
+        let camera = CameraParams::from(&def).camera();
+        assert!((camera.eye - def.position.0).length() < 1e-5, "{}", camera.eye);
+        assert_eq!(camera.target, def.look_at.0);
+    }
+
+    #[test]
+    fn light_angles_reproduce_the_file_direction() {
+        let def = LightDef {
+            direction: Point(Vec3::new(-0.4, -1.0, -0.3)),
+            diffuse: UnitInterval(0.8),
+            ambient: UnitInterval(0.1),
+        };
+        let light = LightParams::from(&def).light();
+        assert!((light.direction - def.direction.0.normalize()).length() < 1e-5);
+        let from_x = LightParams { azimuth_deg: 90.0, elevation_deg: 0.0, diffuse: 1.0, ambient: 0.0 };
+        assert!((from_x.light().direction - Vec3::NEG_X).length() < 1e-6);
+    }
+}

@@ -1,0 +1,133 @@
+//! The command line as scripts use it: exit codes, files written, messages on stderr.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn canopy(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_canopy"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn run_twice_gives_identical_files() {
+    let folder = tempfile::tempdir().unwrap();
+    let files = |n: usize| {
+        let png = folder.path().join(format!("a{n}.png"));
+        let json = folder.path().join(format!("a{n}.json"));
+        let output = canopy(&[
+            "run",
+            "scenes/demo.yaml",
+            "--frames",
+            "30",
+            "--size",
+            "320x180",
+            "--screenshot",
+            png.to_str().unwrap(),
+            "--dump",
+            json.to_str().unwrap(),
+        ]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        (std::fs::read(png).unwrap(), std::fs::read_to_string(json).unwrap())
+    };
+    let (png_a, json_a) = files(1);
+    let (png_b, json_b) = files(2);
+    assert_eq!(png_a, png_b);
+    assert_eq!(json_a, json_b);
+    let dump: serde_json::Value = serde_json::from_str(&json_a).unwrap();
+    assert_eq!(dump["frame"], 30);
+    assert!((dump["time"].as_f64().unwrap() - 0.5).abs() < 1e-6);
+    let image = image::load_from_memory(&png_a).unwrap();
+    assert_eq!((image.width(), image.height()), (320, 180));
+}
+
+#[test]
+fn seconds_are_rounded_to_fixed_steps() {
+    let folder = tempfile::tempdir().unwrap();
+    let json = folder.path().join("s.json");
+    let output =
+        canopy(&["run", "scenes/demo.yaml", "--seconds", "0.25", "--size", "64x36", "--dump", json.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let dump: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    assert_eq!(dump["frame"], 15);
+}
+
+#[test]
+fn check_accepts_valid_scenes_and_reports_every_broken_file() {
+    let output = canopy(&["check", "scenes/demo.yaml", "tests/scenes/red_sphere.yaml"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("scenes/demo.yaml: ok"));
+
+    let output = canopy(&[
+        "check",
+        "tests/malformed/negative_size.yaml",
+        "scenes/demo.yaml",
+        "tests/malformed/unknown_shape_field.yaml",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    let errors = stderr(&output);
+    assert!(errors.contains("tests/malformed/negative_size.yaml:6:"), "{errors}");
+    assert!(
+        errors.contains("tests/malformed/unknown_shape_field.yaml:5:7: entities[0].shape: unknown field `sise`"),
+        "{errors}"
+    );
+}
+
+#[test]
+fn invalid_input_exits_with_1_and_says_where() {
+    let output = canopy(&["run", "tests/malformed/nan_position.yaml", "--frames", "1"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr(&output).contains("nan_position.yaml:6:"), "{}", stderr(&output));
+
+    let folder = tempfile::tempdir().unwrap();
+    let timeline = folder.path().join("t.yaml");
+    std::fs::write(&timeline, "- { at: 0, press: [KeyW] }\n- { at: 1, press: [Kew] }\n").unwrap();
+    let output = canopy(&["run", "scenes/demo.yaml", "--input", timeline.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("t.yaml:2:") && stderr(&output).contains("unknown key `Kew`"),
+        "{}",
+        stderr(&output)
+    );
+
+    std::fs::write(&timeline, "- { at: 0, set: { lamp.azimuth_deg: 3 } }\n").unwrap();
+    let output = canopy(&["run", "scenes/demo.yaml", "--input", timeline.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr(&output).contains("no entity is named `lamp`"), "{}", stderr(&output));
+
+    let output = canopy(&["run", "no/such/scene.yaml"]);
+    assert_eq!(output.status.code(), Some(1));
+}
+
+#[test]
+fn a_bad_command_line_exits_with_2() {
+    for args in [
+        &["run"][..],
+        &["run", "scenes/demo.yaml", "--size", "0x10"],
+        &["run", "scenes/demo.yaml", "--frames", "3", "--seconds", "1"],
+        &["run", "scenes/demo.yaml", "--seconds", "NaN"],
+        &["check"],
+        &["fly"],
+    ] {
+        let output = canopy(args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {}", stderr(&output));
+    }
+}
+
+#[test]
+fn play_without_a_display_renders_headless_and_prints_the_png() {
+    let output = canopy(&["play", "tests/scenes/red_sphere.yaml"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stderr(&output).contains("no display available"), "{}", stderr(&output));
+    let printed = String::from_utf8_lossy(&output.stdout).trim().to_string();
+    assert!(printed.ends_with(".png") && Path::new(&printed).is_file(), "printed `{printed}`");
+    let image = image::open(&printed).unwrap().to_rgba8();
+    assert_eq!(image.get_pixel(640, 360).0, [255, 0, 0, 255]);
+}

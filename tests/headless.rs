@@ -1,0 +1,206 @@
+//! System tests: the real plugins, headless, on scenes from disk, checked through the state
+//! dump and the framebuffer.
+
+use bevy::math::{UVec2, Vec3};
+use canopy::controls::ReloadScene;
+use canopy::dump::dump_state;
+use canopy::raster::Framebuffer;
+use canopy::run::{RunOptions, RunOutput, run_headless};
+use canopy::scene::{ActiveScene, SceneStatus};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// Runs `scene` for `frames` steps with an optional timeline given as YAML text.
+fn run(scene: &str, frames: u64, timeline: Option<&str>, size: UVec2) -> RunOutput {
+    let folder = tempfile::tempdir().unwrap();
+    let timeline = timeline.map(|text| {
+        let file = folder.path().join("timeline.yaml");
+        std::fs::write(&file, text).unwrap();
+        file
+    });
+    let options = RunOptions { scene: path(scene), frames, timeline, size, log: false };
+    run_headless(&options).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn entity<'a>(dump: &'a Value, name: &str) -> &'a Value {
+    dump["entities"].as_array().unwrap().iter().find(|e| e["name"] == name).unwrap_or_else(|| panic!("no {name}"))
+}
+
+fn vec3(value: &Value) -> Vec3 {
+    let a: Vec<f32> = value.as_array().unwrap().iter().map(|v| v.as_f64().unwrap() as f32).collect();
+    Vec3::new(a[0], a[1], a[2])
+}
+
+fn count_pixels(framebuffer: &Framebuffer, rgba: [u8; 4]) -> usize {
+    framebuffer.color().chunks_exact(4).filter(|p| *p == rgba).count()
+}
+
+const SMALL: UVec2 = UVec2::new(160, 120);
+const RED: [u8; 4] = [255, 0, 0, 255];
+const GREEN: [u8; 4] = [0, 255, 0, 255];
+const SKY: [u8; 4] = [0, 0, 255, 255];
+
+#[test]
+fn a_red_sphere_in_front_of_the_camera_is_red_at_the_centre_with_sky_at_the_corners() {
+    let output = run("tests/scenes/red_sphere.yaml", 1, None, SMALL);
+    let fb = &output.framebuffer;
+    assert_eq!((fb.width(), fb.height()), (160, 120));
+    assert_eq!(fb.pixel(80, 60), RED);
+    for (x, y) in [(0, 0), (159, 0), (0, 119), (159, 119)] {
+        assert_eq!(fb.pixel(x, y), SKY, "corner {x},{y}");
+    }
+    // A sphere of radius 1 at distance 5 under a 40 degree fov covers a disc of radius
+    // ~ tan(asin(1/5)) / tan(20 deg) * 60 pixels.
+    let radius = (1.0f64 / 5.0).asin().tan() / 20f64.to_radians().tan() * 60.0;
+    let expected = std::f64::consts::PI * radius * radius;
+    let red = count_pixels(fb, RED) as f64;
+    assert!((red - expected).abs() < expected * 0.03, "{red} red pixels, expected about {expected}");
+}
+
+#[test]
+fn a_box_behind_another_is_hidden_until_the_front_one_moves() {
+    let hidden = run("tests/scenes/occlusion.yaml", 1, None, SMALL);
+    assert_eq!(count_pixels(&hidden.framebuffer, RED), 0);
+    assert!(count_pixels(&hidden.framebuffer, GREEN) > 1000);
+    let moved = run("tests/scenes/occlusion.yaml", 1, Some("- { at: 0, set: { front.position.x: 10 } }"), SMALL);
+    assert!(count_pixels(&moved.framebuffer, RED) > 100);
+    assert_eq!(count_pixels(&moved.framebuffer, GREEN), 0);
+}
+
+#[test]
+fn the_demo_scene_dumps_every_entity_in_order_and_spins_at_its_rate() {
+    let output = run("scenes/demo.yaml", 60, None, SMALL);
+    let dump = &output.dump;
+    assert_eq!(dump["frame"], 60);
+    assert!((dump["time"].as_f64().unwrap() - 1.0).abs() < 1e-6);
+    let names: Vec<&str> = dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["camera", "light", "ground", "ball", "crate", "column", "spinner"]);
+    let spinner = entity(dump, "spinner");
+    assert_eq!(spinner["kind"], "shape");
+    assert_eq!(spinner["primitive"], "box");
+    // 90 degrees per second for one second.
+    assert!((vec3(&spinner["rotation_deg"]).y - 90.0).abs() < 1e-3, "{spinner}");
+    assert_eq!(vec3(&entity(dump, "ball")["position"]), Vec3::new(0.0, 0.6, 0.0));
+}
+
+#[test]
+fn held_keys_orbit_the_camera_at_their_documented_rate() {
+    let start = run("scenes/demo.yaml", 30, None, SMALL);
+    let turned = run(
+        "scenes/demo.yaml",
+        30,
+        Some("- { at: 0, press: [ArrowLeft] }\n- { at: 0.5, release: [ArrowLeft] }"),
+        SMALL,
+    );
+    let yaw = |dump: &Value| {
+        let camera = entity(dump, "camera");
+        let offset = vec3(&camera["position"]) - vec3(&camera["target"]);
+        offset.x.atan2(offset.z).to_degrees()
+    };
+    // 60 degrees per second for half a second, to the left.
+    let turn = yaw(&turned.dump) - yaw(&start.dump);
+    assert!((turn + 30.0).abs() < 1e-2, "turned {turn} degrees");
+    assert_ne!(start.framebuffer.color(), turned.framebuffer.color());
+}
+
+#[test]
+fn timelines_set_parameters_by_name() {
+    let output = run(
+        "scenes/demo.yaml",
+        2,
+        Some("- { at: 0, set: { light.azimuth_deg: 90, light.elevation_deg: 0, ball.color.red: 0.25 } }"),
+        SMALL,
+    );
+    let light = entity(&output.dump, "light");
+    assert!((vec3(&light["direction"]) - Vec3::NEG_X).length() < 1e-6, "{light}");
+    assert_eq!(entity(&output.dump, "ball")["color"][0], 0.25);
+}
+
+#[test]
+fn pause_stops_the_clock_and_step_advances_it_by_one() {
+    let pause = "- { at: 0.25, press: [Space] }\n- { at: 0.3, release: [Space] }\n";
+    let paused_early = run("scenes/demo.yaml", 40, Some(pause), SMALL);
+    let paused_late = run("scenes/demo.yaml", 60, Some(pause), SMALL);
+    let frame = |output: &RunOutput| output.dump["frame"].as_u64().unwrap();
+    assert_eq!(frame(&paused_early), frame(&paused_late));
+    assert!(frame(&paused_early) < 40 && frame(&paused_early) > 10);
+    let stepped = run(
+        "scenes/demo.yaml",
+        60,
+        Some(&format!("{pause}- {{ at: 0.5, press: [Period] }}\n- {{ at: 0.55, release: [Period] }}\n")),
+        SMALL,
+    );
+    assert_eq!(frame(&stepped), frame(&paused_late) + 1);
+}
+
+#[test]
+fn runs_are_deterministic() {
+    let timeline = Some("- { at: 0.1, press: [KeyJ, ArrowUp] }\n- { at: 0.3, release: [KeyJ] }\n");
+    let a = run("scenes/demo.yaml", 25, timeline, SMALL);
+    let b = run("scenes/demo.yaml", 25, timeline, SMALL);
+    assert_eq!(a.dump, b.dump);
+    assert_eq!(a.framebuffer.color(), b.framebuffer.color());
+}
+
+/// Steps `app` until `done` holds, failing after a generous wall-clock limit (file loads run
+/// on the IO threads).
+fn update_until(app: &mut bevy::app::App, done: impl Fn(&ActiveScene) -> bool) {
+    let started = Instant::now();
+    while !done(app.world().resource::<ActiveScene>()) {
+        assert!(started.elapsed() < Duration::from_secs(30), "timed out");
+        app.update();
+    }
+}
+
+#[test]
+fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("live.yaml");
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n").unwrap();
+    let mut app = canopy::app::headless_app(&scene, SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    let names = |app: &mut bevy::app::App| -> Vec<String> {
+        let dump = dump_state(app.world_mut());
+        dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap().to_string()).collect()
+    };
+    assert_eq!(names(&mut app), ["camera", "light", "first"]);
+
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: bx }\n").unwrap();
+    app.world_mut().write_message(ReloadScene);
+    update_until(&mut app, |s| s.error.is_some());
+    let scene_state = app.world().resource::<ActiveScene>();
+    assert_eq!(scene_state.status, SceneStatus::Live);
+    let error = scene_state.error.clone().unwrap();
+    assert!(error.contains("live.yaml:3:") && error.contains("unknown variant `bx`"), "{error}");
+    app.update();
+    assert_eq!(names(&mut app), ["camera", "light", "first"]);
+
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n  - name: second\n    shape: { primitive: sphere }\n").unwrap();
+    app.world_mut().write_message(ReloadScene);
+    update_until(&mut app, |s| s.generation == 2);
+    app.update();
+    assert_eq!(app.world().resource::<ActiveScene>().error, None);
+    assert_eq!(names(&mut app), ["camera", "light", "first", "second"]);
+}
+
+#[test]
+fn the_readme_key_table_lists_every_registered_key() {
+    let app = canopy::app::headless_app(&path("scenes/demo.yaml"), SMALL, false).unwrap();
+    let readme = std::fs::read_to_string(path("README.md")).unwrap();
+    let keys_section = readme.split("## Keys").nth(1).unwrap().split("\n## ").next().unwrap();
+    let key_map = app.world().resource::<canopy::controls::KeyMap>();
+    assert!(key_map.0.len() >= 15);
+    for help in &key_map.0 {
+        let name = help.key_name();
+        let listed = keys_section.lines().any(|line| {
+            line.starts_with('|')
+                && line.split('|').nth(1).is_some_and(|cell| cell.split(" / ").any(|k| k.trim() == name))
+        });
+        assert!(listed, "the README's key table does not list {name} ({})", help.action);
+    }
+}

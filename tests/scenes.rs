@@ -1,0 +1,76 @@
+//! Scene files: every shipped scene is valid, and every malformed file in `tests/malformed/`
+//! is refused with a message naming its line and field.
+
+use canopy::scene::schema::SceneDef;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn shipped_scenes_are_valid() {
+    let mut count = 0;
+    for folder in ["scenes", "tests/scenes"] {
+        for entry in std::fs::read_dir(root().join(folder)).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "yaml") {
+                SceneDef::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                count += 1;
+            }
+        }
+    }
+    assert!(count >= 3, "found only {count} scenes");
+}
+
+/// Each malformed file, the line the error must point at (None: the whole file), and words
+/// the message must contain (the field and what was expected).
+const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
+    ("empty.yaml", None, &["the file is empty: expected a scene"]),
+    ("binary.yaml", Some(3), &["not UTF-8"]),
+    ("syntax.yaml", Some(3), &["expected ',' or ']'"]),
+    ("unknown_section.yaml", Some(4), &["unknown field `camra`", "expected one of"]),
+    ("unknown_shape_field.yaml", Some(5), &["entities[0].shape: unknown field `sise`"]),
+    ("negative_size.yaml", Some(6), &["entities[0].shape.size", "greater than 0", "found -1"]),
+    ("nan_position.yaml", Some(6), &["entities[1].shape.position", "expected a coordinate", "NaN"]),
+    ("huge_number.yaml", Some(2), &["camera.position", "expected a coordinate", "found 1e300"]),
+    ("unknown_primitive.yaml", Some(4), &["entities[0].shape.primitive", "unknown variant `cone`"]),
+    ("no_kind.yaml", Some(4), &["entities[1]", "an entity needs a kind: one of shape"]),
+    ("unknown_kind.yaml", Some(3), &["entities[0]: unknown field `shap`", "expected one of `name`, `shape`"]),
+    ("bad_hex_colour.yaml", Some(1), &["background", "six hex digits", "#12345"]),
+    ("colour_out_of_range.yaml", Some(4), &["entities[0].shape.color", "from 0 to 1", "found 1.5"]),
+    ("duplicate_names.yaml", Some(6), &["entities[2].name", "\"ball\" is used by an earlier entity"]),
+    ("camera_looks_at_itself.yaml", Some(3), &["camera.look_at", "different from camera.position"]),
+    ("fov_out_of_range.yaml", Some(3), &["camera.fov_deg", "less than 180", "found 180"]),
+    ("far_before_near.yaml", Some(3), &["camera.far", "beyond camera.near"]),
+    ("entities_not_a_list.yaml", Some(1), &["entities: invalid type: string", "expected a sequence"]),
+    ("reserved_name.yaml", Some(2), &["entities[0].name", "reserved"]),
+    ("dotted_name.yaml", Some(2), &["entities[0].name", "letters, digits", "my.ball"]),
+    ("wrong_arity.yaml", Some(2), &["light.direction", "invalid length 2"]),
+    ("zero_light_direction.yaml", Some(2), &["light.direction", "non-zero"]),
+    ("deep_nesting.yaml", Some(1), &["recursion limit exceeded"]),
+];
+
+#[test]
+fn malformed_scenes_name_their_line_and_field() {
+    let folder = root().join("tests/malformed");
+    let files = std::fs::read_dir(&folder).unwrap().count();
+    assert_eq!(files, MALFORMED.len(), "every malformed file has an expectation");
+    for &(file, line, words) in MALFORMED {
+        let path = folder.join(file);
+        let error = SceneDef::load(&path).expect_err(file);
+        assert_eq!(error.path, path, "{file}");
+        assert_eq!(error.location.map(|(l, _)| l), line, "{file}: {error}");
+        let shown = error.to_string();
+        assert!(shown.starts_with(&path.display().to_string()), "{shown}");
+        for word in words {
+            assert!(error.message.contains(word), "{file}: `{word}` missing from: {error}");
+        }
+    }
+}
+
+#[test]
+fn a_missing_file_is_an_error_not_a_panic() {
+    let error = SceneDef::load(Path::new("no/such/scene.yaml")).unwrap_err();
+    assert!(error.to_string().starts_with("no/such/scene.yaml: cannot read the file"), "{error}");
+}
