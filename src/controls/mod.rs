@@ -94,9 +94,15 @@ pub struct ReloadScene;
 #[derive(Message, Debug, Clone, Copy)]
 pub struct SaveScreenshot;
 
-/// Whether the key help is shown.
-#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// Whether the key help is shown; it is at start, until F1 hides it.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HelpVisible(pub bool);
+
+impl Default for HelpVisible {
+    fn default() -> Self {
+        Self(true)
+    }
+}
 
 /// The global keys and scripted input.
 pub struct ControlsPlugin;
