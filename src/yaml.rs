@@ -64,9 +64,8 @@ fn yaml_error(path: &Path, text: &str, error: &serde_yaml::Error) -> FileError {
         return FileError::whole_file(path, full);
     };
     let (mut line, mut column) = (location.line(), location.column());
-    // serde_yaml appends " at line L column C" to its messages; the location is kept apart.
-    let suffix = format!(" at line {line} column {column}");
-    let message = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
+    // serde_yaml puts " at line L column C" into its messages; the location is kept apart.
+    let message = full.replacen(&format!(" at line {line} column {column}"), "", 1);
     if let Some(key) = unknown_field(&message)
         && let Some(offset) = key_offsets(text, key).find(|&at| at >= location.index())
     {

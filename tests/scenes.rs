@@ -28,7 +28,7 @@ fn shipped_scenes_are_valid() {
 const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("empty.yaml", None, &["the file is empty: expected a scene"]),
     ("binary.yaml", Some(3), &["not UTF-8"]),
-    ("syntax.yaml", Some(3), &["expected ',' or ']'"]),
+    ("syntax.yaml", Some(3), &["did not find expected key, while parsing a block mapping at line 2"]),
     ("unknown_section.yaml", Some(4), &["unknown field `camra`", "expected one of"]),
     ("unknown_shape_field.yaml", Some(5), &["entities[0].shape: unknown field `sise`"]),
     ("negative_size.yaml", Some(6), &["entities[0].shape.size", "greater than 0", "found -1"]),
@@ -36,7 +36,7 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("huge_number.yaml", Some(2), &["camera.position", "expected a coordinate", "found 1e300"]),
     ("unknown_primitive.yaml", Some(4), &["entities[0].shape.primitive", "unknown variant `cone`"]),
     ("no_kind.yaml", Some(4), &["entities[1]", "an entity needs a kind: one of shape"]),
-    ("unknown_kind.yaml", Some(3), &["entities[0]: unknown field `shap`", "expected one of `name`, `shape`"]),
+    ("unknown_kind.yaml", Some(3), &["entities[0]: unknown field `shap`", "expected", "`shape`"]),
     ("bad_hex_colour.yaml", Some(1), &["background", "six hex digits", "#12345"]),
     ("colour_out_of_range.yaml", Some(4), &["entities[0].shape.color", "from 0 to 1", "found 1.5"]),
     ("duplicate_names.yaml", Some(6), &["entities[2].name", "\"ball\" is used by an earlier entity"]),
@@ -48,7 +48,7 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("dotted_name.yaml", Some(2), &["entities[0].name", "letters, digits", "my.ball"]),
     ("wrong_arity.yaml", Some(2), &["light.direction", "invalid length 2"]),
     ("zero_light_direction.yaml", Some(2), &["light.direction", "non-zero"]),
-    ("deep_nesting.yaml", Some(1), &["recursion limit exceeded"]),
+    ("deep_nesting.yaml", Some(1), &["entities[0]: invalid type: sequence", "expected an entity"]),
 ];
 
 #[test]
@@ -73,4 +73,36 @@ fn malformed_scenes_name_their_line_and_field() {
 fn a_missing_file_is_an_error_not_a_panic() {
     let error = SceneDef::load(Path::new("no/such/scene.yaml")).unwrap_err();
     assert!(error.to_string().starts_with("no/such/scene.yaml: cannot read the file"), "{error}");
+}
+
+mod never_panics {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+
+        /// Arbitrary bytes are refused or accepted, never a panic.
+        #[test]
+        fn on_arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+            let _ = SceneDef::parse(Path::new("fuzz.yaml"), &bytes);
+        }
+
+        /// The demo scene with one span of characters replaced by random text: every error
+        /// still names a place inside the file.
+        #[test]
+        fn on_mutated_scenes(start in 0usize..2000, len in 0usize..40, junk in "[ -~\n]{0,12}") {
+            let text = std::fs::read_to_string(root().join("scenes/demo.yaml")).unwrap();
+            let start = start.min(text.len());
+            let end = (start + len).min(text.len());
+            if text.is_char_boundary(start) && text.is_char_boundary(end) {
+                let mutated = format!("{}{}{}", &text[..start], junk, &text[end..]);
+                if let Err(error) = SceneDef::parse(Path::new("m.yaml"), mutated.as_bytes())
+                    && let Some((line, _)) = error.location
+                {
+                    prop_assert!(line >= 1 && line <= mutated.lines().count() + 1, "{error}");
+                }
+            }
+        }
+    }
 }

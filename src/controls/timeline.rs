@@ -13,6 +13,7 @@
 //! key presses, so scripts and the keyboard drive the same systems.
 
 use crate::params::{ParamError, ParamValue, check_param, set_param};
+use crate::scene::values::checked_number;
 use crate::schedule::{ControlSystems, SimControl};
 use crate::yaml::{FileError, read_yaml_file};
 use bevy::input::ButtonState;
@@ -21,8 +22,9 @@ use bevy::prelude::*;
 use bevy::reflect::FromReflect;
 use bevy::reflect::enums::{DynamicEnum, DynamicVariant};
 use serde::Deserialize;
-use serde::de::{self, Deserializer};
+use serde::de::{self, Deserializer, Visitor};
 use std::collections::BTreeMap;
+use std::fmt;
 use std::path::Path;
 
 /// A key named as Bevy's `KeyCode` variant (`KeyW`, `Space`, `ArrowLeft`, `Digit1`, ...).
@@ -31,30 +33,35 @@ pub struct KeyName(pub KeyCode);
 
 impl<'de> Deserialize<'de> for KeyName {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let name = String::deserialize(deserializer)?;
-        let variant = DynamicEnum::new(name.as_str(), DynamicVariant::Unit);
-        KeyCode::from_reflect(&variant).map(KeyName).ok_or_else(|| {
-            de::Error::custom(format_args!(
-                "unknown key `{name}`: expected a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5"
-            ))
-        })
-    }
-}
+        struct KeyVisitor;
 
-/// Seconds of simulated time, finite and not negative.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Seconds(pub f64);
+        impl<'de> Visitor<'de> for KeyVisitor {
+            type Value = KeyName;
 
-impl<'de> Deserialize<'de> for Seconds {
-    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let value = f64::deserialize(deserializer)?;
-        if value.is_finite() && value >= 0.0 {
-            Ok(Self(value))
-        } else {
-            Err(de::Error::custom(format_args!("expected a time in seconds, 0 or more, found {value}")))
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5")
+            }
+
+            fn visit_str<E: de::Error>(self, name: &str) -> Result<KeyName, E> {
+                let variant = DynamicEnum::new(name, DynamicVariant::Unit);
+                KeyCode::from_reflect(&variant).map(KeyName).ok_or_else(|| {
+                    E::custom(format_args!(
+                        "unknown key `{name}`: expected a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5"
+                    ))
+                })
+            }
         }
+
+        deserializer.deserialize_str(KeyVisitor)
     }
 }
+
+checked_number!(
+    /// Seconds since the scene was loaded, finite and not negative.
+    Seconds(f64),
+    "a time in seconds, 0 or more",
+    |v| v >= 0.0
+);
 
 /// One scripted event.
 #[derive(Debug, Clone, PartialEq, Deserialize)]

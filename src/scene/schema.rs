@@ -127,19 +127,37 @@ impl EntityDef {
     }
 }
 
-/// Checks an entity name: letters, digits, `_` and `-` (a `.` would split parameter names),
-/// not one of [`RESERVED_NAMES`].
-fn check_name<E: de::Error>(name: &str) -> Result<(), E> {
-    let valid_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
-    if name.is_empty() || name.len() > 64 || !valid_chars {
-        return Err(E::custom(format_args!(
-            "expected a name of 1 to 64 letters, digits, `_` or `-`, found \"{name}\""
-        )));
+/// An entity name: letters, digits, `_` and `-` (a `.` would split parameter names), not one
+/// of [`RESERVED_NAMES`].
+struct EntityName(String);
+
+impl<'de> Deserialize<'de> for EntityName {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct NameVisitor;
+
+        impl<'de> Visitor<'de> for NameVisitor {
+            type Value = EntityName;
+
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a name of 1 to 64 letters, digits, `_` or `-`")
+            }
+
+            fn visit_str<E: de::Error>(self, name: &str) -> Result<EntityName, E> {
+                let valid_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+                if name.is_empty() || name.len() > 64 || !valid_chars {
+                    return Err(E::custom(format_args!(
+                        "expected a name of 1 to 64 letters, digits, `_` or `-`, found \"{name}\""
+                    )));
+                }
+                if RESERVED_NAMES.contains(&name) {
+                    return Err(E::custom(format_args!("the name \"{name}\" is reserved for the scene's {name}")));
+                }
+                Ok(EntityName(name.to_string()))
+            }
+        }
+
+        deserializer.deserialize_str(NameVisitor)
     }
-    if RESERVED_NAMES.contains(&name) {
-        return Err(E::custom(format_args!("the name \"{name}\" is reserved for the scene's {name}")));
-    }
-    Ok(())
 }
 
 impl<'de> Deserialize<'de> for EntityDef {
@@ -162,9 +180,7 @@ impl<'de> Deserialize<'de> for EntityDef {
                             if name.is_some() {
                                 return Err(de::Error::duplicate_field("name"));
                             }
-                            let value: String = map.next_value()?;
-                            check_name(&value)?;
-                            name = Some(value);
+                            name = Some(map.next_value::<EntityName>()?.0);
                             continue;
                         }
                         "shape" => EntityKind::Shape(map.next_value()?),

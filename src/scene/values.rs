@@ -11,53 +11,89 @@ use std::fmt;
 /// small enough that `f32` arithmetic on it stays meaningful.
 pub const MAX_METRES: f64 = 1.0e6;
 
-/// Defines an `f32` newtype whose deserializer accepts only finite numbers passing a check.
+/// A number as a message shows it: plainly, or in exponent form when very large or small.
+pub fn shown(value: f64) -> String {
+    if value != 0.0 && value.is_finite() && !(1e-6..1e9).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
+/// Defines a number newtype whose deserializer accepts only finite numbers passing a check.
+/// The check runs inside the deserializer, so errors point at the offending value.
 macro_rules! checked_number {
-    ($(#[$doc:meta])* $name:ident, $expected:literal, |$v:ident| $valid:expr) => {
+    ($(#[$doc:meta])* $name:ident($inner:ty), $expected:literal, |$v:ident| $valid:expr) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, PartialEq)]
-        pub struct $name(pub f32);
+        pub struct $name(pub $inner);
 
-        impl<'de> Deserialize<'de> for $name {
-            fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-                let $v = f64::deserialize(deserializer)?;
-                if $v.is_finite() && $valid {
-                    Ok(Self($v as f32))
-                } else {
-                    Err(de::Error::custom(format_args!("expected {}, found {}", $expected, $v)))
+        impl<'de> serde::Deserialize<'de> for $name {
+            fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                struct NumberVisitor;
+
+                impl<'de> serde::de::Visitor<'de> for NumberVisitor {
+                    type Value = $name;
+
+                    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                        f.write_str($expected)
+                    }
+
+                    fn visit_f64<E: serde::de::Error>(self, $v: f64) -> Result<$name, E> {
+                        if $v.is_finite() && $valid {
+                            Ok($name($v as $inner))
+                        } else {
+                            Err(E::custom(format_args!(
+                                "expected {}, found {}",
+                                $expected,
+                                $crate::scene::values::shown($v)
+                            )))
+                        }
+                    }
+
+                    fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<$name, E> {
+                        self.visit_f64(v as f64)
+                    }
+
+                    fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<$name, E> {
+                        self.visit_f64(v as f64)
+                    }
                 }
+
+                deserializer.deserialize_f64(NumberVisitor)
             }
         }
     };
 }
+pub(crate) use checked_number;
 
 checked_number!(
     /// A coordinate or signed length in metres, finite and within [`MAX_METRES`].
-    Metres,
+    Metres(f32),
     "a coordinate in metres between -1e6 and 1e6",
     |v| v.abs() <= MAX_METRES
 );
 checked_number!(
     /// A positive length in metres, at most [`MAX_METRES`].
-    PositiveMetres,
+    PositiveMetres(f32),
     "a length in metres greater than 0 and at most 1e6",
     |v| v > 0.0 && v <= MAX_METRES
 );
 checked_number!(
     /// An angle in degrees, finite and within one hundred turns either way.
-    Degrees,
+    Degrees(f32),
     "an angle in degrees between -36000 and 36000",
     |v| v.abs() <= 36_000.0
 );
 checked_number!(
     /// A vertical field of view in degrees, strictly between 0 and 180.
-    FieldOfView,
+    FieldOfView(f32),
     "a field of view in degrees greater than 0 and less than 180",
     |v| v > 0.0 && v < 180.0
 );
 checked_number!(
     /// A fraction in `[0, 1]`: a coefficient or a colour channel.
-    UnitInterval,
+    UnitInterval(f32),
     "a number from 0 to 1",
     |v| (0.0..=1.0).contains(&v)
 );
@@ -208,7 +244,7 @@ mod tests {
         }
         // Beyond f64, YAML reads the number as a string.
         let error = parse::<Point>("[0, 0, 1e400]").unwrap_err();
-        assert!(error.contains("invalid type: string \"1e400\", expected f64"), "{error}");
+        assert!(error.contains("invalid type: string \"1e400\", expected a coordinate in metres"), "{error}");
         assert_eq!(parse::<Point>("[1, -2, 3]").unwrap().0, Vec3::new(1.0, -2.0, 3.0));
     }
 
