@@ -179,7 +179,8 @@ fn track_scene_asset(
             scene.status = SceneStatus::Failed;
         }
     }
-    let changed = loaded.read().any(|event| event.is_loaded_with_dependencies(id) || event.is_modified(id));
+    // Sent once per successful load, the first and every reload alike.
+    let changed = loaded.read().any(|event| event.is_loaded_with_dependencies(id));
     let Some(SceneAsset(def)) = changed.then(|| assets.get(id)).flatten() else {
         return;
     };
