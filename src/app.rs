@@ -1,6 +1,7 @@
 //! Assembly of the app, windowed or headless, in one place.
 
 use crate::controls::ControlsPlugin;
+use crate::muscle::MusclePlugin;
 use crate::raster::RasterPlugin;
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::schedule::SchedulePlugin;
@@ -50,6 +51,7 @@ impl PluginGroup for CanopyPlugins {
             .add(ScenePlugin { path: self.scene })
             .add(ViewPlugin)
             .add(ShapePlugin)
+            .add(MusclePlugin)
             .add(RasterPlugin { size, every_frame });
         match self.display {
             Display::Window => group.add(UiPlugin),

@@ -8,6 +8,7 @@
 //! | [`ScenePlugin`](scene::ScenePlugin) | [`scene`] | YAML scene assets, hot reload, spawning |
 //! | [`ViewPlugin`](view::ViewPlugin) | [`view`] | camera and light entities and their keys |
 //! | [`ShapePlugin`](shape::ShapePlugin) | [`shape`] | the `shape` entity kind |
+//! | [`MusclePlugin`](muscle::MusclePlugin) | [`muscle`] | the `muscle` entity kind |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
 //! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: framebuffer, egui panel, key help |
@@ -18,6 +19,7 @@
 pub mod app;
 pub mod controls;
 pub mod dump;
+pub mod muscle;
 pub mod params;
 pub mod raster;
 pub mod run;

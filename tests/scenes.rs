@@ -48,6 +48,15 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("dotted_name.yaml", Some(2), &["entities[0].name", "letters, digits", "my.ball"]),
     ("wrong_arity.yaml", Some(2), &["light.direction", "invalid length 2"]),
     ("zero_light_direction.yaml", Some(2), &["light.direction", "non-zero"]),
+    (
+        "muscle_mismatched_arrays.yaml",
+        Some(4),
+        &["entities[0].muscle.muscle_config", "radiuses has 3 values but grow_mults has 2"],
+    ),
+    ("muscle_zero_radius.yaml", Some(4), &["entities[0].muscle.muscle_config.radiuses", "greater than 0", "found 0"]),
+    ("muscle_nan_length.yaml", Some(3), &["entities[0].muscle.muscle_config.len", "found NaN"]),
+    ("muscle_missing_carcass.yaml", Some(4), &["entities[0].muscle", "missing field `carcass_config`"]),
+    ("muscle_bad_carcass.yaml", Some(6), &["entities[0].muscle.carcass_config.data", "invalid length 1"]),
     ("deep_nesting.yaml", Some(1), &["entities[0]: invalid type: sequence", "expected an entity"]),
 ];
 

@@ -14,6 +14,7 @@ pub mod schema;
 pub mod values;
 
 use crate::controls::ReloadScene;
+use crate::muscle::spawn_muscle;
 use crate::schedule::{ControlSystems, SimClock, SimControl};
 use crate::shape::{PrimitiveMeshes, spawn_shape};
 use crate::view::{Background, CameraParams, LightParams};
@@ -210,6 +211,7 @@ pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMe
         let mut entity = commands.spawn(scene_entity(index + 2, entity_def.display_name(), entity_def.kind.key()));
         match &entity_def.kind {
             EntityKind::Shape(shape) => spawn_shape(&mut entity, shape, meshes),
+            EntityKind::Muscle(muscle) => spawn_muscle(&mut entity, muscle, meshes),
         }
     }
 }

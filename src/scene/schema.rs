@@ -5,6 +5,7 @@
 //! value is that kind's definition. The kinds are listed in [`EntityKind`].
 
 use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
+use crate::muscle::MuscleDef;
 use crate::shape::ShapeDef;
 use crate::yaml::{FileError, parse_yaml, read_yaml_file};
 use bevy::color::Srgba;
@@ -15,7 +16,7 @@ use std::fmt;
 use std::path::Path;
 
 /// The keys of an entity mapping: its name, then every kind.
-const ENTITY_FIELDS: &[&str] = &["name", "shape"];
+const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle"];
 
 /// Names that refer to the scene's camera and light in parameter names and dumps.
 pub const RESERVED_NAMES: [&str; 2] = ["camera", "light"];
@@ -103,6 +104,8 @@ pub struct EntityDef {
 pub enum EntityKind {
     /// A primitive solid (`shape:`).
     Shape(ShapeDef),
+    /// A volume-preserving muscle on its arm (`muscle:`).
+    Muscle(MuscleDef),
 }
 
 impl EntityKind {
@@ -116,6 +119,7 @@ impl EntityKind {
     pub fn key(&self) -> &'static str {
         match self {
             EntityKind::Shape(_) => "shape",
+            EntityKind::Muscle(_) => "muscle",
         }
     }
 }
@@ -184,6 +188,7 @@ impl<'de> Deserialize<'de> for EntityDef {
                             continue;
                         }
                         "shape" => EntityKind::Shape(map.next_value()?),
+                        "muscle" => EntityKind::Muscle(map.next_value()?),
                         other => return Err(de::Error::unknown_field(other, ENTITY_FIELDS)),
                     };
                     if let Some(first) = &kind {
@@ -243,6 +248,15 @@ impl SceneDef {
         }
         if self.light.direction.0.length() < 1e-6 {
             return Err(at_key("direction", 0, "light.direction: expected a non-zero vector".into()));
+        }
+        let muscles = self.entities.iter().enumerate().filter_map(|(index, entity)| match &entity.kind {
+            EntityKind::Muscle(muscle) => Some((index, muscle)),
+            EntityKind::Shape(_) => None,
+        });
+        for (nth, (index, muscle)) in muscles.enumerate() {
+            if let Err(error) = muscle.build() {
+                return Err(at_key("muscle_config", nth, format!("entities[{index}].muscle.muscle_config: {error}")));
+            }
         }
         let mut seen: Vec<&str> = Vec::new();
         for (index, entity) in self.entities.iter().enumerate() {

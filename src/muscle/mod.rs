@@ -1,0 +1,346 @@
+//! The `muscle` entity kind: a volume-preserving biceps on a two-rod arm.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
+//! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
+//! | [`surface`] | the revolved surface with smooth profile normals |
+//!
+//! Parameters: `<name>.flexion_deg` (elbow flexion, 0 = straight arm) and `<name>.length`
+//! (muscle length in config units); setting either moves the other. Keys: W contracts
+//! (flexes), S stretches, Q / E step the flexion by 15 degrees.
+
+pub mod carcass;
+pub mod model;
+pub mod surface;
+
+use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
+use crate::dump::{DumpState, RegisterDump};
+use crate::params::RegisterParams;
+use crate::raster::{MeshData, RasterMesh};
+use crate::scene::values::{Angles, Color, Point, checked_number};
+use crate::schedule::ControlSystems;
+use crate::shape::{Primitive, PrimitiveMeshes};
+use bevy::color::Srgba;
+use bevy::math::{EulerRot, Quat};
+use bevy::prelude::*;
+use carcass::Carcass;
+use model::Muscle;
+use serde::Deserialize;
+use serde_json::{Map, Value, json};
+use std::sync::Arc;
+
+checked_number!(
+    /// A length or radius in config units, finite and greater than 0.
+    ConfigLength(f64),
+    "a number greater than 0",
+    |v| v > 0.0 && v <= 1e9
+);
+checked_number!(
+    /// A growth multiplier: any finite number.
+    Multiplier(f64),
+    "a finite number",
+    |v| v.abs() <= 1e9
+);
+checked_number!(
+    /// A scale factor from config units to metres, greater than 0.
+    Scale(f32),
+    "a scale greater than 0 and at most 1e6",
+    |v| v > 0.0 && v <= 1e6
+);
+checked_number!(
+    /// A bound on the node spacing relative to rest, greater than 0.
+    Part(f64),
+    "a fraction of the rest spacing greater than 0",
+    |v| v > 0.0 && v <= 100.0
+);
+
+/// The source program's `muscle_config`, verbatim.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MuscleConfig {
+    /// Node radii (the source's spelling).
+    pub radiuses: Vec<ConfigLength>,
+    /// Growth multipliers, one per node.
+    pub grow_mults: Vec<Multiplier>,
+    /// Rest length.
+    pub len: ConfigLength,
+}
+
+/// The source program's `carcass_config`, verbatim.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CarcassConfig {
+    /// `[[a1, b1], [a2, b2]]`: rod 1 split at its attachment, rod 2 split at its attachment.
+    pub data: [[ConfigLength; 2]; 2],
+    /// Rod thickness.
+    pub thickness: ConfigLength,
+}
+
+fn default_min_part() -> Part {
+    Part(0.5)
+}
+
+fn default_max_part() -> Part {
+    Part(1.5)
+}
+
+fn default_segments() -> usize {
+    32
+}
+
+fn default_scale() -> Scale {
+    Scale(0.004)
+}
+
+fn default_muscle_color() -> Color {
+    Color(Srgba::rgb(0.78, 0.25, 0.22))
+}
+
+fn origin() -> Point {
+    Point(Vec3::ZERO)
+}
+
+fn no_rotation() -> Angles {
+    Angles(Vec3::ZERO)
+}
+
+/// A `muscle` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MuscleDef {
+    /// The node model.
+    pub muscle_config: MuscleConfig,
+    /// The arm.
+    pub carcass_config: CarcassConfig,
+    /// Shortest node spacing, relative to rest (default 0.5).
+    #[serde(default = "default_min_part")]
+    pub min_part: Part,
+    /// Longest node spacing, relative to rest (default 1.5).
+    #[serde(default = "default_max_part")]
+    pub max_part: Part,
+    /// Vertices around each ring of the surface (default 32).
+    #[serde(default = "default_segments")]
+    pub segments: usize,
+    /// Muscle colour.
+    #[serde(default = "default_muscle_color")]
+    pub color: Color,
+    /// Elbow position in metres.
+    #[serde(default = "origin")]
+    pub position: Point,
+    /// Rotation of the arm in degrees (x, then y, then z).
+    #[serde(default = "no_rotation")]
+    pub rotation_deg: Angles,
+    /// Metres per config unit (default 0.004: a 250-unit muscle is 1 m long).
+    #[serde(default = "default_scale")]
+    pub scale: Scale,
+}
+
+impl MuscleDef {
+    /// The model and carcass this definition describes, or why it describes none.
+    pub fn build(&self) -> Result<(Muscle, Carcass), model::ConfigError> {
+        let radii = self.muscle_config.radiuses.iter().map(|r| r.0).collect();
+        let mults = self.muscle_config.grow_mults.iter().map(|m| m.0).collect();
+        let muscle = Muscle::new(radii, mults, self.muscle_config.len.0, self.min_part.0, self.max_part.0)?;
+        let [[a1, b1], [a2, b2]] = self.carcass_config.data;
+        let carcass = Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: self.carcass_config.thickness.0 };
+        Ok((muscle, carcass))
+    }
+}
+
+/// The live muscle: model, carcass and the surface mesh.
+#[derive(Component, Debug, Clone)]
+pub struct MuscleBody {
+    /// The node model.
+    pub model: Muscle,
+    /// The arm.
+    pub carcass: Carcass,
+    /// Vertices around each ring.
+    pub segments: usize,
+    /// The flexion and length last applied, to tell which parameter the user changed.
+    applied: (f64, f64),
+    /// Why the last requested change was refused or clamped.
+    pub message: Option<String>,
+}
+
+/// The muscle's editable parameters.
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct MuscleParams {
+    /// Elbow flexion in degrees, 0 = straight arm.
+    pub flexion_deg: f64,
+    /// Muscle length in config units.
+    pub length: f64,
+}
+
+/// Marks the entity drawing the muscle surface, a child of the muscle entity.
+#[derive(Component)]
+struct MuscleSurface;
+
+/// Marks the entity drawing rod 1 or rod 2 of the carcass.
+#[derive(Component)]
+struct Rod(u8);
+
+/// Spawns a muscle entity and its drawn parts onto `entity`.
+pub fn spawn_muscle(entity: &mut EntityCommands, def: &MuscleDef, meshes: &PrimitiveMeshes) {
+    let (model, carcass) = match def.build() {
+        Ok(built) => built,
+        Err(error) => {
+            // Scene files are checked before spawning; a definition built in code may not be.
+            error!("muscle not spawned: {error}");
+            return;
+        }
+    };
+    let length = model.length();
+    let flexion_deg = carcass.flexion_from_length(length).value.to_degrees();
+    let r = def.rotation_deg.0.map(f32::to_radians);
+    let color = def.color.0;
+    let color = Vec3::new(color.red, color.green, color.blue);
+    entity
+        .insert((
+            Transform {
+                translation: def.position.0,
+                rotation: Quat::from_euler(EulerRot::XYZ, r.x, r.y, r.z),
+                scale: Vec3::splat(def.scale.0),
+            },
+            MuscleParams { flexion_deg, length },
+            MuscleBody {
+                model,
+                carcass,
+                segments: def.segments.clamp(3, 256),
+                applied: (f64::NAN, f64::NAN),
+                message: None,
+            },
+        ))
+        .with_children(|children| {
+            children.spawn((MuscleSurface, RasterMesh { mesh: Arc::new(MeshData::default()), color }));
+            for index in 0..2 {
+                let rod = RasterMesh { mesh: meshes.get(Primitive::Cylinder).clone(), color: Vec3::splat(0.85) };
+                children.spawn((Rod(index), rod));
+            }
+        });
+}
+
+/// Registers the muscle kind.
+pub struct MusclePlugin;
+
+/// Flexion speed of the hold keys, degrees per second.
+const FLEX_DEG_PER_S: f64 = 30.0;
+/// Flexion step of the step keys, degrees.
+const FLEX_STEP_DEG: f64 = 15.0;
+/// Muscle keys: (key, action, hold rate sign, step sign).
+const MUSCLE_KEYS: [(KeyCode, &str, f64, f64); 4] = [
+    (KeyCode::KeyW, "contract the muscle (flex the elbow)", 1.0, 0.0),
+    (KeyCode::KeyS, "stretch the muscle (extend the elbow)", -1.0, 0.0),
+    (KeyCode::KeyE, "flex the elbow 15 degrees more", 0.0, 1.0),
+    (KeyCode::KeyQ, "flex the elbow 15 degrees less", 0.0, -1.0),
+];
+
+impl Plugin for MusclePlugin {
+    fn build(&self, app: &mut App) {
+        let help = MUSCLE_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Kind("muscle") });
+        app.register_params::<MuscleParams>()
+            .register_dump::<MuscleBody>()
+            .register_keys(&help)
+            .add_systems(Update, flex_with_keys.in_set(ControlSystems::Input))
+            .add_systems(Update, (apply_muscle_params, place_muscle_parts).chain().in_set(ControlSystems::Apply));
+    }
+}
+
+fn flex_with_keys(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut muscles: Query<&mut MuscleParams>) {
+    let mut change = 0.0;
+    for (key, _, rate, step) in MUSCLE_KEYS {
+        if keys.pressed(key) {
+            change += rate * FLEX_DEG_PER_S * time.delta_secs_f64();
+        }
+        if keys.just_pressed(key) {
+            change += step * FLEX_STEP_DEG;
+        }
+    }
+    if change != 0.0 {
+        for mut params in &mut muscles {
+            params.flexion_deg = (params.flexion_deg + change).clamp(0.0, 180.0);
+        }
+    }
+}
+
+/// Moves the model to the length or flexion the parameters ask for; a refusal keeps the last
+/// valid state and is reported.
+fn apply_muscle_params(mut muscles: Query<(&mut MuscleParams, &mut MuscleBody), Changed<MuscleParams>>) {
+    for (mut params, mut body) in &mut muscles {
+        let body = &mut *body;
+        let flexion_changed = params.flexion_deg != body.applied.0;
+        let (length, clamp_note) = if flexion_changed {
+            let clamped = body.carcass.length_from_flexion(params.flexion_deg.to_radians());
+            (clamped.value, clamped.note)
+        } else {
+            (params.length, None)
+        };
+        body.message = match body.model.set_length(length) {
+            Ok(()) => clamp_note.map(str::to_string),
+            Err(refusal) => Some(refusal.to_string()),
+        };
+        if let Some(message) = &body.message {
+            warn!("muscle: {message}");
+        }
+        let length = body.model.length();
+        let flexion = body.carcass.flexion_from_length(length).value.to_degrees();
+        body.applied = (flexion, length);
+        let params = params.bypass_change_detection();
+        params.flexion_deg = flexion;
+        params.length = length;
+    }
+}
+
+/// The drawn surface of a muscle, apart from its rods.
+type SurfaceParts<'w, 's> =
+    Query<'w, 's, (&'static mut RasterMesh, &'static mut Transform), (With<MuscleSurface>, Without<Rod>)>;
+
+/// Rebuilds the surface and places the surface and rods for the current state.
+fn place_muscle_parts(
+    muscles: Query<(&MuscleBody, &Children), Changed<MuscleBody>>,
+    mut surfaces: SurfaceParts,
+    mut rods: Query<(&Rod, &mut Transform), Without<MuscleSurface>>,
+) {
+    for (body, children) in &muscles {
+        let carcass = &body.carcass;
+        let flexion = carcass.flexion_from_length(body.model.length()).value;
+        // The elbow is the origin; rod 1 lies along -x, rod 2 turns up by the flexion.
+        let forearm = Vec3::new(flexion.cos() as f32, flexion.sin() as f32, 0.0);
+        let attachment_1 = Vec3::new(-carcass.b1 as f32, 0.0, 0.0);
+        let attachment_2 = forearm * carcass.a2 as f32;
+        let ends = [
+            (Vec3::new(-(carcass.a1 + carcass.b1) as f32, 0.0, 0.0), Vec3::ZERO),
+            (Vec3::ZERO, forearm * (carcass.a2 + carcass.b2) as f32),
+        ];
+        for child in children.iter() {
+            if let Ok((mut mesh, mut transform)) = surfaces.get_mut(child) {
+                let muscle_mesh = Arc::make_mut(&mut mesh.mesh);
+                surface::build_surface(body.model.radii(), body.model.node_spacing(), body.segments, muscle_mesh);
+                let axis = attachment_2 - attachment_1;
+                *transform = Transform::from_translation(attachment_1)
+                    .with_rotation(Quat::from_rotation_arc(Vec3::X, axis.normalize_or(Vec3::X)));
+            } else if let Ok((rod, mut transform)) = rods.get_mut(child) {
+                let (start, end) = ends[rod.0 as usize];
+                let thickness = carcass.thickness as f32;
+                *transform = Transform {
+                    translation: (start + end) / 2.0,
+                    rotation: Quat::from_rotation_arc(Vec3::Y, (end - start).normalize_or(Vec3::Y)),
+                    scale: Vec3::new(thickness, (end - start).length(), thickness),
+                };
+            }
+        }
+    }
+}
+
+impl DumpState for MuscleBody {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let model = &self.model;
+        out.insert("radii".into(), json!(model.radii()));
+        out.insert("length".into(), json!(model.length()));
+        out.insert("flexion_deg".into(), json!(self.carcass.flexion_from_length(model.length()).value.to_degrees()));
+        out.insert("volume".into(), json!(model.volume()));
+        out.insert("rest_volume".into(), json!(model.rest_volume()));
+        out.insert("node_spacing".into(), json!(model.node_spacing()));
+    }
+}
