@@ -60,6 +60,26 @@ fn capture_window(mut commands: Commands, capture: Res<WindowCapture>, scene: Re
     }
 }
 
+/// Draws a kind's own section of the panel for a selected entity, with access to the world.
+pub type PanelSection = fn(&mut egui::Ui, &mut World, Entity);
+
+/// The panel sections of entity kinds, drawn under the parameters of a selected entity.
+#[derive(Resource, Default)]
+pub struct PanelSections(Vec<(&'static str, PanelSection)>);
+
+/// Registration of panel sections on the app.
+pub trait RegisterPanel {
+    /// Draws `section` in the panel when an entity of `kind` is selected.
+    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self;
+}
+
+impl RegisterPanel for App {
+    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self {
+        self.world_mut().get_resource_or_init::<PanelSections>().0.push((kind, section));
+        self
+    }
+}
+
 /// The image the framebuffer is copied into for display.
 #[derive(Resource)]
 struct FramebufferImage(Handle<Image>);
@@ -115,6 +135,8 @@ struct PanelData {
     stats: crate::raster::RenderStats,
     raster_ms: f32,
     entities: Vec<(String, &'static str)>,
+    /// The selected entity and its kind.
+    selected: Option<(Entity, &'static str)>,
     params: Vec<ParamEntry>,
     keys: Vec<(String, &'static str)>,
     help: bool,
@@ -128,11 +150,9 @@ impl PanelData {
             .map(|(e, s)| (s.index, e, s.name.clone(), s.kind))
             .collect();
         entities.sort_by_key(|(index, ..)| *index);
-        let params = entities
-            .iter()
-            .find(|(_, _, name, _)| Some(name.as_str()) == selected)
-            .map(|(_, entity, ..)| list_params(world, *entity))
-            .unwrap_or_default();
+        let selected =
+            entities.iter().find(|(_, _, name, _)| Some(name.as_str()) == selected).map(|(_, e, _, kind)| (*e, *kind));
+        let params = selected.map(|(entity, _)| list_params(world, entity)).unwrap_or_default();
         let scene = world.resource::<ActiveScene>();
         let target = world.resource::<RasterTarget>();
         let keys = world.resource::<KeyMap>().active(&scene.kinds).map(|help| (help.key_name(), help.action)).collect();
@@ -146,6 +166,7 @@ impl PanelData {
             stats: target.stats,
             raster_ms: target.raster_time.as_secs_f32() * 1000.0,
             entities: entities.into_iter().map(|(_, _, name, kind)| (name, kind)).collect(),
+            selected,
             params,
             keys,
             help: world.resource::<HelpVisible>().0,
@@ -173,6 +194,11 @@ fn draw_ui(world: &mut World) {
     let frame_seconds = world.resource::<Time<Real>>().delta_secs();
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
     state.frame_ms += (frame_seconds * 1000.0 - state.frame_ms) * 0.1;
+    if state.selected.is_none() {
+        // Start with the first entity of the file selected (after the camera and the light).
+        state.selected =
+            world.query::<&SceneEntity>().iter(world).filter(|s| s.index == 2).map(|s| s.name.clone()).next();
+    }
     let data = PanelData::gather(world, state.selected.as_deref());
     let mut actions = PanelActions::default();
 
@@ -181,9 +207,21 @@ fn draw_ui(world: &mut World) {
         "canopy-root".into(),
         egui::UiBuilder::new().layer_id(egui::LayerId::background()).max_rect(ctx.viewport_rect()),
     );
-    egui::Panel::right("canopy-panel")
-        .default_size(300.0)
-        .show_inside(&mut root, |ui| panel(ui, &data, &mut state, &mut actions));
+    let sections: Vec<PanelSection> = match (data.selected, world.get_resource::<PanelSections>()) {
+        (Some((_, kind)), Some(sections)) => sections.0.iter().filter(|(k, _)| *k == kind).map(|(_, s)| *s).collect(),
+        _ => Vec::new(),
+    };
+    egui::Panel::right("canopy-panel").default_size(300.0).show_inside(&mut root, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            panel(ui, &data, &mut state, &mut actions);
+            if let Some((entity, _)) = data.selected {
+                for section in &sections {
+                    ui.separator();
+                    section(ui, world, entity);
+                }
+            }
+        });
+    });
     let view = egui::CentralPanel::no_frame()
         .show_inside(&mut root, |ui| {
             let size = ui.available_size();

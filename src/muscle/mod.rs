@@ -5,6 +5,7 @@
 //! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
 //! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
 //! | [`surface`] | the revolved surface with smooth profile normals |
+//! | [`panel`] | the window's muscle section: figures, node editor, model vs real plot |
 //!
 //! Parameters: `<name>.flexion_deg` (elbow flexion, 0 = straight arm) and `<name>.length`
 //! (muscle length in config units); setting either moves the other. Keys: W contracts
@@ -12,6 +13,7 @@
 
 pub mod carcass;
 pub mod model;
+pub mod panel;
 pub mod surface;
 
 use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
@@ -21,6 +23,7 @@ use crate::raster::{MeshData, RasterMesh};
 use crate::scene::values::{Angles, Color, Point, checked_number};
 use crate::schedule::ControlSystems;
 use crate::shape::{Primitive, PrimitiveMeshes};
+use crate::ui::RegisterPanel;
 use bevy::color::Srgba;
 use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
@@ -242,6 +245,7 @@ impl Plugin for MusclePlugin {
         app.register_params::<MuscleParams>()
             .register_dump::<MuscleBody>()
             .register_keys(&help)
+            .register_panel_section("muscle", panel::muscle_section)
             .add_systems(Update, flex_with_keys.in_set(ControlSystems::Input))
             .add_systems(Update, (apply_muscle_params, place_muscle_parts).chain().in_set(ControlSystems::Apply));
     }
