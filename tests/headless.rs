@@ -242,3 +242,24 @@ fn holding_w_flexes_the_elbow_at_its_documented_rate() {
     // 30 degrees per second for 30 frames at 60 Hz.
     assert!((flexion(&output) - flexion(&start) - 15.0).abs() < 1e-3, "{} -> {}", flexion(&start), flexion(&output));
 }
+
+#[test]
+fn the_source_config_file_alone_is_a_playable_scene() {
+    let output = run("scenes/biceps_config.yaml", 2, Some("- { at: 0, set: { muscle.flexion_deg: 60 } }"), SMALL);
+    let muscle = entity(&output.dump, "muscle");
+    assert_eq!(muscle["kind"], "muscle");
+    assert!((muscle["flexion_deg"].as_f64().unwrap() - 60.0).abs() < 1e-9);
+    // The default camera frames the arm: the muscle's red is on screen, around the middle.
+    let width = output.framebuffer.width() as usize;
+    let columns: Vec<usize> = output
+        .framebuffer
+        .color()
+        .chunks_exact(4)
+        .enumerate()
+        .filter(|(_, p)| p[0] as u32 > 2 * p[1] as u32 && p[0] > 60)
+        .map(|(i, _)| i % width)
+        .collect();
+    assert!(columns.len() > 100, "{} muscle pixels", columns.len());
+    let centre = columns.iter().sum::<usize>() as f64 / columns.len() as f64;
+    assert!((width as f64 * 0.2..width as f64 * 0.8).contains(&centre), "muscle centred at column {centre}");
+}

@@ -176,6 +176,31 @@ pub struct MuscleParams {
     pub length: f64,
 }
 
+/// Where the arm stands: the model's position, rotation and scale, editable like any
+/// parameter (`<name>.position.x`, `<name>.rotation_deg.y`, `<name>.scale`, ...).
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct Placement {
+    /// The elbow, metres.
+    pub position: Vec3,
+    /// Rotation in degrees about x, then y, then z.
+    pub rotation_deg: Vec3,
+    /// Metres per config unit.
+    pub scale: f32,
+}
+
+impl Placement {
+    /// The transform these values describe (a scale of at least 1e-6).
+    pub fn transform(&self) -> Transform {
+        let r = self.rotation_deg.map(f32::to_radians);
+        Transform {
+            translation: self.position,
+            rotation: Quat::from_euler(EulerRot::XYZ, r.x, r.y, r.z),
+            scale: Vec3::splat(self.scale.max(1e-6)),
+        }
+    }
+}
+
 /// Marks the entity drawing the muscle surface, a child of the muscle entity.
 #[derive(Component)]
 struct MuscleSurface;
@@ -196,16 +221,13 @@ pub fn spawn_muscle(entity: &mut EntityCommands, def: &MuscleDef, meshes: &Primi
     };
     let length = model.length();
     let flexion_deg = carcass.flexion_from_length(length).value.to_degrees();
-    let r = def.rotation_deg.0.map(f32::to_radians);
     let color = def.color.0;
     let color = Vec3::new(color.red, color.green, color.blue);
+    let placement = Placement { position: def.position.0, rotation_deg: def.rotation_deg.0, scale: def.scale.0 };
     entity
         .insert((
-            Transform {
-                translation: def.position.0,
-                rotation: Quat::from_euler(EulerRot::XYZ, r.x, r.y, r.z),
-                scale: Vec3::splat(def.scale.0),
-            },
+            placement.transform(),
+            placement,
             MuscleParams { flexion_deg, length },
             MuscleBody {
                 model,
@@ -238,16 +260,38 @@ const MUSCLE_KEYS: [(KeyCode, &str, f64, f64); 4] = [
     (KeyCode::KeyE, "flex the elbow 15 degrees more", 0.0, 1.0),
     (KeyCode::KeyQ, "flex the elbow 15 degrees less", 0.0, -1.0),
 ];
+/// Turning speed of the model, degrees per second.
+const TURN_DEG_PER_S: f32 = 45.0;
+/// Moving speed of the model, metres per second.
+const MOVE_M_PER_S: f32 = 0.5;
+/// Scaling speed of the model: the scale changes by this factor per second.
+const SCALE_PER_S: f32 = 1.5;
+/// Placement keys: (key, action, turn about y, move along x, move along y, scale exponent).
+const PLACEMENT_KEYS: [(KeyCode, &str, f32, f32, f32, f32); 8] = [
+    (KeyCode::KeyR, "turn the arm left", 1.0, 0.0, 0.0, 0.0),
+    (KeyCode::KeyF, "turn the arm right", -1.0, 0.0, 0.0, 0.0),
+    (KeyCode::KeyA, "move the arm left", 0.0, -1.0, 0.0, 0.0),
+    (KeyCode::KeyD, "move the arm right", 0.0, 1.0, 0.0, 0.0),
+    (KeyCode::KeyT, "move the arm up", 0.0, 0.0, 1.0, 0.0),
+    (KeyCode::KeyG, "move the arm down", 0.0, 0.0, -1.0, 0.0),
+    (KeyCode::KeyX, "make the arm larger", 0.0, 0.0, 0.0, 1.0),
+    (KeyCode::KeyZ, "make the arm smaller", 0.0, 0.0, 0.0, -1.0),
+];
 
 impl Plugin for MusclePlugin {
     fn build(&self, app: &mut App) {
-        let help = MUSCLE_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Kind("muscle") });
+        let help = |key, action| KeyHelp { key, action, scope: KeyScope::Kind("muscle") };
         app.register_params::<MuscleParams>()
+            .register_params::<Placement>()
             .register_dump::<MuscleBody>()
-            .register_keys(&help)
+            .register_keys(&MUSCLE_KEYS.map(|(key, action, ..)| help(key, action)))
+            .register_keys(&PLACEMENT_KEYS.map(|(key, action, ..)| help(key, action)))
             .register_panel_section("muscle", panel::muscle_section)
-            .add_systems(Update, flex_with_keys.in_set(ControlSystems::Input))
-            .add_systems(Update, (apply_muscle_params, place_muscle_parts).chain().in_set(ControlSystems::Apply));
+            .add_systems(Update, (flex_with_keys, place_with_keys).in_set(ControlSystems::Input))
+            .add_systems(
+                Update,
+                ((apply_muscle_params, place_muscle_parts).chain(), apply_placement).in_set(ControlSystems::Apply),
+            );
     }
 }
 
@@ -265,6 +309,31 @@ fn flex_with_keys(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut muscles:
         for mut params in &mut muscles {
             params.flexion_deg = (params.flexion_deg + change).clamp(0.0, 180.0);
         }
+    }
+}
+
+fn place_with_keys(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut placements: Query<&mut Placement>) {
+    let dt = time.delta_secs();
+    let (mut turn, mut shift, mut grow) = (0.0, Vec3::ZERO, 0.0);
+    for (key, _, t, x, y, s) in PLACEMENT_KEYS {
+        if keys.pressed(key) {
+            (turn, shift, grow) = (turn + t, shift + Vec3::new(x, y, 0.0), grow + s);
+        }
+    }
+    if (turn, shift, grow) == (0.0, Vec3::ZERO, 0.0) {
+        return;
+    }
+    for mut placement in &mut placements {
+        placement.rotation_deg.y =
+            (placement.rotation_deg.y + turn * TURN_DEG_PER_S * dt + 180.0).rem_euclid(360.0) - 180.0;
+        placement.position += shift * MOVE_M_PER_S * dt;
+        placement.scale *= SCALE_PER_S.powf(grow * dt);
+    }
+}
+
+fn apply_placement(mut placements: Query<(&Placement, &mut Transform), Changed<Placement>>) {
+    for (placement, mut transform) in &mut placements {
+        *transform = placement.transform();
     }
 }
 

@@ -7,7 +7,7 @@
 use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::muscle::MuscleDef;
 use crate::shape::ShapeDef;
-use crate::yaml::{FileError, parse_yaml, read_yaml_file};
+use crate::yaml::{FileError, parse_yaml};
 use bevy::color::Srgba;
 use bevy::math::Vec3;
 use serde::Deserialize;
@@ -214,16 +214,41 @@ impl<'de> Deserialize<'de> for EntityDef {
 impl SceneDef {
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Self, FileError> {
-        let scene: Self = read_yaml_file(path, "a scene")?;
-        scene.check(path, &std::fs::read_to_string(path).unwrap_or_default())?;
-        Ok(scene)
+        let bytes = std::fs::read(path)
+            .map_err(|error| FileError::whole_file(path, format!("cannot read the file: {error}")))?;
+        Self::parse(path, &bytes)
     }
 
     /// Parses and checks scene text read from `path`.
+    ///
+    /// A file whose top level is the source program's muscle configuration (`muscle_config`
+    /// and `carcass_config`) is a scene too: that muscle, named `muscle`, seen from a camera
+    /// that frames its arm.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
-        let scene: Self = parse_yaml(path, bytes, "a scene")?;
-        scene.check(path, &String::from_utf8_lossy(bytes))?;
+        let text = String::from_utf8_lossy(bytes);
+        let scene = if text.lines().any(|line| line.starts_with("muscle_config:")) {
+            Self::of_muscle(parse_yaml(path, bytes, "a muscle configuration")?)
+        } else {
+            parse_yaml(path, bytes, "a scene")?
+        };
+        scene.check(path, &text)?;
         Ok(scene)
+    }
+
+    /// A scene holding one muscle, framed from the front.
+    fn of_muscle(muscle: MuscleDef) -> Self {
+        let camera = CameraDef {
+            position: Point(Vec3::new(-0.2, 0.7, 2.4)),
+            look_at: Point(Vec3::new(-0.2, 0.1, 0.0)),
+            fov_deg: FieldOfView(45.0),
+            ..CameraDef::default()
+        };
+        Self {
+            camera,
+            light: LightDef::default(),
+            background: default_background(),
+            entities: vec![EntityDef { name: None, kind: EntityKind::Muscle(muscle) }],
+        }
     }
 
     /// The checks that involve several fields, located by their key in `text`.
