@@ -263,3 +263,11 @@ fn the_source_config_file_alone_is_a_playable_scene() {
     let centre = columns.iter().sum::<usize>() as f64 / columns.len() as f64;
     assert!((width as f64 * 0.2..width as f64 * 0.8).contains(&centre), "muscle centred at column {centre}");
 }
+
+#[test]
+fn a_muscle_configured_from_another_file_plays_like_the_inline_one() {
+    let timeline = Some("- { at: 0, set: { biceps.flexion_deg: 80 } }");
+    let from_file = run("scenes/biceps_from_file.yaml", 3, timeline, SMALL);
+    let inline = run("scenes/biceps.yaml", 3, timeline, SMALL);
+    assert_eq!(entity(&from_file.dump, "biceps")["radii"], entity(&inline.dump, "biceps")["radii"]);
+}

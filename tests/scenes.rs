@@ -55,8 +55,10 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ),
     ("muscle_zero_radius.yaml", Some(4), &["entities[0].muscle.muscle_config.radiuses", "greater than 0", "found 0"]),
     ("muscle_nan_length.yaml", Some(3), &["entities[0].muscle.muscle_config.len", "found NaN"]),
-    ("muscle_missing_carcass.yaml", Some(4), &["entities[0].muscle", "missing field `carcass_config`"]),
+    ("muscle_missing_carcass.yaml", Some(4), &["entities[0].muscle", "needs muscle_config and carcass_config"]),
     ("muscle_bad_carcass.yaml", Some(6), &["entities[0].muscle.carcass_config.data", "invalid length 1"]),
+    ("muscle_file_outside.yaml", Some(4), &["entities[0].muscle.file", "inside the scene's folder", "../../scenes"]),
+    ("muscle_file_and_inline.yaml", Some(5), &["entities[0].muscle.file", "either inline or from a file, not both"]),
     ("deep_nesting.yaml", Some(1), &["entities[0]: invalid type: sequence", "expected an entity"]),
 ];
 
@@ -114,4 +116,30 @@ mod never_panics {
             }
         }
     }
+}
+
+#[test]
+fn referenced_configurations_are_read_and_their_errors_located() {
+    let from_file = SceneDef::load(&root().join("scenes/biceps_from_file.yaml")).unwrap();
+    let inline = SceneDef::load(&root().join("scenes/biceps.yaml")).unwrap();
+    let muscle = |scene: &SceneDef| match &scene.entities[0].kind {
+        canopy::scene::schema::EntityKind::Muscle(muscle) => muscle.build().unwrap(),
+        other => panic!("not a muscle: {other:?}"),
+    };
+    assert_eq!(muscle(&from_file), muscle(&inline));
+
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("scene.yaml");
+    std::fs::write(&scene, "entities:\n  - muscle: { file: arm.yaml }\n").unwrap();
+    let error = SceneDef::load(&scene).unwrap_err();
+    assert_eq!(error.path, folder.path().join("arm.yaml"));
+    assert!(error.message.contains("cannot read the file"), "{error}");
+    std::fs::write(
+        folder.path().join("arm.yaml"),
+        "muscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1, 1]\n  len: -3\n",
+    )
+    .unwrap();
+    let error = SceneDef::load(&scene).unwrap_err();
+    assert_eq!((error.path.clone(), error.location.map(|l| l.0)), (folder.path().join("arm.yaml"), Some(4)), "{error}");
+    assert!(error.message.contains("muscle_config.len"), "{error}");
 }

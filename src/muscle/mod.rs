@@ -112,10 +112,16 @@ fn no_rotation() -> Angles {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MuscleDef {
+    /// A file holding `muscle_config` and `carcass_config`, relative to the scene's folder;
+    /// instead of giving them inline.
+    #[serde(default)]
+    pub file: Option<ConfigPath>,
     /// The node model.
-    pub muscle_config: MuscleConfig,
+    #[serde(default)]
+    pub muscle_config: Option<MuscleConfig>,
     /// The arm.
-    pub carcass_config: CarcassConfig,
+    #[serde(default)]
+    pub carcass_config: Option<CarcassConfig>,
     /// Shortest node spacing, relative to rest (default 0.5).
     #[serde(default = "default_min_part")]
     pub min_part: Part,
@@ -142,12 +148,66 @@ pub struct MuscleDef {
 impl MuscleDef {
     /// The model and carcass this definition describes, or why it describes none.
     pub fn build(&self) -> Result<(Muscle, Carcass), model::ConfigError> {
-        let radii = self.muscle_config.radiuses.iter().map(|r| r.0).collect();
-        let mults = self.muscle_config.grow_mults.iter().map(|m| m.0).collect();
-        let muscle = Muscle::new(radii, mults, self.muscle_config.len.0, self.min_part.0, self.max_part.0)?;
-        let [[a1, b1], [a2, b2]] = self.carcass_config.data;
-        let carcass = Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: self.carcass_config.thickness.0 };
+        let (Some(config), Some(arm)) = (&self.muscle_config, &self.carcass_config) else {
+            return Err(model::ConfigError::Missing);
+        };
+        let radii = config.radiuses.iter().map(|r| r.0).collect();
+        let mults = config.grow_mults.iter().map(|m| m.0).collect();
+        let muscle = Muscle::new(radii, mults, config.len.0, self.min_part.0, self.max_part.0)?;
+        let [[a1, b1], [a2, b2]] = arm.data;
+        let carcass = Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: arm.thickness.0 };
         Ok((muscle, carcass))
+    }
+
+    /// Takes the configurations from a referenced file's contents.
+    pub fn fill_from(&mut self, file: ConfigFile) {
+        self.muscle_config = Some(file.muscle_config);
+        self.carcass_config = Some(file.carcass_config);
+    }
+}
+
+/// A file holding exactly the source program's configuration.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigFile {
+    /// The node model.
+    pub muscle_config: MuscleConfig,
+    /// The arm.
+    pub carcass_config: CarcassConfig,
+}
+
+/// A path to a configuration file: relative, inside the scene's folder (no `..`), ending in
+/// `.yaml` or `.yml`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigPath(pub String);
+
+impl<'de> Deserialize<'de> for ConfigPath {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct PathVisitor;
+
+        impl serde::de::Visitor<'_> for PathVisitor {
+            type Value = ConfigPath;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a .yaml file in the scene's folder, e.g. biceps_config.yaml")
+            }
+
+            fn visit_str<E: serde::de::Error>(self, path: &str) -> Result<ConfigPath, E> {
+                let inside = std::path::Path::new(path)
+                    .components()
+                    .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
+                let yaml = path.ends_with(".yaml") || path.ends_with(".yml");
+                if inside && yaml && !path.is_empty() {
+                    Ok(ConfigPath(path.to_string()))
+                } else {
+                    Err(E::custom(format_args!(
+                        "expected a .yaml file inside the scene's folder (relative, without `..`), found \"{path}\""
+                    )))
+                }
+            }
+        }
+
+        deserializer.deserialize_str(PathVisitor)
     }
 }
 

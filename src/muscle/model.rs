@@ -68,6 +68,9 @@ pub enum ConfigError {
     /// The rest length is not a positive finite number.
     #[error("len must be a finite number greater than 0, found {0}")]
     BadLength(f64),
+    /// The muscle has no configuration, inline or from a file.
+    #[error("a muscle needs muscle_config and carcass_config, inline or from a `file`")]
+    Missing,
     /// The bounds on the node spacing are not `0 < min_part <= 1 <= max_part`.
     #[error("min_part and max_part must satisfy 0 < min_part <= 1 <= max_part, found {0} and {1}")]
     BadBounds(f64, f64),

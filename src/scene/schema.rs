@@ -5,7 +5,7 @@
 //! value is that kind's definition. The kinds are listed in [`EntityKind`].
 
 use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
-use crate::muscle::MuscleDef;
+use crate::muscle::{ConfigFile, MuscleDef};
 use crate::shape::ShapeDef;
 use crate::yaml::{FileError, parse_yaml};
 use bevy::color::Srgba;
@@ -219,19 +219,70 @@ impl SceneDef {
         Self::parse(path, &bytes)
     }
 
-    /// Parses and checks scene text read from `path`.
+    /// Parses and checks scene text read from `path`, reading referenced files next to it.
+    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+        let mut scene = Self::parse_unresolved(path, bytes)?;
+        let folder = path.parent().unwrap_or(Path::new(""));
+        for file in scene.references() {
+            let referenced = folder.join(&file);
+            let contents = std::fs::read(&referenced)
+                .map_err(|error| FileError::whole_file(&referenced, format!("cannot read the file: {error}")))?;
+            scene.resolve(&file, &referenced, &contents)?;
+        }
+        scene.check(path, &String::from_utf8_lossy(bytes))?;
+        Ok(scene)
+    }
+
+    /// The configuration files the scene refers to, relative to its folder.
+    pub fn references(&self) -> Vec<String> {
+        let mut files: Vec<String> = self
+            .entities
+            .iter()
+            .filter_map(|entity| match &entity.kind {
+                EntityKind::Muscle(muscle) => muscle.file.as_ref().map(|f| f.0.clone()),
+                EntityKind::Shape(_) => None,
+            })
+            .collect();
+        files.dedup();
+        files
+    }
+
+    /// Fills every entity referring to `file` from its `contents`, read from `shown_path`.
+    pub fn resolve(&mut self, file: &str, shown_path: &Path, contents: &[u8]) -> Result<(), FileError> {
+        let config: ConfigFile = parse_yaml(shown_path, contents, "a muscle configuration")?;
+        for entity in &mut self.entities {
+            if let EntityKind::Muscle(muscle) = &mut entity.kind
+                && muscle.file.as_ref().is_some_and(|f| f.0 == file)
+            {
+                muscle.fill_from(config.clone());
+            }
+        }
+        Ok(())
+    }
+
+    /// Parses scene text read from `path`, leaving references to other files unread; the
+    /// result still needs [`Self::resolve`] for each of [`Self::references`] and checking.
     ///
     /// A file whose top level is the source program's muscle configuration (`muscle_config`
     /// and `carcass_config`) is a scene too: that muscle, named `muscle`, seen from a camera
     /// that frames its arm.
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+    pub fn parse_unresolved(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
         let text = String::from_utf8_lossy(bytes);
-        let scene = if text.lines().any(|line| line.starts_with("muscle_config:")) {
-            Self::of_muscle(parse_yaml(path, bytes, "a muscle configuration")?)
-        } else {
-            parse_yaml(path, bytes, "a scene")?
-        };
-        scene.check(path, &text)?;
+        if text.lines().any(|line| line.starts_with("muscle_config:")) {
+            return Ok(Self::of_muscle(parse_yaml(path, bytes, "a muscle configuration")?));
+        }
+        let scene: Self = parse_yaml(path, bytes, "a scene")?;
+        for (index, entity) in scene.entities.iter().enumerate() {
+            if let EntityKind::Muscle(muscle) = &entity.kind
+                && muscle.file.is_some()
+                && (muscle.muscle_config.is_some() || muscle.carcass_config.is_some())
+            {
+                let message = format!(
+                    "entities[{index}].muscle.file: give the configuration either inline or from a file, not both"
+                );
+                return Err(locate(path, &text, "file", 0, message));
+            }
+        }
         Ok(scene)
     }
 
@@ -252,11 +303,8 @@ impl SceneDef {
     }
 
     /// The checks that involve several fields, located by their key in `text`.
-    fn check(&self, path: &Path, text: &str) -> Result<(), FileError> {
-        let at_key = |key: &str, nth: usize, message: String| match crate::yaml::find_nth_key(text, key, nth) {
-            Some((line, column)) => FileError::at(path, line, column, message),
-            None => FileError::whole_file(path, message),
-        };
+    pub fn check(&self, path: &Path, text: &str) -> Result<(), FileError> {
+        let at_key = |key: &str, nth: usize, message: String| locate(path, text, key, nth, message);
         let camera = &self.camera;
         if (camera.position.0 - camera.look_at.0).length() < 1e-6 {
             return Err(at_key("look_at", 0, "camera.look_at: expected a point different from camera.position".into()));
@@ -300,5 +348,14 @@ impl SceneDef {
             seen.push(name);
         }
         Ok(())
+    }
+}
+
+/// An error at the `nth` (from 0) occurrence of mapping key `key` in `text`, or about the
+/// whole file when the key cannot be found.
+fn locate(path: &Path, text: &str, key: &str, nth: usize, message: String) -> FileError {
+    match crate::yaml::find_nth_key(text, key, nth) {
+        Some((line, column)) => FileError::at(path, line, column, message),
+        None => FileError::whole_file(path, message),
     }
 }
