@@ -80,6 +80,37 @@ fn unknown_field(message: &str) -> Option<&str> {
     Some(&rest[..rest.find('`')?])
 }
 
+/// Deserializes a string and converts it with `parse`, inside the deserializer, so that a
+/// refused value is reported at its own line and column with its field path. `expecting`
+/// describes a valid value.
+pub fn deserialize_str_with<'de, D, T>(
+    deserializer: D,
+    expecting: &'static str,
+    parse: fn(&str) -> Result<T, String>,
+) -> Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    struct StrVisitor<T> {
+        expecting: &'static str,
+        parse: fn(&str) -> Result<T, String>,
+    }
+
+    impl<T> serde::de::Visitor<'_> for StrVisitor<T> {
+        type Value = T;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str(self.expecting)
+        }
+
+        fn visit_str<E: serde::de::Error>(self, value: &str) -> Result<T, E> {
+            (self.parse)(value).map_err(E::custom)
+        }
+    }
+
+    deserializer.deserialize_str(StrVisitor { expecting, parse })
+}
+
 /// The 1-based line and column of the `nth` (from 0) mapping key `key` in `text`.
 pub fn find_nth_key(text: &str, key: &str, nth: usize) -> Option<(usize, usize)> {
     key_offsets(text, key).nth(nth).map(|at| line_column(text.as_bytes(), at))

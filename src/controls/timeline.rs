@@ -15,16 +15,15 @@
 use crate::params::{ParamError, ParamValue, check_param, set_param};
 use crate::scene::values::checked_number;
 use crate::schedule::{ControlSystems, SimControl};
-use crate::yaml::{FileError, read_yaml_file};
+use crate::yaml::{FileError, deserialize_str_with, read_yaml_file};
 use bevy::input::ButtonState;
 use bevy::input::keyboard::{Key, KeyboardInput};
 use bevy::prelude::*;
 use bevy::reflect::FromReflect;
 use bevy::reflect::enums::{DynamicEnum, DynamicVariant};
 use serde::Deserialize;
-use serde::de::{self, Deserializer, Visitor};
+use serde::Deserializer;
 use std::collections::BTreeMap;
-use std::fmt;
 use std::path::Path;
 
 /// A key named as Bevy's `KeyCode` variant (`KeyW`, `Space`, `ArrowLeft`, `Digit1`, ...).
@@ -33,26 +32,13 @@ pub struct KeyName(pub KeyCode);
 
 impl<'de> Deserialize<'de> for KeyName {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct KeyVisitor;
-
-        impl<'de> Visitor<'de> for KeyVisitor {
-            type Value = KeyName;
-
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5")
-            }
-
-            fn visit_str<E: de::Error>(self, name: &str) -> Result<KeyName, E> {
-                let variant = DynamicEnum::new(name, DynamicVariant::Unit);
-                KeyCode::from_reflect(&variant).map(KeyName).ok_or_else(|| {
-                    E::custom(format_args!(
-                        "unknown key `{name}`: expected a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5"
-                    ))
-                })
-            }
-        }
-
-        deserializer.deserialize_str(KeyVisitor)
+        const EXPECTED: &str = "a Bevy KeyCode name such as KeyW, Space, ArrowLeft, Digit1, F5";
+        deserialize_str_with(deserializer, EXPECTED, |name| {
+            let variant = DynamicEnum::new(name, DynamicVariant::Unit);
+            KeyCode::from_reflect(&variant)
+                .map(KeyName)
+                .ok_or_else(|| format!("unknown key `{name}`: expected {EXPECTED}"))
+        })
     }
 }
 

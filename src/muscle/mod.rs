@@ -24,6 +24,7 @@ use crate::scene::values::{Angles, Color, Point, checked_number};
 use crate::schedule::ControlSystems;
 use crate::shape::{Primitive, PrimitiveMeshes};
 use crate::ui::RegisterPanel;
+use crate::yaml::deserialize_str_with;
 use bevy::color::Srgba;
 use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
@@ -183,31 +184,19 @@ pub struct ConfigPath(pub String);
 
 impl<'de> Deserialize<'de> for ConfigPath {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct PathVisitor;
-
-        impl serde::de::Visitor<'_> for PathVisitor {
-            type Value = ConfigPath;
-
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a .yaml file in the scene's folder, e.g. biceps_config.yaml")
+        deserialize_str_with(deserializer, "a .yaml file in the scene's folder, e.g. biceps_config.yaml", |path| {
+            let inside = std::path::Path::new(path)
+                .components()
+                .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
+            let yaml = path.ends_with(".yaml") || path.ends_with(".yml");
+            if inside && yaml {
+                Ok(ConfigPath(path.to_string()))
+            } else {
+                Err(format!(
+                    "expected a .yaml file inside the scene's folder (relative, without `..`), found \"{path}\""
+                ))
             }
-
-            fn visit_str<E: serde::de::Error>(self, path: &str) -> Result<ConfigPath, E> {
-                let inside = std::path::Path::new(path)
-                    .components()
-                    .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
-                let yaml = path.ends_with(".yaml") || path.ends_with(".yml");
-                if inside && yaml && !path.is_empty() {
-                    Ok(ConfigPath(path.to_string()))
-                } else {
-                    Err(E::custom(format_args!(
-                        "expected a .yaml file inside the scene's folder (relative, without `..`), found \"{path}\""
-                    )))
-                }
-            }
-        }
-
-        deserializer.deserialize_str(PathVisitor)
+        })
     }
 }
 

@@ -7,7 +7,7 @@
 use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::muscle::{ConfigFile, MuscleDef};
 use crate::shape::ShapeDef;
-use crate::yaml::{FileError, parse_yaml};
+use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
 use bevy::math::Vec3;
 use serde::Deserialize;
@@ -137,30 +137,16 @@ struct EntityName(String);
 
 impl<'de> Deserialize<'de> for EntityName {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct NameVisitor;
-
-        impl<'de> Visitor<'de> for NameVisitor {
-            type Value = EntityName;
-
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a name of 1 to 64 letters, digits, `_` or `-`")
-            }
-
-            fn visit_str<E: de::Error>(self, name: &str) -> Result<EntityName, E> {
-                let valid_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
-                if name.is_empty() || name.len() > 64 || !valid_chars {
-                    return Err(E::custom(format_args!(
-                        "expected a name of 1 to 64 letters, digits, `_` or `-`, found \"{name}\""
-                    )));
-                }
-                if RESERVED_NAMES.contains(&name) {
-                    return Err(E::custom(format_args!("the name \"{name}\" is reserved for the scene's {name}")));
-                }
+        deserialize_str_with(deserializer, "a name of 1 to 64 letters, digits, `_` or `-`", |name| {
+            let valid_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            if name.is_empty() || name.len() > 64 || !valid_chars {
+                Err(format!("expected a name of 1 to 64 letters, digits, `_` or `-`, found \"{name}\""))
+            } else if RESERVED_NAMES.contains(&name) {
+                Err(format!("the name \"{name}\" is reserved for the scene's {name}"))
+            } else {
                 Ok(EntityName(name.to_string()))
             }
-        }
-
-        deserializer.deserialize_str(NameVisitor)
+        })
     }
 }
 
