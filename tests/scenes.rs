@@ -142,4 +142,12 @@ fn referenced_configurations_are_read_and_their_errors_located() {
     let error = SceneDef::load(&scene).unwrap_err();
     assert_eq!((error.path.clone(), error.location.map(|l| l.0)), (folder.path().join("arm.yaml"), Some(4)), "{error}");
     assert!(error.message.contains("muscle_config.len"), "{error}");
+    std::fs::write(
+        folder.path().join("arm.yaml"),
+        "# an arm\nmuscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1]\n  len: 3\ncarcass_config: { data: [[1, 2], [1, 2]], thickness: 1 }\n",
+    )
+    .unwrap();
+    let error = SceneDef::load(&scene).unwrap_err();
+    assert_eq!((error.path.clone(), error.location.map(|l| l.0)), (folder.path().join("arm.yaml"), Some(2)), "{error}");
+    assert!(error.message.contains("radiuses has 2 values but grow_mults has 1"), "{error}");
 }

@@ -71,6 +71,15 @@ pub struct MuscleConfig {
     pub len: ConfigLength,
 }
 
+impl MuscleConfig {
+    /// The node model at rest, with node spacing bounds relative to rest.
+    pub fn model(&self, min_part: f64, max_part: f64) -> Result<Muscle, model::ConfigError> {
+        let radii = self.radiuses.iter().map(|r| r.0).collect();
+        let mults = self.grow_mults.iter().map(|m| m.0).collect();
+        Muscle::new(radii, mults, self.len.0, min_part, max_part)
+    }
+}
+
 /// The source program's `carcass_config`, verbatim.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -152,9 +161,7 @@ impl MuscleDef {
         let (Some(config), Some(arm)) = (&self.muscle_config, &self.carcass_config) else {
             return Err(model::ConfigError::Missing);
         };
-        let radii = config.radiuses.iter().map(|r| r.0).collect();
-        let mults = config.grow_mults.iter().map(|m| m.0).collect();
-        let muscle = Muscle::new(radii, mults, config.len.0, self.min_part.0, self.max_part.0)?;
+        let muscle = config.model(self.min_part.0, self.max_part.0)?;
         let [[a1, b1], [a2, b2]] = arm.data;
         let carcass = Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: arm.thickness.0 };
         Ok((muscle, carcass))

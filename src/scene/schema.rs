@@ -236,6 +236,11 @@ impl SceneDef {
     /// Fills every entity referring to `file` from its `contents`, read from `shown_path`.
     pub fn resolve(&mut self, file: &str, shown_path: &Path, contents: &[u8]) -> Result<(), FileError> {
         let config: ConfigFile = parse_yaml(shown_path, contents, "a muscle configuration")?;
+        // The node model is checked here, where its errors can point into its own file.
+        if let Err(error) = config.muscle_config.model(1.0, 1.0) {
+            let text = String::from_utf8_lossy(contents);
+            return Err(locate(shown_path, &text, "muscle_config", 0, format!("muscle_config: {error}")));
+        }
         for entity in &mut self.entities {
             if let EntityKind::Muscle(muscle) = &mut entity.kind
                 && muscle.file.as_ref().is_some_and(|f| f.0 == file)
@@ -312,10 +317,25 @@ impl SceneDef {
             EntityKind::Muscle(muscle) => Some((index, muscle)),
             EntityKind::Shape(_) => None,
         });
-        for (nth, (index, muscle)) in muscles.enumerate() {
-            if let Err(error) = muscle.build() {
-                return Err(at_key("muscle_config", nth, format!("entities[{index}].muscle.muscle_config: {error}")));
+        // Inline configurations are located by their key; the nth inline muscle has the nth
+        // `muscle_config` of the file.
+        let mut inline = 0;
+        for (index, muscle) in muscles {
+            let result = muscle.build();
+            if muscle.file.is_some() {
+                if let Err(error) = result {
+                    return Err(FileError::whole_file(path, format!("entities[{index}].muscle: {error}")));
+                }
+                continue;
             }
+            if let Err(error) = result {
+                return Err(at_key(
+                    "muscle_config",
+                    inline,
+                    format!("entities[{index}].muscle.muscle_config: {error}"),
+                ));
+            }
+            inline += 1;
         }
         let mut seen: Vec<&str> = Vec::new();
         for (index, entity) in self.entities.iter().enumerate() {
