@@ -15,7 +15,9 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy_egui::egui;
-use bevy_egui::{EguiContext, EguiPrimaryContextPass, EguiTextureHandle, EguiUserTextures, PrimaryEguiContext};
+use bevy_egui::{
+    EguiContext, EguiGlobalSettings, EguiPrimaryContextPass, EguiTextureHandle, EguiUserTextures, PrimaryEguiContext,
+};
 use std::path::PathBuf;
 
 /// Degrees the camera turns per point of mouse drag.
@@ -28,6 +30,8 @@ pub struct UiPlugin;
 
 impl Plugin for UiPlugin {
     fn build(&self, app: &mut App) {
+        // While an egui field has the keyboard (typing a value), the scene's keys stay quiet.
+        app.world_mut().get_resource_or_init::<EguiGlobalSettings>().enable_absorb_bevy_input_system = true;
         app.init_resource::<UiState>()
             .add_systems(Startup, setup_view)
             .add_systems(Update, capture_window.run_if(resource_exists::<WindowCapture>))
