@@ -31,6 +31,11 @@ impl FileError {
         Self { path: path.to_path_buf(), location: None, message: message.into() }
     }
 
+    /// The file could not be read at all.
+    pub fn unreadable(path: &Path, error: impl fmt::Display) -> Self {
+        Self::whole_file(path, format!("cannot read the file: {error}"))
+    }
+
     /// An error at a 1-based line and column.
     pub fn at(path: &Path, line: usize, column: usize, message: impl Into<String>) -> Self {
         Self { path: path.to_path_buf(), location: Some((line, column)), message: message.into() }
@@ -39,8 +44,7 @@ impl FileError {
 
 /// Reads and parses a YAML file; `what` names the expected content for an empty file.
 pub fn read_yaml_file<T: DeserializeOwned>(path: &Path, what: &str) -> Result<T, FileError> {
-    let bytes =
-        std::fs::read(path).map_err(|error| FileError::whole_file(path, format!("cannot read the file: {error}")))?;
+    let bytes = std::fs::read(path).map_err(|error| FileError::unreadable(path, error))?;
     parse_yaml(path, &bytes, what)
 }
 

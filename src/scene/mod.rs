@@ -61,19 +61,18 @@ impl AssetLoader for SceneLoader {
         load_context: &mut LoadContext<'_>,
     ) -> Result<SceneAsset, FileError> {
         let path = load_context.path().path().to_path_buf();
-        let cannot_read = |path: &Path, error: &dyn std::fmt::Display| {
-            FileError::whole_file(path, format!("cannot read the file: {error}"))
-        };
         let mut bytes = Vec::new();
-        reader.read_to_end(&mut bytes).await.map_err(|error| cannot_read(&path, &error))?;
+        reader.read_to_end(&mut bytes).await.map_err(|error| FileError::unreadable(&path, error))?;
         let mut scene = SceneDef::parse_unresolved(&path, &bytes)?;
         let folder = path.parent().unwrap_or(Path::new(""));
         for file in scene.references() {
             let referenced = folder.join(&file);
             // Read through the asset server, so that editing the referenced file reloads too.
             let asset_path = format!("{SCENE_SOURCE}://{}", referenced.to_string_lossy());
-            let contents =
-                load_context.read_asset_bytes(asset_path).await.map_err(|error| cannot_read(&referenced, &error))?;
+            let contents = load_context
+                .read_asset_bytes(asset_path)
+                .await
+                .map_err(|error| FileError::unreadable(&referenced, error))?;
             scene.resolve(&file, &referenced, &contents)?;
         }
         scene.check(&path, &String::from_utf8_lossy(&bytes))?;

@@ -200,8 +200,7 @@ impl<'de> Deserialize<'de> for EntityDef {
 impl SceneDef {
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Self, FileError> {
-        let bytes = std::fs::read(path)
-            .map_err(|error| FileError::whole_file(path, format!("cannot read the file: {error}")))?;
+        let bytes = std::fs::read(path).map_err(|error| FileError::unreadable(path, error))?;
         Self::parse(path, &bytes)
     }
 
@@ -211,8 +210,7 @@ impl SceneDef {
         let folder = path.parent().unwrap_or(Path::new(""));
         for file in scene.references() {
             let referenced = folder.join(&file);
-            let contents = std::fs::read(&referenced)
-                .map_err(|error| FileError::whole_file(&referenced, format!("cannot read the file: {error}")))?;
+            let contents = std::fs::read(&referenced).map_err(|error| FileError::unreadable(&referenced, error))?;
             scene.resolve(&file, &referenced, &contents)?;
         }
         scene.check(path, &String::from_utf8_lossy(bytes))?;
@@ -229,6 +227,8 @@ impl SceneDef {
                 EntityKind::Shape(_) => None,
             })
             .collect();
+        // Each file is read once, however many entities refer to it.
+        files.sort();
         files.dedup();
         files
     }
