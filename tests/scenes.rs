@@ -134,20 +134,23 @@ fn referenced_configurations_are_read_and_their_errors_located() {
     let error = SceneDef::load(&scene).unwrap_err();
     assert_eq!(error.path, folder.path().join("arm.yaml"));
     assert!(error.message.contains("cannot read the file"), "{error}");
-    std::fs::write(
-        folder.path().join("arm.yaml"),
-        "muscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1, 1]\n  len: -3\n",
-    )
-    .unwrap();
-    let error = SceneDef::load(&scene).unwrap_err();
-    assert_eq!((error.path.clone(), error.location.map(|l| l.0)), (folder.path().join("arm.yaml"), Some(4)), "{error}");
-    assert!(error.message.contains("muscle_config.len"), "{error}");
-    std::fs::write(
-        folder.path().join("arm.yaml"),
-        "# an arm\nmuscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1]\n  len: 3\ncarcass_config: { data: [[1, 2], [1, 2]], thickness: 1 }\n",
-    )
-    .unwrap();
-    let error = SceneDef::load(&scene).unwrap_err();
-    assert_eq!((error.path.clone(), error.location.map(|l| l.0)), (folder.path().join("arm.yaml"), Some(2)), "{error}");
-    assert!(error.message.contains("radiuses has 2 values but grow_mults has 1"), "{error}");
+    // Errors inside the referenced file name that file and their line there.
+    let broken: [(&str, usize, &str); 2] = [
+        ("muscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1, 1]\n  len: -3\n", 4, "muscle_config.len"),
+        (
+            "# an arm\nmuscle_config:\n  radiuses: [1, 2]\n  grow_mults: [1]\n  len: 3\ncarcass_config: { data: [[1, 2], [1, 2]], thickness: 1 }\n",
+            2,
+            "radiuses has 2 values but grow_mults has 1",
+        ),
+    ];
+    for (contents, line, words) in broken {
+        std::fs::write(folder.path().join("arm.yaml"), contents).unwrap();
+        let error = SceneDef::load(&scene).unwrap_err();
+        assert_eq!(
+            (error.path.clone(), error.location.map(|l| l.0)),
+            (folder.path().join("arm.yaml"), Some(line)),
+            "{error}"
+        );
+        assert!(error.message.contains(words), "{error}");
+    }
 }
