@@ -2,7 +2,7 @@
 
 use crate::controls::ControlsPlugin;
 use crate::muscle::MusclePlugin;
-use crate::raster::RasterPlugin;
+use crate::raster::{RasterPlugin, RenderSettingsPlugin};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::schedule::SchedulePlugin;
 use crate::shape::ShapePlugin;
@@ -50,6 +50,7 @@ impl PluginGroup for CanopyPlugins {
             .add(ControlsPlugin)
             .add(ScenePlugin { path: self.scene })
             .add(ViewPlugin)
+            .add(RenderSettingsPlugin)
             .add(ShapePlugin)
             .add(MusclePlugin)
             .add(RasterPlugin { size, every_frame });

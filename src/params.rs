@@ -4,24 +4,28 @@
 //! A parameter name is `<entity>.<field path>`: the entity's name (or its kind, for unnamed
 //! entities, which then addresses every unnamed entity of that kind), then a reflection path
 //! into one of the entity's parameter components, for example `light.azimuth_deg` or
-//! `ball.position.y`. Numbers (`f32`, `f64`) and booleans can be set.
+//! `ball.position.y`. Numbers (`f32`, `f64`), booleans and choices (enums of unit variants,
+//! named in snake case, e.g. `render.shading: phong`) can be set.
 
 use crate::scene::SceneEntity;
 use bevy::ecs::reflect::ReflectComponent;
 use bevy::prelude::*;
-use bevy::reflect::{GetPath, PartialReflect, ReflectRef, TypeRegistry};
+use bevy::reflect::enums::{DynamicEnum, DynamicVariant, VariantType};
+use bevy::reflect::{GetPath, PartialReflect, ReflectRef, TypeInfo, TypeRegistry};
 use serde::Deserialize;
 use std::any::TypeId;
 use std::fmt;
 
 /// A parameter's value.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(untagged)]
 pub enum ParamValue {
     /// A number.
     Number(f64),
     /// A switch.
     Bool(bool),
+    /// One of a fixed set of names.
+    Choice(String),
 }
 
 impl fmt::Display for ParamValue {
@@ -29,8 +33,29 @@ impl fmt::Display for ParamValue {
         match self {
             ParamValue::Number(v) => write!(f, "{v}"),
             ParamValue::Bool(v) => write!(f, "{v}"),
+            ParamValue::Choice(v) => write!(f, "{v}"),
         }
     }
+}
+
+/// The snake-case names of a unit-variant enum's variants, or `None` for other types.
+fn choices(value: &dyn PartialReflect) -> Option<Vec<String>> {
+    let Some(TypeInfo::Enum(info)) = value.get_represented_type_info() else { return None };
+    info.iter()
+        .all(|variant| variant.as_unit_variant().is_ok())
+        .then(|| info.variant_names().iter().map(|n| snake_case(n)).collect())
+}
+
+/// `PascalCase` to `snake_case`.
+fn snake_case(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() && i > 0 {
+            out.push('_');
+        }
+        out.push(c.to_ascii_lowercase());
+    }
+    out
 }
 
 /// One parameter of an entity, as listed for the UI.
@@ -40,6 +65,8 @@ pub struct ParamEntry {
     pub path: String,
     /// Its current value.
     pub value: ParamValue,
+    /// The names a choice accepts; empty for numbers and switches.
+    pub choices: Vec<String>,
 }
 
 /// Why a parameter could not be set.
@@ -78,7 +105,7 @@ pub enum ParamError {
         /// The value given.
         value: ParamValue,
         /// What the parameter takes.
-        expected: &'static str,
+        expected: String,
     },
 }
 
@@ -109,15 +136,19 @@ fn read_leaf(value: &dyn PartialReflect) -> Option<ParamValue> {
         Some(ParamValue::Number(*v as f64))
     } else if let Some(v) = value.try_downcast_ref::<f64>() {
         Some(ParamValue::Number(*v))
+    } else if let Some(v) = value.try_downcast_ref::<bool>() {
+        Some(ParamValue::Bool(*v))
+    } else if let (ReflectRef::Enum(e), Some(_)) = (value.reflect_ref(), choices(value)) {
+        Some(ParamValue::Choice(snake_case(e.variant_name())))
     } else {
-        value.try_downcast_ref::<bool>().map(|v| ParamValue::Bool(*v))
+        None
     }
 }
 
 /// Lists the settable leaves under `value`, depth first in field order.
 fn collect_leaves(value: &dyn PartialReflect, prefix: &str, out: &mut Vec<ParamEntry>) {
     if let Some(leaf) = read_leaf(value) {
-        out.push(ParamEntry { path: prefix.to_string(), value: leaf });
+        out.push(ParamEntry { path: prefix.to_string(), value: leaf, choices: choices(value).unwrap_or_default() });
         return;
     }
     if let ReflectRef::Struct(fields) = value.reflect_ref() {
@@ -180,13 +211,25 @@ pub fn check_param(world: &mut World, name: &str, value: ParamValue) -> Result<(
             known: params.iter().map(|p| p.path.as_str()).collect::<Vec<_>>().join(", "),
         });
     };
-    let bad = |expected| ParamError::BadValue { name: name.to_string(), value, expected };
-    match (entry.value, value) {
-        (ParamValue::Number(_), ParamValue::Number(v)) if v.is_finite() && v.abs() <= f32::MAX as f64 => Ok(()),
-        (ParamValue::Number(_), ParamValue::Number(_)) => Err(bad("a finite number")),
-        (ParamValue::Number(_), ParamValue::Bool(_)) => Err(bad("a number")),
-        (ParamValue::Bool(_), ParamValue::Bool(_)) => Ok(()),
-        (ParamValue::Bool(_), ParamValue::Number(_)) => Err(bad("true or false")),
+    let (accepted, expected) = match (&entry.value, &value) {
+        (ParamValue::Number(_), ParamValue::Number(v)) => {
+            (v.is_finite() && v.abs() <= f32::MAX as f64, "a finite number")
+        }
+        (ParamValue::Number(_), _) => (false, "a number"),
+        (ParamValue::Bool(_), given) => (matches!(given, ParamValue::Bool(_)), "true or false"),
+        (ParamValue::Choice(_), given) => {
+            let accepted = matches!(given, ParamValue::Choice(choice) if entry.choices.contains(choice));
+            if !accepted {
+                let expected = format!("one of {}", entry.choices.join(", "));
+                return Err(ParamError::BadValue { name: name.to_string(), value, expected });
+            }
+            (true, "")
+        }
+    };
+    if accepted {
+        Ok(())
+    } else {
+        Err(ParamError::BadValue { name: name.to_string(), value, expected: expected.into() })
     }
 }
 
@@ -204,7 +247,7 @@ pub fn set_param(world: &mut World, name: &str, value: ParamValue) -> Result<(),
     let registry = world.resource::<AppTypeRegistry>().clone();
     let components = world.get_resource::<ParamComponents>().map(|c| c.0.clone()).unwrap_or_default();
     for target in targets {
-        if !set_on_entity(world, &registry.read(), &components, target, path, name, value)? {
+        if !set_on_entity(world, &registry.read(), &components, target, path, name, &value)? {
             let known = list_params(world, target).into_iter().map(|p| p.path).collect::<Vec<_>>();
             return Err(ParamError::NoParameter {
                 name: name.to_string(),
@@ -225,28 +268,43 @@ fn set_on_entity(
     entity: Entity,
     path: &str,
     name: &str,
-    value: ParamValue,
+    value: &ParamValue,
 ) -> Result<bool, ParamError> {
-    let bad = |expected| ParamError::BadValue { name: name.to_string(), value, expected };
+    let bad = |expected: &str| ParamError::BadValue {
+        name: name.to_string(),
+        value: value.clone(),
+        expected: expected.into(),
+    };
     for reflect in components.iter().filter_map(|id| registry.get_type_data::<ReflectComponent>(*id)) {
         let Ok(entity_mut) = world.get_entity_mut(entity) else { return Ok(false) };
         let Some(mut component) = reflect.reflect_mut(entity_mut) else { continue };
         let Ok(field) = component.bypass_change_detection().reflect_path_mut(path) else { continue };
         if let Some(target) = field.try_downcast_mut::<f32>() {
-            let ParamValue::Number(v) = value else { return Err(bad("a number")) };
+            let &ParamValue::Number(v) = value else { return Err(bad("a number")) };
             if !v.is_finite() || v.abs() > f32::MAX as f64 {
                 return Err(bad("a finite number"));
             }
             *target = v as f32;
         } else if let Some(target) = field.try_downcast_mut::<f64>() {
-            let ParamValue::Number(v) = value else { return Err(bad("a number")) };
+            let &ParamValue::Number(v) = value else { return Err(bad("a number")) };
             if !v.is_finite() {
                 return Err(bad("a finite number"));
             }
             *target = v;
         } else if let Some(target) = field.try_downcast_mut::<bool>() {
-            let ParamValue::Bool(v) = value else { return Err(bad("true or false")) };
+            let &ParamValue::Bool(v) = value else { return Err(bad("true or false")) };
             *target = v;
+        } else if let Some(names) = choices(field) {
+            let expected = format!("one of {}", names.join(", "));
+            let ParamValue::Choice(choice) = value else { return Err(bad(&expected)) };
+            let Some(TypeInfo::Enum(info)) = field.get_represented_type_info() else { continue };
+            let Some(variant) = names.iter().position(|n| n == choice).and_then(|i| info.variant_at(i)) else {
+                return Err(bad(&expected));
+            };
+            debug_assert_eq!(variant.variant_type(), VariantType::Unit);
+            field
+                .try_apply(&DynamicEnum::new(variant.name(), DynamicVariant::Unit))
+                .map_err(|error| bad(&format!("{expected} ({error})")))?;
         } else {
             continue;
         }
@@ -260,12 +318,20 @@ fn set_on_entity(
 mod tests {
     use super::*;
 
+    #[derive(Reflect, Default, Debug, PartialEq)]
+    enum Mode {
+        #[default]
+        Quiet,
+        VeryLoud,
+    }
+
     #[derive(Component, Reflect, Default)]
     #[reflect(Component)]
     struct Knobs {
         gain: f32,
         offset: Vec3,
         enabled: bool,
+        mode: Mode,
     }
 
     fn world_with(names: &[&str]) -> (App, Vec<Entity>) {
@@ -287,7 +353,7 @@ mod tests {
     fn lists_leaves_with_their_paths() {
         let (app, entities) = world_with(&["a"]);
         let paths: Vec<String> = list_params(app.world(), entities[0]).into_iter().map(|p| p.path).collect();
-        assert_eq!(paths, ["gain", "offset.x", "offset.y", "offset.z", "enabled"]);
+        assert_eq!(paths, ["gain", "offset.x", "offset.y", "offset.z", "enabled", "mode"]);
     }
 
     #[test]
@@ -295,8 +361,11 @@ mod tests {
         let (mut app, entities) = world_with(&["a", "b"]);
         set_param(app.world_mut(), "b.offset.y", ParamValue::Number(2.5)).unwrap();
         set_param(app.world_mut(), "b.enabled", ParamValue::Bool(true)).unwrap();
+        set_param(app.world_mut(), "b.mode", ParamValue::Choice("very_loud".into())).unwrap();
         let b = app.world().get::<Knobs>(entities[1]).unwrap();
-        assert_eq!((b.offset.y, b.enabled), (2.5, true));
+        assert_eq!((b.offset.y, b.enabled, &b.mode), (2.5, true, &Mode::VeryLoud));
+        let listed = list_params(app.world(), entities[1]);
+        assert_eq!(listed.last().unwrap().value, ParamValue::Choice("very_loud".into()));
         assert_eq!(app.world().get::<Knobs>(entities[0]).unwrap().offset.y, 0.0);
     }
 
@@ -322,5 +391,10 @@ mod tests {
         assert!(error.contains("expected true or false"), "{error}");
         let error = set_param(world, "a.gain", ParamValue::Number(f64::NAN)).unwrap_err().to_string();
         assert!(error.contains("expected a finite number"), "{error}");
+        let error = set_param(world, "a.mode", ParamValue::Choice("loud".into())).unwrap_err().to_string();
+        assert!(error.contains("expected one of quiet, very_loud"), "{error}");
+        let error = check_param(world, "a.mode", ParamValue::Choice("loud".into())).unwrap_err().to_string();
+        assert!(error.contains("expected one of quiet, very_loud"), "{error}");
+        assert!(check_param(world, "a.mode", ParamValue::Choice("quiet".into())).is_ok());
     }
 }

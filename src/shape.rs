@@ -4,12 +4,16 @@
 //! Parameters (`<name>.<parameter>`, all from [`ShapeParams`]): `position.{x,y,z}` (metres),
 //! `rotation_deg.{x,y,z}`, `size.{x,y,z}` (metres, > 0), `color.{red,green,blue}` (0 to 1),
 //! `spin_deg_per_s.{x,y,z}`.
+//!
+//! A shape may carry a texture: a PNG or BMP file in the scene's folder, modulated by its
+//! colour, read with nearest or bilinear filtering, repeated or clamped at its edges.
 
 use crate::dump::{DumpState, RegisterDump};
 use crate::params::RegisterParams;
-use crate::raster::{MeshData, RasterMesh};
-use crate::scene::values::{Angles, Color, Point, Size};
+use crate::raster::{Address, Filter, Material, MeshData, RasterMesh, Sampler, Texture};
+use crate::scene::values::{Angles, Color, Point, Repeats, Size, inside_folder};
 use crate::schedule::{ControlSystems, SimSystems};
+use crate::yaml::deserialize_str_with;
 use bevy::color::Srgba;
 use bevy::math::{EulerRot, Quat, Vec3};
 use bevy::prelude::*;
@@ -65,6 +69,66 @@ pub struct ShapeDef {
     /// Rates of change of `rotation_deg` in degrees per second; none by default.
     #[serde(default = "no_angles")]
     pub spin_deg_per_s: Angles,
+    /// An image on the surface; none by default.
+    #[serde(default)]
+    pub texture: Option<TextureDef>,
+}
+
+/// A shape's texture in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDef {
+    /// The image file.
+    pub file: TexturePath,
+    /// `nearest` or `bilinear` (the default).
+    #[serde(default)]
+    pub filter: Filter,
+    /// `repeat` (the default) or `clamp`.
+    #[serde(default)]
+    pub address: Address,
+    /// Repetitions across the surface along u and v; `[1, 1]` by default.
+    #[serde(default = "once")]
+    pub repeat: [Repeats; 2],
+    /// The decoded image, filled in when the scene is resolved.
+    #[serde(skip)]
+    pub image: Option<Arc<Texture>>,
+}
+
+fn once() -> [Repeats; 2] {
+    [Repeats(1.0); 2]
+}
+
+/// A path to a texture: relative, inside the scene's folder (no `..`), ending in `.png` or
+/// `.bmp`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TexturePath(pub String);
+
+impl<'de> Deserialize<'de> for TexturePath {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserialize_str_with(deserializer, "a .png or .bmp file in the scene's folder", |path| {
+            let lower = path.to_ascii_lowercase();
+            if inside_folder(path) && (lower.ends_with(".png") || lower.ends_with(".bmp")) {
+                Ok(TexturePath(path.to_string()))
+            } else {
+                Err(format!(
+                    "expected a .png or .bmp file inside the scene's folder (relative, without `..`), found \"{path}\""
+                ))
+            }
+        })
+    }
+}
+
+impl ShapeDef {
+    /// The material these settings describe, in the shape's current colour.
+    fn material(&self, color: Srgba) -> Material {
+        let mut material = Material::colored(srgb_vec(color));
+        if let Some(texture) = &self.texture {
+            material.texture = texture.image.clone();
+            material.sampler = Sampler { filter: texture.filter, address: texture.address };
+            material.uv_scale = Vec2::new(texture.repeat[0].0, texture.repeat[1].0);
+        }
+        material
+    }
 }
 
 fn unit_size() -> Size {
@@ -184,7 +248,7 @@ pub fn spawn_shape(entity: &mut EntityCommands, def: &ShapeDef, meshes: &Primiti
     entity.insert((
         Shape(def.primitive),
         params.transform(),
-        RasterMesh { mesh: meshes.get(def.primitive).clone(), color: srgb_vec(params.color) },
+        RasterMesh { mesh: meshes.get(def.primitive).clone(), material: def.material(params.color) },
         params,
     ));
 }
@@ -222,7 +286,7 @@ fn spin_shapes(time: Res<Time>, mut shapes: Query<&mut ShapeParams>) {
 fn apply_shape_params(mut shapes: Query<(&ShapeParams, &mut Transform, &mut RasterMesh), Changed<ShapeParams>>) {
     for (params, mut transform, mut mesh) in &mut shapes {
         *transform = params.transform();
-        mesh.color = srgb_vec(params.color);
+        mesh.material.color = srgb_vec(params.color);
     }
 }
 
@@ -239,6 +303,25 @@ mod tests {
         assert!(error.contains("unknown variant `cone`, expected one of"), "{error}");
         let error = serde_yaml::from_str::<ShapeDef>("size: 1").unwrap_err().to_string();
         assert!(error.contains("missing field `primitive`"), "{error}");
+    }
+
+    #[test]
+    fn texture_settings_parse_with_defaults_and_paths_stay_inside() {
+        let def: ShapeDef = serde_yaml::from_str("{primitive: plane, texture: {file: textures/checker.png}}").unwrap();
+        let texture = def.texture.unwrap();
+        assert_eq!((texture.filter, texture.address), (Filter::Bilinear, Address::Repeat));
+        let def: ShapeDef = serde_yaml::from_str(
+            "{primitive: box, texture: {file: a.bmp, filter: nearest, address: clamp, repeat: [2, 3]}}",
+        )
+        .unwrap();
+        let material = def.material(Srgba::WHITE);
+        assert_eq!(material.sampler, Sampler { filter: Filter::Nearest, address: Address::Clamp });
+        assert_eq!(material.uv_scale, Vec2::new(2.0, 3.0));
+        for bad in ["../up.png", "/abs.png", "image.jpg"] {
+            let yaml = format!("{{primitive: box, texture: {{file: \"{bad}\"}}}}");
+            let error = serde_yaml::from_str::<ShapeDef>(&yaml).unwrap_err().to_string();
+            assert!(error.contains("expected a .png or .bmp file inside the scene's folder"), "{error}");
+        }
     }
 
     #[test]

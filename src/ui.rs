@@ -293,6 +293,19 @@ fn orbit_with_mouse(
     }
 }
 
+/// A drop-down of a choice parameter's names; returns the name picked, if it changed.
+fn choice_box(ui: &mut egui::Ui, id: &str, current: &str, choices: &[String]) -> Option<ParamValue> {
+    let mut picked = None;
+    egui::ComboBox::from_id_salt(id).selected_text(current).show_ui(ui, |ui| {
+        for choice in choices {
+            if ui.selectable_label(choice == current, choice).clicked() && choice != current {
+                picked = Some(ParamValue::Choice(choice.clone()));
+            }
+        }
+    });
+    picked
+}
+
 fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut PanelActions) {
     ui.heading("Canopy");
     ui.label(&data.scene);
@@ -339,12 +352,13 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
         egui::Grid::new("params").num_columns(2).show(ui, |ui| {
             for entry in &data.params {
                 ui.label(&entry.path);
-                let edited = match entry.value {
-                    ParamValue::Number(mut v) => {
+                let edited = match &entry.value {
+                    &ParamValue::Number(mut v) => {
                         let speed = (v.abs() * 0.01).max(0.01);
                         ui.add(egui::DragValue::new(&mut v).speed(speed)).changed().then_some(ParamValue::Number(v))
                     }
-                    ParamValue::Bool(mut v) => ui.checkbox(&mut v, "").changed().then_some(ParamValue::Bool(v)),
+                    &ParamValue::Bool(mut v) => ui.checkbox(&mut v, "").changed().then_some(ParamValue::Bool(v)),
+                    ParamValue::Choice(current) => choice_box(ui, &entry.path, current, &entry.choices),
                 };
                 if let Some(value) = edited {
                     actions.edits.push((format!("{name}.{}", entry.path), value));

@@ -140,6 +140,7 @@ impl LightParams {
         Light {
             direction: -unit_from_angles(self.azimuth_deg, self.elevation_deg),
             diffuse: self.diffuse.clamp(0.0, 1.0),
+            fill: 0.0,
             ambient: self.ambient.clamp(0.0, 1.0),
         }
     }

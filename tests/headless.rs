@@ -79,7 +79,7 @@ fn the_demo_scene_dumps_every_entity_in_order_and_spins_at_its_rate() {
     assert_eq!(dump["frame"], 60);
     assert!((dump["time"].as_f64().unwrap() - 1.0).abs() < 1e-6);
     let names: Vec<&str> = dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["camera", "light", "ground", "ball", "crate", "column", "spinner"]);
+    assert_eq!(names, ["camera", "light", "render", "ground", "ball", "crate", "column", "spinner"]);
     let spinner = entity(dump, "spinner");
     assert_eq!(spinner["kind"], "shape");
     assert_eq!(spinner["primitive"], "box");
@@ -168,7 +168,7 @@ fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
         let dump = dump_state(app.world_mut());
         dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap().to_string()).collect()
     };
-    assert_eq!(names(&mut app), ["camera", "light", "first"]);
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first"]);
 
     std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: bx }\n").unwrap();
     app.world_mut().write_message(ReloadScene);
@@ -178,14 +178,14 @@ fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
     let error = scene_state.error.clone().unwrap();
     assert!(error.contains("live.yaml:3:") && error.contains("unknown variant `bx`"), "{error}");
     app.update();
-    assert_eq!(names(&mut app), ["camera", "light", "first"]);
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first"]);
 
     std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n  - name: second\n    shape: { primitive: sphere }\n").unwrap();
     app.world_mut().write_message(ReloadScene);
     update_until(&mut app, |s| s.generation == 2);
     app.update();
     assert_eq!(app.world().resource::<ActiveScene>().error, None);
-    assert_eq!(names(&mut app), ["camera", "light", "first", "second"]);
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first", "second"]);
 }
 
 #[test]

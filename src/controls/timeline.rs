@@ -87,7 +87,7 @@ impl Timeline {
     pub fn check(&self, world: &mut World) -> Result<(), ParamError> {
         for event in &self.events {
             for (name, value) in &event.set {
-                check_param(world, name, *value)?;
+                check_param(world, name, value.clone())?;
             }
         }
         Ok(())

@@ -20,7 +20,7 @@ use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
 use crate::dump::{DumpState, RegisterDump};
 use crate::params::RegisterParams;
 use crate::raster::{MeshData, RasterMesh};
-use crate::scene::values::{Angles, Color, Point, checked_number};
+use crate::scene::values::{Angles, Color, Point, checked_number, inside_folder};
 use crate::schedule::ControlSystems;
 use crate::shape::{Primitive, PrimitiveMeshes};
 use crate::ui::RegisterPanel;
@@ -192,11 +192,8 @@ pub struct ConfigPath(pub String);
 impl<'de> Deserialize<'de> for ConfigPath {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         deserialize_str_with(deserializer, "a .yaml file in the scene's folder, e.g. biceps_config.yaml", |path| {
-            let inside = std::path::Path::new(path)
-                .components()
-                .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
             let yaml = path.ends_with(".yaml") || path.ends_with(".yml");
-            if inside && yaml {
+            if inside_folder(path) && yaml {
                 Ok(ConfigPath(path.to_string()))
             } else {
                 Err(format!(
@@ -294,9 +291,9 @@ pub fn spawn_muscle(entity: &mut EntityCommands, def: &MuscleDef, meshes: &Primi
             },
         ))
         .with_children(|children| {
-            children.spawn((MuscleSurface, RasterMesh { mesh: Arc::new(MeshData::default()), color }));
+            children.spawn((MuscleSurface, RasterMesh::colored(Arc::new(MeshData::default()), color)));
             for index in 0..2 {
-                let rod = RasterMesh { mesh: meshes.get(Primitive::Cylinder).clone(), color: Vec3::splat(0.85) };
+                let rod = RasterMesh::colored(meshes.get(Primitive::Cylinder).clone(), Vec3::splat(0.85));
                 children.spawn((Rod(index), rod));
             }
         });

@@ -1,26 +1,11 @@
-//! The CPU rasterizer: every 3D view in Canopy is drawn here, never by Bevy's GPU pipeline.
-//!
-//! | module | what it holds |
-//! |---|---|
-//! | [`framebuffer`] | RGBA8 colour and `f32` depth targets, PNG output |
-//! | [`mesh`] | indexed triangle meshes and the primitive shapes |
-//! | [`camera`] | the perspective camera and the directional light |
-//! | [`clip`] | near-plane and guard-band clipping in clip space |
-//! | [`pipeline`] | vertex lighting, setup, binning, parallel band rasterization |
-//! | [`plugin`] | the ECS side: [`RasterMesh`](plugin::RasterMesh) in, framebuffer out |
-//!
-//! Everything but [`plugin`] is pure: it takes plain data and a task pool and is tested
-//! without an app.
+//! The CPU rasterizer: the pure core is the `canopy_raster` crate (re-exported here), built
+//! optimized even in development builds; [`plugin`] is its ECS side and [`settings`] the scene's
+//! `render` entity.
 
-pub mod camera;
-pub mod clip;
-pub mod framebuffer;
-pub mod mesh;
-pub mod pipeline;
+pub use canopy_raster::*;
+
 pub mod plugin;
+pub mod settings;
 
-pub use camera::{Camera, Light};
-pub use framebuffer::Framebuffer;
-pub use mesh::MeshData;
-pub use pipeline::{Frame, Instance, RenderStats, Renderer};
 pub use plugin::{RasterMesh, RasterPlugin, RenderSystems, RenderView};
+pub use settings::{RenderParams, RenderSettingsPlugin};

@@ -11,7 +11,9 @@
 //! Drawing runs every frame, or only when asked ([`RenderPolicy`]) in headless runs that need
 //! just their last frame.
 
-use super::{Camera, Framebuffer, Instance, Light, MeshData, RenderStats, Renderer};
+use super::{
+    Camera, Framebuffer, Instance, Light, MAX_TARGET_SIZE, Material, MeshData, RenderSettings, RenderStats, Renderer,
+};
 use crate::controls::SaveScreenshot;
 use crate::schedule::ControlSystems;
 use bevy::prelude::*;
@@ -21,7 +23,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// The geometry and colour an entity is drawn with; its `GlobalTransform` places it.
+/// The geometry and material an entity is drawn with; its `GlobalTransform` places it.
 ///
 /// Domain plugins feed the rasterizer only through this component: write a new mesh when the
 /// shape changes, move the transform when it only moves.
@@ -30,8 +32,15 @@ use std::time::{Duration, Instant};
 pub struct RasterMesh {
     /// The triangles, shareable between entities.
     pub mesh: Arc<MeshData>,
-    /// Surface colour, RGB from 0 to 1.
-    pub color: Vec3,
+    /// Colour, texture and sampling.
+    pub material: Material,
+}
+
+impl RasterMesh {
+    /// A mesh drawn in a plain colour (linear RGB from 0 to 1).
+    pub fn colored(mesh: Arc<MeshData>, color: Vec3) -> Self {
+        Self { mesh, material: Material::colored(color) }
+    }
 }
 
 /// The ordered sets of `PostUpdate` in which a frame is drawn.
@@ -45,7 +54,7 @@ pub enum RenderSystems {
     Present,
 }
 
-/// The camera, light and background of the next frame.
+/// The camera, light, background and settings of the next frame.
 #[derive(Resource, Debug, Clone, Copy)]
 pub struct RenderView {
     /// The viewpoint.
@@ -54,14 +63,17 @@ pub struct RenderView {
     pub light: Light,
     /// Colour where no surface is, RGBA8.
     pub background: [u8; 4],
+    /// Shading mode and shadows.
+    pub settings: RenderSettings,
 }
 
 impl Default for RenderView {
     fn default() -> Self {
         Self {
             camera: Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 },
-            light: Light { direction: Vec3::NEG_Y, diffuse: 1.0, ambient: 0.2 },
+            light: Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.2 },
             background: [0, 0, 0, 255],
+            settings: RenderSettings::default(),
         }
     }
 }
@@ -75,7 +87,8 @@ pub struct RenderQueue(pub Vec<Instance>);
 pub struct RasterTarget {
     /// The last frame drawn.
     pub framebuffer: Framebuffer,
-    /// The size the next frame is drawn at, in pixels.
+    /// The size the next frame is drawn at, in pixels (at most
+    /// [`MAX_TARGET_SIZE`] a side).
     pub size: UVec2,
     /// Counts from the last frame.
     pub stats: RenderStats,
@@ -159,7 +172,7 @@ fn collect_meshes(meshes: Query<(&RasterMesh, &GlobalTransform)>, mut queue: Res
     queue.0.extend(meshes.iter().map(|(raster, transform)| Instance {
         mesh: raster.mesh.clone(),
         model: transform.to_matrix(),
-        color: raster.color,
+        material: raster.material.clone(),
     }));
 }
 
@@ -172,11 +185,17 @@ fn rasterize(
 ) {
     let started = Instant::now();
     let target = &mut *target;
-    if target.framebuffer.width() != target.size.x || target.framebuffer.height() != target.size.y {
-        target.framebuffer.resize(target.size.x, target.size.y);
+    let size = target.size.min(UVec2::splat(MAX_TARGET_SIZE));
+    if target.framebuffer.width() != size.x || target.framebuffer.height() != size.y {
+        target.framebuffer.resize(size.x, size.y);
     }
-    let frame =
-        super::Frame { camera: view.camera, light: view.light, background: view.background, instances: &queue.0 };
+    let frame = super::Frame {
+        camera: view.camera,
+        light: view.light,
+        background: view.background,
+        instances: &queue.0,
+        settings: view.settings,
+    };
     let pool = ComputeTaskPool::get_or_init(TaskPool::default);
     target.stats = renderer.render(&mut target.framebuffer, pool, &frame);
     target.raster_time = started.elapsed();

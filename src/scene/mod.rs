@@ -15,6 +15,7 @@ pub mod values;
 
 use crate::controls::ReloadScene;
 use crate::muscle::spawn_muscle;
+use crate::raster::RenderParams;
 use crate::schedule::{ControlSystems, SimClock, SimControl};
 use crate::shape::{PrimitiveMeshes, spawn_shape};
 use crate::view::{Background, CameraParams, LightParams};
@@ -87,7 +88,7 @@ impl AssetLoader for SceneLoader {
 /// Identifies a spawned scene entity: its place in the file, its name and its kind.
 #[derive(Component, Debug, Clone, PartialEq, Eq)]
 pub struct SceneEntity {
-    /// Order in the scene: the camera, the light, then the file's entities.
+    /// Order in the scene: the camera, the light, the render settings, then the file's entities.
     pub index: usize,
     /// The name parameters and dumps use.
     pub name: String,
@@ -210,15 +211,16 @@ fn track_scene_asset(
     info!("scene {} loaded ({} entities)", scene.path.display(), def.entities.len());
 }
 
-/// Spawns the camera, the light and every entity of `def`.
+/// Spawns the camera, the light, the render settings and every entity of `def`.
 pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMeshes) {
     let scene_entity = |index: usize, name: &str, kind: &'static str| {
         (SceneEntity { index, name: name.to_string(), kind }, Name::new(name.to_string()))
     };
     commands.spawn((scene_entity(0, "camera", "camera"), CameraParams::from(&def.camera)));
     commands.spawn((scene_entity(1, "light", "light"), LightParams::from(&def.light)));
+    commands.spawn((scene_entity(2, "render", "render"), RenderParams::from(&def.render)));
     for (index, entity_def) in def.entities.iter().enumerate() {
-        let mut entity = commands.spawn(scene_entity(index + 2, entity_def.display_name(), entity_def.kind.key()));
+        let mut entity = commands.spawn(scene_entity(index + 3, entity_def.display_name(), entity_def.kind.key()));
         match &entity_def.kind {
             EntityKind::Shape(shape) => spawn_shape(&mut entity, shape, meshes),
             EntityKind::Muscle(muscle) => spawn_muscle(&mut entity, muscle, meshes),

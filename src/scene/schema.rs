@@ -6,6 +6,8 @@
 
 use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::muscle::{ConfigFile, MuscleDef};
+use crate::raster::Texture;
+use crate::raster::settings::RenderDef;
 use crate::shape::ShapeDef;
 use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
@@ -14,12 +16,14 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use std::fmt;
 use std::path::Path;
+use std::sync::Arc;
 
 /// The keys of an entity mapping: its name, then every kind.
 const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle"];
 
-/// Names that refer to the scene's camera and light in parameter names and dumps.
-pub const RESERVED_NAMES: [&str; 2] = ["camera", "light"];
+/// Names that refer to the scene's camera, light and render settings in parameter names and
+/// dumps.
+pub const RESERVED_NAMES: [&str; 3] = ["camera", "light", "render"];
 
 /// A whole scene file.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -34,6 +38,9 @@ pub struct SceneDef {
     /// Colour of pixels showing no surface (the sky); light blue by default.
     #[serde(default = "default_background")]
     pub background: Color,
+    /// Shading mode and shadows; Gouraud with filtered shadows by default.
+    #[serde(default)]
+    pub render: RenderDef,
     /// What the scene holds, in order.
     #[serde(default)]
     pub entities: Vec<EntityDef>,
@@ -217,14 +224,15 @@ impl SceneDef {
         Ok(scene)
     }
 
-    /// The configuration files the scene refers to, relative to its folder.
+    /// The files the scene refers to (muscle configurations and textures), relative to its
+    /// folder.
     pub fn references(&self) -> Vec<String> {
         let mut files: Vec<String> = self
             .entities
             .iter()
             .filter_map(|entity| match &entity.kind {
                 EntityKind::Muscle(muscle) => muscle.file.as_ref().map(|f| f.0.clone()),
-                EntityKind::Shape(_) => None,
+                EntityKind::Shape(shape) => shape.texture.as_ref().map(|t| t.file.0.clone()),
             })
             .collect();
         // Each file is read once, however many entities refer to it.
@@ -235,6 +243,22 @@ impl SceneDef {
 
     /// Fills every entity referring to `file` from its `contents`, read from `shown_path`.
     pub fn resolve(&mut self, file: &str, shown_path: &Path, contents: &[u8]) -> Result<(), FileError> {
+        let textured = self.entities.iter().enumerate().filter_map(|(index, entity)| match &entity.kind {
+            EntityKind::Shape(shape) if shape.texture.as_ref().is_some_and(|t| t.file.0 == file) => Some(index),
+            _ => None,
+        });
+        if let Some(first) = textured.clone().next() {
+            let texture = Texture::decode(contents).map_err(|error| {
+                FileError::whole_file(shown_path, format!("entities[{first}].shape.texture.file: {error}"))
+            })?;
+            let texture = Arc::new(texture);
+            for index in textured.collect::<Vec<_>>() {
+                if let EntityKind::Shape(ShapeDef { texture: Some(def), .. }) = &mut self.entities[index].kind {
+                    def.image = Some(texture.clone());
+                }
+            }
+            return Ok(());
+        }
         let config: ConfigFile = parse_yaml(shown_path, contents, "a muscle configuration")?;
         // The node model is checked here, where its errors can point into its own file.
         if let Err(error) = config.muscle_config.model(1.0, 1.0) {
@@ -289,6 +313,7 @@ impl SceneDef {
             camera,
             light: LightDef::default(),
             background: default_background(),
+            render: RenderDef::default(),
             entities: vec![EntityDef { name: None, kind: EntityKind::Muscle(muscle) }],
         }
     }

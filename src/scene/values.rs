@@ -92,6 +92,21 @@ checked_number!(
     |v| v > 0.0 && v < 180.0
 );
 checked_number!(
+    /// How many times a texture repeats across its surface.
+    Repeats(f32),
+    "a number of repetitions greater than 0 and at most 10000",
+    |v| v > 0.0 && v <= 10_000.0
+);
+
+/// Whether `path` is relative and stays inside the folder it is relative to (no `..`, no root).
+pub fn inside_folder(path: &str) -> bool {
+    !path.is_empty()
+        && std::path::Path::new(path)
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
+}
+
+checked_number!(
     /// A fraction in `[0, 1]`: a coefficient or a colour channel.
     UnitInterval(f32),
     "a number from 0 to 1",

@@ -1,18 +1,23 @@
 //! Triangle meshes as the rasterizer consumes them, and the primitive shapes.
 
-use bevy::math::Vec3;
+use bevy_math::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
 /// An indexed triangle mesh in model space.
 ///
 /// Front faces wind counter-clockwise seen from outside (the right-handed convention of
-/// `glam`); `normals` has one unit normal per position.
+/// `glam`); `normals` has one unit normal per position. `uvs` and `colors` are either empty or
+/// hold one entry per position.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {
     /// Vertex positions in model units.
     pub positions: Vec<Vec3>,
     /// Unit vertex normals, one per position.
     pub normals: Vec<Vec3>,
+    /// Texture coordinates, one per position, or empty (then every vertex reads `(0, 0)`).
+    pub uvs: Vec<Vec2>,
+    /// Linear RGB vertex colours multiplying the material colour, or empty (white).
+    pub colors: Vec<Vec3>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
 }
@@ -23,16 +28,26 @@ impl MeshData {
         self.triangles.len()
     }
 
+    /// The smallest axis-aligned box holding every position, as `(min, max)`; `None` for a
+    /// mesh without positions.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(self.positions.iter().fold((first, first), |(min, max), &p| (min.min(p), max.max(p))))
+    }
+
     /// Appends a vertex and returns its index.
-    fn push_vertex(&mut self, position: Vec3, normal: Vec3) -> u32 {
+    fn push_vertex(&mut self, position: Vec3, normal: Vec3, uv: Vec2) -> u32 {
         self.positions.push(position);
         self.normals.push(normal);
+        self.uvs.push(uv);
         (self.positions.len() - 1) as u32
     }
 
-    /// Appends the quad `a b c d` (counter-clockwise seen from the side `normal` points to).
+    /// Appends the quad `a b c d` (counter-clockwise seen from the side `normal` points to),
+    /// textured with the whole image: `a` at the bottom-left, `c` at the top-right.
     fn push_quad(&mut self, corners: [Vec3; 4], normal: Vec3) {
-        let [a, b, c, d] = corners.map(|p| self.push_vertex(p, normal));
+        let uvs = [Vec2::new(0.0, 1.0), Vec2::ONE, Vec2::new(1.0, 0.0), Vec2::ZERO];
+        let [a, b, c, d] = [0, 1, 2, 3].map(|i| self.push_vertex(corners[i], normal, uvs[i]));
         self.triangles.push([a, b, c]);
         self.triangles.push([a, c, d]);
     }
@@ -54,7 +69,7 @@ impl MeshData {
     }
 
     /// A sphere of diameter 1 centred on the origin, as `stacks` rings of `slices` quads with
-    /// smooth normals.
+    /// smooth normals; `u` runs once around the equator, `v` from the north pole to the south.
     pub fn sphere(stacks: u32, slices: u32) -> Self {
         let (stacks, slices) = (stacks.max(2), slices.max(3));
         let mut mesh = Self::default();
@@ -69,7 +84,8 @@ impl MeshData {
                     i if i == stacks => -Vec3::Y,
                     _ => Vec3::new(polar.sin() * azimuth.cos(), polar.cos(), -polar.sin() * azimuth.sin()),
                 };
-                mesh.push_vertex(normal * 0.5, normal);
+                let uv = Vec2::new(j as f32 / slices as f32, i as f32 / stacks as f32);
+                mesh.push_vertex(normal * 0.5, normal, uv);
             }
         }
         let row = slices + 1;
@@ -88,7 +104,7 @@ impl MeshData {
     }
 
     /// A cylinder of diameter 1 and height 1 along the y axis, centred on the origin: a smooth
-    /// side of `slices` quads and two flat caps.
+    /// side of `slices` quads (`u` around, `v` down) and two flat caps (mapped from above).
     pub fn cylinder(slices: u32) -> Self {
         let slices = slices.max(3);
         let mut mesh = Self::default();
@@ -98,8 +114,9 @@ impl MeshData {
         };
         for j in 0..=slices {
             let radial = ring(j);
-            mesh.push_vertex(radial * 0.5 - Vec3::Y * 0.5, radial);
-            mesh.push_vertex(radial * 0.5 + Vec3::Y * 0.5, radial);
+            let u = j as f32 / slices as f32;
+            mesh.push_vertex(radial * 0.5 - Vec3::Y * 0.5, radial, Vec2::new(u, 1.0));
+            mesh.push_vertex(radial * 0.5 + Vec3::Y * 0.5, radial, Vec2::new(u, 0.0));
         }
         for j in 0..slices {
             let (bottom, top) = (2 * j, 2 * j + 1);
@@ -107,10 +124,12 @@ impl MeshData {
             mesh.triangles.push([top, bottom + 2, top + 2]);
         }
         for (normal, y) in [(Vec3::Y, 0.5), (-Vec3::Y, -0.5)] {
-            let centre = mesh.push_vertex(Vec3::Y * y, normal);
+            let cap_uv = |p: Vec3| Vec2::new(p.x + 0.5, p.z + 0.5);
+            let centre = mesh.push_vertex(Vec3::Y * y, normal, cap_uv(Vec3::ZERO));
             let first = mesh.positions.len() as u32;
             for j in 0..slices {
-                mesh.push_vertex(ring(j) * 0.5 + Vec3::Y * y, normal);
+                let p = ring(j) * 0.5;
+                mesh.push_vertex(p + Vec3::Y * y, normal, cap_uv(p));
             }
             for j in 0..slices {
                 let (a, b) = (first + j, first + (j + 1) % slices);
@@ -122,7 +141,8 @@ impl MeshData {
     }
 
     /// A square of edge 1 in the xz plane, facing +y, split into `cells` x `cells` quads so
-    /// that per-vertex lighting and near-plane clipping stay smooth on large planes.
+    /// that per-vertex lighting and near-plane clipping stay smooth on large planes; the
+    /// texture covers it once, `u` along +x and `v` along +z.
     pub fn plane(cells: u32) -> Self {
         let cells = cells.max(1);
         let mut mesh = Self::default();
@@ -131,7 +151,7 @@ impl MeshData {
             for j in 0..=cells {
                 let x = j as f32 / cells as f32 - 0.5;
                 let z = i as f32 / cells as f32 - 0.5;
-                mesh.push_vertex(Vec3::new(x, 0.0, z), Vec3::Y);
+                mesh.push_vertex(Vec3::new(x, 0.0, z), Vec3::Y, Vec2::new(x + 0.5, z + 0.5));
             }
         }
         for i in 0..cells {
@@ -176,6 +196,8 @@ mod tests {
     fn normals_are_unit_and_indices_valid() {
         for (name, mesh) in all_primitives() {
             assert_eq!(mesh.positions.len(), mesh.normals.len());
+            assert_eq!(mesh.positions.len(), mesh.uvs.len());
+            assert!(mesh.uvs.iter().all(|uv| (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y)), "{name}");
             for n in &mesh.normals {
                 assert!((n.length() - 1.0).abs() < 1e-5, "{name}: normal {n}");
             }
@@ -206,8 +228,8 @@ mod tests {
     #[test]
     fn primitives_fit_the_unit_box() {
         for (name, mesh) in all_primitives() {
-            let max = mesh.positions.iter().fold(Vec3::ZERO, |m, p| m.max(p.abs()));
-            assert!((max.max_element() - 0.5).abs() < 1e-6, "{name}: extent {max}");
+            let (min, max) = mesh.bounds().unwrap();
+            assert!((max.max(-min).max_element() - 0.5).abs() < 1e-6, "{name}: extent {min} {max}");
         }
     }
 }

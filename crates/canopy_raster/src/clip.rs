@@ -6,7 +6,8 @@
 //! for exact fixed-point edge functions. Far-plane and viewport clipping are left to the depth
 //! test and the screen bounds.
 
-use bevy::math::{Vec3, Vec4};
+use crate::shade::Varyings;
+use bevy_math::Vec4;
 
 /// How far outside the viewport, in viewport half-sizes, vertices may lie before x/y clipping
 /// cuts the triangle.
@@ -24,19 +25,60 @@ const PLANES: [Vec4; 5] = [
     Vec4::new(0.0, -1.0, 0.0, GUARD_BAND),
 ];
 
-/// A vertex after the vertex stage: its clip-space position and its lit colour.
+/// A vertex after the vertex stage: its clip-space position and the values interpolated
+/// across its triangles.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ClipVertex {
     /// Homogeneous clip-space position.
     pub position: Vec4,
-    /// Linear RGB colour after lighting.
-    pub color: Vec3,
+    /// Interpolated values (see [`shade`](crate::shade)).
+    pub varyings: Varyings,
 }
 
 impl ClipVertex {
     fn lerp(self, other: Self, t: f32) -> Self {
-        Self { position: self.position.lerp(other.position, t), color: self.color.lerp(other.color, t) }
+        let mut varyings = self.varyings;
+        for (v, o) in varyings.iter_mut().zip(other.varyings) {
+            *v += (o - *v) * t;
+        }
+        Self { position: self.position.lerp(other.position, t), varyings }
     }
+}
+
+/// Bits of [`outcode`]: which planes a clip-space position lies outside of.
+pub mod outside {
+    /// In front of the near plane.
+    pub const NEAR: u8 = 1;
+    /// Beyond the far plane.
+    pub const FAR: u8 = 2;
+    /// Left of the viewport.
+    pub const LEFT: u8 = 4;
+    /// Right of the viewport.
+    pub const RIGHT: u8 = 8;
+    /// Below the viewport.
+    pub const BOTTOM: u8 = 16;
+    /// Above the viewport.
+    pub const TOP: u8 = 32;
+    /// Outside the guard band on some side.
+    pub const GUARD: u8 = 64;
+    /// The view volume's planes: a triangle with all vertices outside one of them is invisible.
+    pub const VIEW: u8 = NEAR | FAR | LEFT | RIGHT | BOTTOM | TOP;
+    /// The planes [`clip_triangle`](super::clip_triangle) cuts against.
+    pub const CLIPPED: u8 = NEAR | GUARD;
+}
+
+/// Which planes `position` lies outside of, as [`outside`] bits.
+pub fn outcode(p: Vec4) -> u8 {
+    let mut code = 0;
+    let mut set = |outside: bool, bit: u8| code |= if outside { bit } else { 0 };
+    set(p.z < 0.0, outside::NEAR);
+    set(p.z > p.w, outside::FAR);
+    set(p.x < -p.w, outside::LEFT);
+    set(p.x > p.w, outside::RIGHT);
+    set(p.y < -p.w, outside::BOTTOM);
+    set(p.y > p.w, outside::TOP);
+    set(p.x.abs() > GUARD_BAND * p.w || p.y.abs() > GUARD_BAND * p.w, outside::GUARD);
+    code
 }
 
 /// A convex polygon of at most [`MAX_CLIPPED`] vertices, stored inline.
@@ -51,23 +93,6 @@ impl Polygon {
     pub fn vertices(&self) -> &[ClipVertex] {
         &self.vertices[..self.len]
     }
-}
-
-/// Whether the triangle needs clipping at all: false when every vertex is inside every plane.
-pub fn needs_clipping(triangle: &[ClipVertex; 3]) -> bool {
-    triangle.iter().any(|v| PLANES.iter().any(|plane| plane.dot(v.position) < 0.0))
-}
-
-/// Whether the triangle lies entirely outside one of the view volume's planes (near, left,
-/// right, bottom, top or far), so that nothing of it can be visible.
-pub fn outside_view(triangle: &[ClipVertex; 3]) -> bool {
-    let outside = |test: fn(Vec4) -> bool| triangle.iter().all(|v| test(v.position));
-    outside(|p| p.z < 0.0)
-        || outside(|p| p.z > p.w)
-        || outside(|p| p.x < -p.w)
-        || outside(|p| p.x > p.w)
-        || outside(|p| p.y < -p.w)
-        || outside(|p| p.y > p.w)
 }
 
 /// Clips a triangle against the near plane and the guard band (Sutherland-Hodgman), keeping
@@ -102,15 +127,20 @@ pub fn clip_triangle(triangle: &[ClipVertex; 3]) -> Polygon {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shade::VARYINGS;
 
     fn vertex(x: f32, y: f32, z: f32, w: f32) -> ClipVertex {
-        ClipVertex { position: Vec4::new(x, y, z, w), color: Vec3::splat(z) }
+        ClipVertex { position: Vec4::new(x, y, z, w), varyings: [z; VARYINGS] }
+    }
+
+    fn codes(triangle: &[ClipVertex; 3]) -> [u8; 3] {
+        triangle.map(|v| outcode(v.position))
     }
 
     #[test]
     fn a_triangle_inside_is_left_alone() {
         let tri = [vertex(0.0, 0.0, 0.5, 1.0), vertex(0.5, 0.0, 0.5, 1.0), vertex(0.0, 0.5, 0.5, 1.0)];
-        assert!(!needs_clipping(&tri));
+        assert_eq!(codes(&tri), [0; 3]);
         assert_eq!(clip_triangle(&tri).vertices(), &tri);
     }
 
@@ -118,7 +148,7 @@ mod tests {
     fn crossing_the_near_plane_cuts_into_a_quad_on_the_plane() {
         // One vertex behind the near plane (z < 0).
         let tri = [vertex(0.0, 0.0, -1.0, 1.0), vertex(1.0, 0.0, 1.0, 2.0), vertex(0.0, 1.0, 1.0, 2.0)];
-        assert!(needs_clipping(&tri));
+        assert!(codes(&tri).iter().any(|c| c & outside::CLIPPED != 0));
         let polygon = clip_triangle(&tri);
         assert_eq!(polygon.vertices().len(), 4);
         for v in polygon.vertices() {
@@ -126,16 +156,16 @@ mod tests {
         }
         let on_plane = polygon.vertices().iter().filter(|v| v.position.z.abs() < 1e-6).count();
         assert_eq!(on_plane, 2);
-        // Attributes are interpolated with the position: colour was set to z.
+        // Varyings are interpolated with the position: they were all set to z.
         for v in polygon.vertices() {
-            assert!((v.color.x - v.position.z).abs() < 1e-6);
+            assert!(v.varyings.iter().all(|&value| (value - v.position.z).abs() < 1e-6));
         }
     }
 
     #[test]
     fn a_triangle_behind_the_eye_vanishes() {
         let tri = [vertex(0.0, 0.0, -1.0, 1.0), vertex(1.0, 0.0, -0.5, 1.0), vertex(0.0, 1.0, -2.0, 1.0)];
-        assert!(outside_view(&tri));
+        assert_ne!(codes(&tri).into_iter().fold(outside::VIEW, |all, c| all & c), 0);
         assert!(clip_triangle(&tri).vertices().is_empty());
     }
 

@@ -1,0 +1,162 @@
+//! Canopy's rasterizer against two real CPU renderers on the standard scene, in one process,
+//! interleaved frame by frame so that the machine's noise hits every renderer alike.
+//!
+//! Run with `cargo bench --profile dev --bench peers` (the rasterizer and the peers are built
+//! optimized in that profile); `-- --rounds N` sets the frames timed per renderer and camera
+//! (default 40). The Mesa llvmpipe peer needs `libegl1 libegl-mesa0 libgl1-mesa-dri`; without
+//! them its rows say why they are missing.
+//!
+//! Every renderer draws the same mesh with the same matrices; the coverage column (the share
+//! of pixels not left at the background) shows that they drew the same picture.
+
+mod euc_peer;
+mod gl_peer;
+mod peer_scene;
+
+use bevy_tasks::{TaskPool, TaskPoolBuilder};
+use canopy_raster::standard::{self, CAMERAS, HEIGHT, WIDTH};
+use canopy_raster::{Framebuffer, RenderSettings, Renderer};
+use euc_peer::EucPeer;
+use gl_peer::GlPeer;
+use peer_scene::PeerScene;
+use std::time::Instant;
+
+/// Frames drawn by each renderer before timing starts.
+const WARM_UP: usize = 3;
+
+/// The renderers compared, in table order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Contender {
+    Canopy,
+    CanopyShadowed,
+    Euc,
+    Llvmpipe,
+}
+
+impl Contender {
+    const ALL: [Contender; 4] = [Contender::Canopy, Contender::CanopyShadowed, Contender::Euc, Contender::Llvmpipe];
+
+    fn label(self) -> &'static str {
+        match self {
+            Contender::Canopy => "Canopy",
+            Contender::CanopyShadowed => "Canopy + shadow map (PCF)",
+            Contender::Euc => "euc 0.5.3",
+            Contender::Llvmpipe => "Mesa llvmpipe (EGL)",
+        }
+    }
+}
+
+/// Canopy's renderer with its target, pool and scene.
+struct Canopy {
+    renderer: Renderer,
+    target: Framebuffer,
+    pool: TaskPool,
+    instances: Vec<canopy_raster::Instance>,
+}
+
+impl Canopy {
+    fn render(&mut self, camera: &standard::StandardCamera, shadows: bool) {
+        let settings = RenderSettings { shadows, ..RenderSettings::default() };
+        let frame = standard::frame(camera, &self.instances, settings);
+        self.renderer.render(&mut self.target, &self.pool, &frame);
+    }
+
+    fn coverage(&self) -> f64 {
+        let background = standard::BACKGROUND;
+        let covered = self.target.color().chunks_exact(4).filter(|p| *p != background).count();
+        covered as f64 / (self.target.width() * self.target.height()) as f64
+    }
+}
+
+fn median(samples: &mut [f64]) -> f64 {
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+fn main() {
+    let mut rounds = 40;
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        if arg == "--rounds" {
+            rounds = args.next().and_then(|n| n.parse().ok()).filter(|&n| n > 0).expect("--rounds takes a count");
+        }
+    }
+
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut canopy = Canopy {
+        renderer: Renderer::default(),
+        target: Framebuffer::new(WIDTH, HEIGHT),
+        pool: TaskPoolBuilder::new().num_threads(threads).build(),
+        instances: vec![standard::instance()],
+    };
+    let mesh = canopy.instances[0].mesh.clone();
+    let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+    let normals: Vec<[f32; 3]> = mesh.normals.iter().map(|n| n.to_array()).collect();
+    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    let scene = PeerScene {
+        positions: &positions,
+        normals: &normals,
+        indices: &indices,
+        color: standard::COLOR.to_array(),
+        light: standard::towards_light().to_array(),
+    };
+    let mut euc = EucPeer::new(WIDTH as usize, HEIGHT as usize);
+    let mut gl = GlPeer::new(WIDTH, HEIGHT, &scene);
+    let triangles = mesh.triangle_count() as f64;
+
+    println!(
+        "Standard scene: {} triangles at {WIDTH}x{HEIGHT}, {rounds} interleaved frames per renderer",
+        mesh.triangle_count()
+    );
+    println!("Canopy: {threads} threads on the task pool; euc 0.5.3: one thread (it has no parallel mode)");
+    match &gl {
+        Ok(gl) => println!("llvmpipe: {} (threads: LP_NUM_THREADS or one per core)", gl.renderer_name()),
+        Err(reason) => println!("llvmpipe: not measured: {reason}"),
+    }
+    println!();
+    println!("| camera | renderer | ms / frame (median) | triangles / s | coverage | Canopy faster by |");
+    println!("|---|---|---:|---:|---:|---:|");
+    for camera in &CAMERAS {
+        let clip = camera.camera().view_projection(WIDTH as f32 / HEIGHT as f32).to_cols_array();
+        let mut samples: Vec<Vec<f64>> = vec![Vec::with_capacity(rounds); Contender::ALL.len()];
+        for round in 0..WARM_UP + rounds {
+            for (index, contender) in Contender::ALL.into_iter().enumerate() {
+                let started = Instant::now();
+                match contender {
+                    Contender::Canopy => canopy.render(camera, false),
+                    Contender::CanopyShadowed => canopy.render(camera, true),
+                    Contender::Euc => euc.render(&scene, clip),
+                    Contender::Llvmpipe => match &mut gl {
+                        Ok(gl) => gl.render(clip),
+                        Err(_) => continue,
+                    },
+                }
+                if round >= WARM_UP {
+                    samples[index].push(started.elapsed().as_secs_f64() * 1e3);
+                }
+            }
+        }
+        // Coverage of each renderer's last frame of this camera (Canopy's without shadows).
+        canopy.render(camera, false);
+        let coverage = [Some(canopy.coverage()), None, Some(euc.coverage()), gl.as_mut().ok().map(|gl| gl.coverage())];
+        let canopy_ms = median(&mut samples[0]);
+        for (index, contender) in Contender::ALL.into_iter().enumerate() {
+            if samples[index].is_empty() {
+                continue;
+            }
+            let ms = median(&mut samples[index]);
+            let coverage = coverage[index].map_or("same".to_string(), |c| format!("{:.1}%", c * 100.0));
+            let ratio = match contender {
+                Contender::Canopy => "-".to_string(),
+                Contender::CanopyShadowed => format!("shadows cost {:.2}x", ms / canopy_ms),
+                _ => format!("{:.1}x", ms / canopy_ms),
+            };
+            println!(
+                "| {} | {} | {ms:.2} | {:.1} M | {coverage} | {ratio} |",
+                camera.name,
+                contender.label(),
+                triangles / ms * 1e-3,
+            );
+        }
+    }
+}

@@ -1,0 +1,700 @@
+//! The frame pipeline: a parallel vertex stage, parallel triangle binning into screen tiles,
+//! then parallel rasterization of the tiles, for the shadow map first (when on) and then for
+//! the image.
+//!
+//! Binning does the least per triangle that sorts it: trivial rejection against the view
+//! volume, back-face and zero-area culling from the fixed-point screen vertices, and the
+//! triangle's pixel bounds. The full setup (edge functions, interpolants) happens once per
+//! tile a triangle touches, right before its pixels are drawn, while its vertices are still in
+//! cache. Triangles crossing the near plane or the guard band are clipped during binning and
+//! kept whole in their chunk.
+//!
+//! Draw order is kept: chunks are contiguous runs of triangles and each tile walks the chunks
+//! in order, so earlier triangles win depth ties exactly as in a sequential renderer. Every
+//! buffer lives in the [`Renderer`] and is reused, so a frame of steady size allocates nothing
+//! of its own.
+
+use crate::camera::{Camera, Light};
+use crate::clip::{ClipVertex, clip_triangle, outcode, outside};
+use crate::framebuffer::Framebuffer;
+use crate::mesh::MeshData;
+use crate::shade::{Material, Shading, VARYINGS, Varyings, slot};
+use crate::shadow::{ShadowMap, fit_light};
+use crate::tile::{self, DepthBand, TileContext};
+use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use bevy_tasks::TaskPool;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// Tile width in pixels.
+pub const TILE_WIDTH: u32 = 64;
+
+/// Tile height in pixels; a row of tiles is one unit of parallel work.
+pub const TILE_HEIGHT: u32 = 32;
+
+/// Sub-pixel positions per pixel along each axis (8 bits of sub-pixel precision).
+pub const SUBPIXEL_STEPS: i64 = 256;
+
+/// The largest framebuffer or shadow-map side, in pixels, for which the fixed-point edge
+/// functions are exact.
+pub const MAX_TARGET_SIZE: u32 = 4096;
+
+/// Contiguous runs of triangles binned in parallel, per worker thread.
+const CHUNKS_PER_THREAD: usize = 4;
+
+/// One mesh placed in the world.
+#[derive(Debug, Clone)]
+pub struct Instance {
+    /// The geometry, shared between instances.
+    pub mesh: Arc<MeshData>,
+    /// Model-to-world matrix.
+    pub model: Mat4,
+    /// The surface it is drawn with.
+    pub material: Material,
+}
+
+/// Switches that change how a frame is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// The lighting computation.
+    pub shading: Shading,
+    /// Whether the directional light casts shadows.
+    pub shadows: bool,
+    /// Whether shadow edges are filtered over 3 x 3 map texels.
+    pub pcf: bool,
+    /// Shadow map side in texels, at most [`MAX_TARGET_SIZE`].
+    pub shadow_map_size: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self { shading: Shading::Gouraud, shadows: false, pcf: true, shadow_map_size: 1024 }
+    }
+}
+
+/// Everything one frame is drawn from.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    /// The viewpoint.
+    pub camera: Camera,
+    /// The directional light.
+    pub light: Light,
+    /// Colour of pixels no triangle covers, as RGBA8.
+    pub background: [u8; 4],
+    /// What to draw, in order (earlier instances win depth ties).
+    pub instances: &'a [Instance],
+    /// Shading mode and shadows.
+    pub settings: RenderSettings,
+}
+
+/// Counts from one frame, for the UI and for tests.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Triangles handed to the pipeline.
+    pub triangles_submitted: usize,
+    /// Triangles (after clipping) that survived culling and were binned.
+    pub triangles_rasterized: usize,
+    /// Pixels covered by some rasterized triangle, counted once per triangle covering them
+    /// (before the depth test).
+    pub fragments: u64,
+    /// Triangle-tile pairs skipped because the tile was already nearer everywhere.
+    pub occluded: u64,
+    /// Triangles binned into the shadow map.
+    pub shadow_triangles: usize,
+}
+
+/// A vertex projected to the screen: its clip position, which planes it is outside of, and
+/// (when it needs no clipping) its fixed-point screen position, depth and `1/w`.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ScreenVertex {
+    pub clip: Vec4,
+    /// [`outside`] bits.
+    pub code: u8,
+    /// Screen x in sub-pixel units.
+    pub x: i32,
+    /// Screen y (downwards) in sub-pixel units.
+    pub y: i32,
+    /// Normalized device depth.
+    pub z: f32,
+    /// `1/w`.
+    pub inv_w: f32,
+}
+
+impl ScreenVertex {
+    /// Projects a clip-space position onto a `width` x `height` target.
+    fn new(clip: Vec4, width: u32, height: u32) -> Self {
+        let code = outcode(clip);
+        if code & outside::CLIPPED != 0 {
+            return Self { clip, code, ..Self::default() };
+        }
+        Self { code, ..Self::projected(clip, width, height) }
+    }
+
+    /// Projects a clip-space position known to be inside the near plane and the guard band
+    /// (up to rounding).
+    fn projected(clip: Vec4, width: u32, height: u32) -> Self {
+        let inv_w = 1.0 / clip.w;
+        let ndc = clip.truncate() * inv_w;
+        let steps = SUBPIXEL_STEPS as f32;
+        // The clamp only guards against rounding past the guard band after clipping.
+        let limit = 3.0 * MAX_TARGET_SIZE as f32 * steps;
+        let x = ((ndc.x + 1.0) * 0.5 * width as f32 * steps).round().clamp(-limit, limit) as i32;
+        let y = ((1.0 - ndc.y) * 0.5 * height as f32 * steps).round().clamp(-limit, limit) as i32;
+        Self { clip, code: 0, x, y, z: ndc.z.max(0.0), inv_w }
+    }
+}
+
+/// A triangle made by clipping, kept whole with its projected vertices.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ClippedTriangle {
+    pub vertices: [ScreenVertex; 3],
+    pub varyings: [Varyings; 3],
+    /// The flat-shading diffuse term of the triangle it was cut from.
+    pub flat_diffuse: f32,
+}
+
+/// A triangle's place in a tile bin: a mesh triangle of an instance, or a clipped triangle of
+/// the same chunk when [`CLIPPED_BIT`] is set.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BinEntry {
+    pub triangle: u32,
+    pub instance: u32,
+}
+
+/// Marks a [`BinEntry`] whose triangle is in its chunk's clipped list.
+pub(crate) const CLIPPED_BIT: u32 = 1 << 31;
+
+/// The binning output of one run of triangles.
+#[derive(Debug, Default)]
+pub(crate) struct Chunk {
+    /// Per tile, the triangles touching it, in draw order.
+    pub bins: Vec<Vec<BinEntry>>,
+    pub clipped: Vec<ClippedTriangle>,
+    binned: usize,
+}
+
+/// Where an instance's vertices and triangles start in the frame's global numbering, and its
+/// transforms.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Span {
+    pub first_vertex: usize,
+    pub first_triangle: usize,
+    model: Mat4,
+    normal_matrix: Mat3,
+}
+
+/// The vertex stage's output that binning reads besides the projected vertices.
+#[derive(Clone, Copy)]
+struct Geometry<'a> {
+    spans: &'a [Span],
+    world: &'a [Vec3],
+    /// Varyings for clipping; `None` for depth-only views.
+    varyings: Option<&'a [Varyings]>,
+}
+
+/// A view being binned: its projected vertices, its target size and whether back faces go.
+#[derive(Clone, Copy)]
+struct BinTarget<'a> {
+    vertices: &'a [ScreenVertex],
+    width: u32,
+    height: u32,
+    cull_back_faces: bool,
+}
+
+impl BinTarget<'_> {
+    fn tiles_x(&self) -> u32 {
+        self.width.div_ceil(TILE_WIDTH)
+    }
+
+    fn tiles(&self) -> usize {
+        (self.tiles_x() * self.height.div_ceil(TILE_HEIGHT)) as usize
+    }
+}
+
+/// The CPU rasterizer. Keeps its working buffers between frames so that drawing a scene of
+/// steady size does not allocate.
+#[derive(Debug, Default)]
+pub struct Renderer {
+    spans: Vec<Span>,
+    world: Vec<Vec3>,
+    vertices: Vec<ScreenVertex>,
+    light_vertices: Vec<ScreenVertex>,
+    varyings: Vec<Varyings>,
+    chunks: Vec<Chunk>,
+    shadow_chunks: Vec<Chunk>,
+    shadow: ShadowMap,
+}
+
+impl Renderer {
+    /// Draws `frame` into `target` (cleared first), spreading the work over `pool`.
+    ///
+    /// # Panics
+    /// If the target or the shadow map is larger than [`MAX_TARGET_SIZE`] on a side.
+    pub fn render(&mut self, target: &mut Framebuffer, pool: &TaskPool, frame: &Frame) -> RenderStats {
+        let (width, height) = (target.width(), target.height());
+        let settings = frame.settings;
+        assert!(
+            width <= MAX_TARGET_SIZE && height <= MAX_TARGET_SIZE && settings.shadow_map_size <= MAX_TARGET_SIZE,
+            "render targets are limited to {MAX_TARGET_SIZE} pixels a side"
+        );
+        let mut stats = RenderStats {
+            triangles_submitted: frame.instances.iter().map(|i| i.mesh.triangle_count()).sum(),
+            ..RenderStats::default()
+        };
+        let aspect = width.max(1) as f32 / height.max(1) as f32;
+        let light_clip = if settings.shadows && width > 0 && height > 0 {
+            scene_bounds(frame.instances).and_then(|bounds| fit_light(&frame.camera, aspect, &frame.light, bounds))
+        } else {
+            None
+        };
+        self.shadow.reset(settings.shadow_map_size, light_clip);
+
+        self.vertex_stage(pool, frame, aspect, width, height, light_clip);
+        let threads = pool.thread_num().max(1);
+        if light_clip.is_some() {
+            let size = settings.shadow_map_size;
+            let view = BinTarget { vertices: &self.light_vertices, width: size, height: size, cull_back_faces: false };
+            let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: None };
+            stats.shadow_triangles = bin(pool, threads, &mut self.shadow_chunks, geometry, frame, view);
+            self.draw_shadow_map(pool, frame);
+        }
+        let view = BinTarget { vertices: &self.vertices, width, height, cull_back_faces: true };
+        let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: Some(&self.varyings) };
+        stats.triangles_rasterized = bin(pool, threads, &mut self.chunks, geometry, frame, view);
+
+        let context = TileContext {
+            frame,
+            chunks: &self.chunks,
+            world: &self.world,
+            vertices: &self.vertices,
+            varyings: &self.varyings,
+            spans: &self.spans,
+            shadow: self.shadow.is_active().then_some(&self.shadow),
+            tiles_x: width.div_ceil(TILE_WIDTH),
+        };
+        let counts = pool.scope(|scope| {
+            for (row, band) in target.bands_mut(TILE_HEIGHT).enumerate() {
+                let context = &context;
+                scope.spawn(async move { tile::draw_band(context, row as u32, band) });
+            }
+        });
+        for (fragments, occluded) in counts {
+            stats.fragments += fragments;
+            stats.occluded += occluded;
+        }
+        stats
+    }
+
+    /// The shadow map of the last frame.
+    pub fn shadow_map(&self) -> &ShadowMap {
+        &self.shadow
+    }
+
+    /// Transforms, lights and projects every vertex, in parallel runs.
+    fn vertex_stage(
+        &mut self,
+        pool: &TaskPool,
+        frame: &Frame,
+        aspect: f32,
+        width: u32,
+        height: u32,
+        light_clip: Option<Mat4>,
+    ) {
+        self.spans.clear();
+        let (mut vertices, mut triangles) = (0, 0);
+        for instance in frame.instances {
+            self.spans.push(Span {
+                first_vertex: vertices,
+                first_triangle: triangles,
+                model: instance.model,
+                normal_matrix: Mat3::from_mat4(instance.model).inverse().transpose(),
+            });
+            vertices += instance.mesh.positions.len();
+            triangles += instance.mesh.triangle_count();
+        }
+        self.world.resize(vertices, Vec3::ZERO);
+        self.vertices.resize(vertices, ScreenVertex::default());
+        self.varyings.resize(vertices, [0.0; VARYINGS]);
+        self.light_vertices.resize(if light_clip.is_some() { vertices } else { 0 }, ScreenVertex::default());
+
+        let view_projection = frame.camera.view_projection(aspect);
+        let threads = pool.thread_num().max(1);
+        let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
+        let (spans, shadow, map_size) = (&self.spans, &self.shadow, frame.settings.shadow_map_size);
+        let mut light_runs = self.light_vertices.chunks_mut(run);
+        pool.scope(|scope| {
+            let runs = self.world.chunks_mut(run).zip(self.vertices.chunks_mut(run)).zip(self.varyings.chunks_mut(run));
+            for (index, ((world, screen), varyings)) in runs.enumerate() {
+                let light_run = light_runs.next();
+                scope.spawn(async move {
+                    let first = index * run;
+                    let outputs = world.iter_mut().zip(screen.iter_mut()).zip(varyings.iter_mut()).enumerate();
+                    let mut light_run = light_run.map(|run| run.iter_mut());
+                    let mut span_index = spans.partition_point(|s| s.first_vertex <= first) - 1;
+                    for (offset, ((world, screen), varyings)) in outputs {
+                        let global = first + offset;
+                        while span_index + 1 < spans.len() && spans[span_index + 1].first_vertex <= global {
+                            span_index += 1;
+                        }
+                        let span = &spans[span_index];
+                        let instance = &frame.instances[span_index];
+                        let local = global - span.first_vertex;
+                        let position = span.model.transform_point3(instance.mesh.positions[local]);
+                        let normal = (span.normal_matrix * instance.mesh.normals[local]).normalize_or_zero();
+                        *world = position;
+                        *screen = ScreenVertex::new(view_projection * position.extend(1.0), width, height);
+                        *varyings = vertex_varyings(instance, local, normal, &frame.light);
+                        if let (Some(light_clip), Some(light_vertex)) =
+                            (light_clip, light_run.as_mut().and_then(Iterator::next))
+                        {
+                            let clip = light_clip * position.extend(1.0);
+                            *light_vertex = ScreenVertex::new(clip, map_size, map_size);
+                            let at = shadow.locate(position);
+                            varyings[slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&at.to_array());
+                        }
+                    }
+                });
+            }
+        });
+    }
+
+    /// Clears the shadow map and draws the binned light-view triangles into it, depth only.
+    fn draw_shadow_map(&mut self, pool: &TaskPool, frame: &Frame) {
+        let size = self.shadow.size();
+        let rows = (size * TILE_HEIGHT) as usize;
+        let (chunks, vertices, spans) = (&self.shadow_chunks, &self.light_vertices, &self.spans);
+        pool.scope(|scope| {
+            for (row, depth) in self.shadow.depth_mut().chunks_mut(rows).enumerate() {
+                let band = DepthBand { y0: row as u32 * TILE_HEIGHT, width: size, depth };
+                scope.spawn(async move { tile::draw_depth_band(frame, chunks, vertices, spans, row as u32, band) });
+            }
+        });
+    }
+}
+
+/// The varyings of one vertex before the shadow position is known.
+fn vertex_varyings(instance: &Instance, local: usize, normal: Vec3, light: &Light) -> Varyings {
+    let material = &instance.material;
+    let mesh = &instance.mesh;
+    let color = material.color * mesh.colors.get(local).copied().unwrap_or(Vec3::ONE);
+    let uv = mesh.uvs.get(local).copied().unwrap_or(Vec2::ZERO) * material.uv_scale;
+    let mut varyings = [0.0; VARYINGS];
+    varyings[slot::COLOR..slot::COLOR + 3].copy_from_slice(&color.to_array());
+    varyings[slot::DIFFUSE] = light.diffuse_term(normal);
+    varyings[slot::NORMAL..slot::NORMAL + 3].copy_from_slice(&normal.to_array());
+    varyings[slot::UV..slot::UV + 2].copy_from_slice(&uv.to_array());
+    varyings
+}
+
+/// The diffuse term of a triangle's geometric normal, for flat shading.
+pub(crate) fn flat_diffuse(corners: [Vec3; 3], light: &Light) -> f32 {
+    let [a, b, c] = corners;
+    light.diffuse_term((b - a).cross(c - a).normalize_or_zero())
+}
+
+/// World bounds of everything drawn, from each instance's transformed model bounds.
+fn scene_bounds(instances: &[Instance]) -> Option<(Vec3, Vec3)> {
+    instances
+        .iter()
+        .filter_map(|instance| {
+            let (min, max) = instance.mesh.bounds()?;
+            let centre = instance.model.transform_point3((min + max) * 0.5);
+            let half = (max - min) * 0.5;
+            let m = Mat3::from_mat4(instance.model);
+            // The transformed box's half extent along each world axis.
+            let extent = Vec3::new(m.row(0).abs().dot(half), m.row(1).abs().dot(half), m.row(2).abs().dot(half));
+            Some((centre - extent, centre + extent))
+        })
+        .reduce(|(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)))
+}
+
+/// Splits `0..total` into at most `parts` contiguous, nearly equal runs.
+fn runs(total: usize, parts: usize) -> impl Iterator<Item = Range<usize>> {
+    let size = total.div_ceil(parts.max(1)).max(1);
+    (0..total).step_by(size).map(move |start| start..(start + size).min(total))
+}
+
+/// Bins every triangle of `frame` for `view` into `chunks`, in parallel runs. Returns how many
+/// triangles were binned.
+fn bin(
+    pool: &TaskPool,
+    threads: usize,
+    chunks: &mut Vec<Chunk>,
+    geometry: Geometry,
+    frame: &Frame,
+    view: BinTarget,
+) -> usize {
+    let spans = geometry.spans;
+    let total = spans.last().zip(frame.instances.last()).map_or(0, |(s, i)| s.first_triangle + i.mesh.triangle_count());
+    let parts = threads * CHUNKS_PER_THREAD;
+    chunks.resize_with(parts, Chunk::default);
+    let tiles = view.tiles();
+    for chunk in chunks.iter_mut() {
+        chunk.bins.resize_with(tiles, Vec::new);
+        chunk.bins.iter_mut().for_each(Vec::clear);
+        chunk.clipped.clear();
+        chunk.binned = 0;
+    }
+    pool.scope(|scope| {
+        for (range, chunk) in runs(total, parts).zip(chunks.iter_mut()) {
+            scope.spawn(async move { bin_run(chunk, range, geometry, frame, view) });
+        }
+    });
+    chunks.iter().map(|c| c.binned).sum()
+}
+
+/// Bins the global triangles `range` into `chunk`.
+fn bin_run(chunk: &mut Chunk, range: Range<usize>, geometry: Geometry, frame: &Frame, view: BinTarget) {
+    let spans = geometry.spans;
+    let mut span_index = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
+    for global in range {
+        while span_index + 1 < spans.len() && spans[span_index + 1].first_triangle <= global {
+            span_index += 1;
+        }
+        let span = &spans[span_index];
+        let local = global - span.first_triangle;
+        let indices = frame.instances[span_index].mesh.triangles[local].map(|i| span.first_vertex + i as usize);
+        let corners = indices.map(|i| &view.vertices[i]);
+        if corners[0].code & corners[1].code & corners[2].code & outside::VIEW != 0 {
+            continue;
+        }
+        let entry = BinEntry { triangle: local as u32, instance: span_index as u32 };
+        if (corners[0].code | corners[1].code | corners[2].code) & outside::CLIPPED == 0 {
+            if let Some(bounds) = screen_bounds(corners.map(|v| (v.x, v.y)), view) {
+                chunk.push(entry, bounds, view);
+            }
+            continue;
+        }
+        let vertex_varyings = indices.map(|i| geometry.varyings.map_or([0.0; VARYINGS], |v| v[i]));
+        let flat_diffuse = flat_diffuse(indices.map(|i| geometry.world[i]), &frame.light);
+        let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
+            position: corners[k].clip,
+            varyings: vertex_varyings[k],
+        }));
+        let polygon = clip.vertices();
+        for i in 1..polygon.len().saturating_sub(1) {
+            let fan = [polygon[0], polygon[i], polygon[i + 1]];
+            let vertices = fan.map(|v| ScreenVertex::projected(v.position, view.width, view.height));
+            let Some(bounds) = screen_bounds(vertices.map(|v| (v.x, v.y)), view) else { continue };
+            let triangle = ClippedTriangle { vertices, varyings: fan.map(|v| v.varyings), flat_diffuse };
+            let entry = BinEntry { triangle: chunk.clipped.len() as u32 | CLIPPED_BIT, ..entry };
+            chunk.clipped.push(triangle);
+            chunk.push(entry, bounds, view);
+        }
+    }
+}
+
+impl Chunk {
+    /// Adds `entry` to the bins of every tile its pixel `bounds` touch.
+    fn push(&mut self, entry: BinEntry, bounds: PixelBounds, view: BinTarget) {
+        self.binned += 1;
+        let tiles_x = view.tiles_x();
+        for ty in bounds.min_y / TILE_HEIGHT..=bounds.max_y / TILE_HEIGHT {
+            for tx in bounds.min_x / TILE_WIDTH..=bounds.max_x / TILE_WIDTH {
+                self.bins[(ty * tiles_x + tx) as usize].push(entry);
+            }
+        }
+    }
+}
+
+/// Inclusive pixel bounds of a triangle, within its target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct PixelBounds {
+    pub min_x: u32,
+    pub max_x: u32,
+    pub min_y: u32,
+    pub max_y: u32,
+}
+
+/// Twice the signed area of the triangle `a b p` in sub-pixel units squared; positive when `p`
+/// lies to the right of `a -> b` on a y-down screen.
+#[inline(always)]
+pub(crate) fn edge(a: (i64, i64), b: (i64, i64), p: (i64, i64)) -> i64 {
+    (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
+}
+
+/// Culls a projected triangle (zero area, or facing away when the view culls back faces) and
+/// returns the pixels whose centres its bounding box holds, or `None` if it covers no pixel
+/// centre of the target.
+fn screen_bounds(corners: [(i32, i32); 3], view: BinTarget) -> Option<PixelBounds> {
+    let [a, b, c] = corners.map(|(x, y)| (x as i64, y as i64));
+    let area = edge(a, b, c);
+    // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the screen.
+    if area == 0 || (view.cull_back_faces && area > 0) {
+        return None;
+    }
+    let bounds = pixel_bounds([a, b, c], view.width, view.height)?;
+    Some(bounds)
+}
+
+/// The pixels whose centres lie in the bounding box of `corners` (sub-pixel units), clipped to
+/// a `width` x `height` target.
+pub(crate) fn pixel_bounds(corners: [(i64, i64); 3], width: u32, height: u32) -> Option<PixelBounds> {
+    // Pixel (px, py) is sampled at its centre, (px + 1/2, py + 1/2).
+    let half = SUBPIXEL_STEPS / 2;
+    let first = |v: i64| (v - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS);
+    let last = |v: i64| (v - half).div_euclid(SUBPIXEL_STEPS);
+    let xs = corners.map(|c| c.0);
+    let ys = corners.map(|c| c.1);
+    let min_x = first(xs[0].min(xs[1]).min(xs[2])).max(0);
+    let max_x = last(xs[0].max(xs[1]).max(xs[2])).min(width as i64 - 1);
+    let min_y = first(ys[0].min(ys[1]).min(ys[2])).max(0);
+    let max_y = last(ys[0].max(ys[1]).max(ys[2])).min(height as i64 - 1);
+    (min_x <= max_x && min_y <= max_y).then_some(PixelBounds {
+        min_x: min_x as u32,
+        max_x: max_x as u32,
+        min_y: min_y as u32,
+        max_y: max_y as u32,
+    })
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f32::consts::FRAC_PI_2;
+
+    const SKY: [u8; 4] = [10, 20, 30, 255];
+
+    fn camera_at(eye: Vec3, target: Vec3) -> Camera {
+        Camera { eye, target, fov_y: FRAC_PI_2, near: 0.1, far: 100.0 }
+    }
+
+    fn full_light() -> Light {
+        Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 1.0 }
+    }
+
+    fn draw(camera: Camera, instances: &[Instance], size: (u32, u32)) -> (Framebuffer, RenderStats) {
+        let mut target = Framebuffer::new(size.0, size.1);
+        let frame =
+            Frame { camera, light: full_light(), background: SKY, instances, settings: RenderSettings::default() };
+        let stats = Renderer::default().render(&mut target, &TaskPool::new(), &frame);
+        (target, stats)
+    }
+
+    fn instance(mesh: MeshData, model: Mat4, color: Vec3) -> Instance {
+        Instance { mesh: Arc::new(mesh), model, material: Material::colored(color) }
+    }
+
+    /// A triangle fan over the square [-2, 2]^2 at z = 0 around an off-grid centre, facing +z.
+    fn fan(centre: Vec3, rim_points: usize) -> MeshData {
+        let mut mesh = MeshData { positions: vec![centre], normals: vec![Vec3::Z], ..MeshData::default() };
+        for i in 0..rim_points {
+            let angle = std::f32::consts::TAU * i as f32 / rim_points as f32 + 0.1;
+            let rim = Vec3::new(angle.cos(), angle.sin(), 0.0);
+            mesh.positions.push(rim * 2.0 / rim.x.abs().max(rim.y.abs()));
+            mesh.normals.push(Vec3::Z);
+        }
+        for i in 0..rim_points as u32 {
+            mesh.triangles.push([0, 1 + i, 1 + (i + 1) % rim_points as u32]);
+        }
+        mesh
+    }
+
+    #[test]
+    fn shared_edges_cover_every_pixel_exactly_once() {
+        // The camera sees exactly [-1, 1]^2 at z = 0; the fan covers more, so every pixel
+        // must be produced once: a gap would lower the count, a double pixel would raise it.
+        for (centre, size) in
+            [(Vec3::ZERO, (64, 64)), (Vec3::new(0.123, -0.377, 0.0), (97, 61)), (Vec3::new(-0.5, 0.25, 0.0), (40, 40))]
+        {
+            let camera = camera_at(Vec3::Z, Vec3::ZERO);
+            let mesh = fan(centre, 37);
+            let (_, stats) = draw(camera, &[instance(mesh, Mat4::IDENTITY, Vec3::ONE)], size);
+            assert_eq!(stats.fragments, size.0 as u64 * size.1 as u64, "centre {centre}");
+        }
+    }
+
+    #[test]
+    fn a_red_cube_in_front_of_the_camera_is_red_at_the_centre() {
+        let cube = instance(MeshData::cube(), Mat4::IDENTITY, Vec3::X);
+        let (fb, stats) = draw(camera_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO), &[cube], (80, 60));
+        assert_eq!(fb.pixel(40, 30), [255, 0, 0, 255]);
+        for (x, y) in [(0, 0), (79, 0), (0, 59), (79, 59)] {
+            assert_eq!(fb.pixel(x, y), SKY);
+        }
+        assert_eq!(stats.triangles_submitted, 12);
+        // Only the front face survives back-face culling.
+        assert_eq!(stats.triangles_rasterized, 2);
+    }
+
+    #[test]
+    fn the_nearer_surface_wins_regardless_of_draw_order() {
+        let near = instance(MeshData::cube(), Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)), Vec3::Y);
+        let far = instance(MeshData::cube(), Mat4::from_scale(Vec3::splat(1.5)), Vec3::X);
+        let camera = camera_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO);
+        for order in [[near.clone(), far.clone()], [far, near]] {
+            let (fb, _) = draw(camera, &order, (64, 64));
+            assert_eq!(fb.pixel(32, 32), [0, 255, 0, 255]);
+        }
+    }
+
+    #[test]
+    fn interpenetrating_triangles_split_where_they_cross() {
+        // Two quads crossing along the y axis: each is nearer on one side.
+        let tilted = |angle: f32, color| {
+            let model =
+                Mat4::from_rotation_y(angle) * Mat4::from_rotation_x(FRAC_PI_2) * Mat4::from_scale(Vec3::splat(3.0));
+            instance(MeshData::plane(1), model, color)
+        };
+        let camera = camera_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO);
+        let (fb, _) = draw(camera, &[tilted(0.4, Vec3::X), tilted(-0.4, Vec3::Y)], (64, 64));
+        let left = fb.pixel(20, 32);
+        let right = fb.pixel(44, 32);
+        assert_ne!(left, right);
+        assert!(left == [255, 0, 0, 255] || left == [0, 255, 0, 255], "{left:?}");
+        assert!(right == [255, 0, 0, 255] || right == [0, 255, 0, 255], "{right:?}");
+    }
+
+    #[test]
+    fn a_floor_crossing_the_near_plane_is_clipped_not_dropped() {
+        // A huge floor under the camera reaches behind the eye; its near part must still
+        // cover the bottom of the image.
+        let floor = instance(MeshData::plane(1), Mat4::from_scale(Vec3::splat(50.0)), Vec3::ONE);
+        let camera = camera_at(Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.8, -1.0));
+        let (fb, _) = draw(camera, &[floor], (64, 64));
+        for x in [0, 32, 63] {
+            assert_eq!(fb.pixel(x, 63), [255, 255, 255, 255]);
+        }
+        assert_eq!(fb.pixel(32, 0), SKY);
+    }
+
+    #[test]
+    fn gouraud_shading_follows_the_light() {
+        let light = Light { direction: Vec3::NEG_X, diffuse: 1.0, fill: 0.0, ambient: 0.1 };
+        let sphere = instance(MeshData::sphere(24, 48), Mat4::IDENTITY, Vec3::ONE);
+        let mut fb = Framebuffer::new(64, 64);
+        let frame = Frame {
+            camera: camera_at(Vec3::new(0.0, 0.0, 0.9), Vec3::ZERO),
+            light,
+            background: SKY,
+            instances: &[sphere],
+            settings: RenderSettings::default(),
+        };
+        Renderer::default().render(&mut fb, &TaskPool::new(), &frame);
+        // Lit from +x: the right side is bright, the left half at the ambient floor.
+        let right = fb.pixel(48, 32)[0];
+        let centre = fb.pixel(32, 32)[0];
+        let left = fb.pixel(16, 32)[0];
+        assert!(right > centre + 50 && centre >= left, "{left} {centre} {right}");
+        assert!(left.abs_diff(26) <= 1, "ambient floor 0.1 gives 26, got {left}");
+    }
+
+    #[test]
+    fn rendering_is_deterministic_and_reuses_buffers() {
+        let sphere = instance(MeshData::sphere(16, 32), Mat4::IDENTITY, Vec3::new(0.3, 0.6, 0.9));
+        let frame = Frame {
+            camera: camera_at(Vec3::new(0.4, 0.3, 1.2), Vec3::ZERO),
+            light: Light { direction: Vec3::new(0.3, -1.0, -0.2).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 },
+            background: SKY,
+            instances: &[sphere],
+            settings: RenderSettings { shadows: true, ..RenderSettings::default() },
+        };
+        let pool = TaskPool::new();
+        let mut renderer = Renderer::default();
+        let (mut a, mut b) = (Framebuffer::new(100, 70), Framebuffer::new(100, 70));
+        let first = renderer.render(&mut a, &pool, &frame);
+        let second = renderer.render(&mut b, &pool, &frame);
+        assert_eq!(first, second);
+        assert_eq!(a.color(), b.color());
+        assert_eq!(a.depth(), b.depth());
+    }
+}

@@ -1,0 +1,114 @@
+//! What a pixel's colour is made of: materials, shading modes and the values interpolated across
+//! triangles.
+//!
+//! Every vertex carries the same [`Varyings`]; which of them a pixel actually interpolates
+//! depends on the shading mode, the texture and shadows, chosen once per triangle so that the
+//! pixel loops are compiled for each combination.
+
+use crate::texture::{Sampler, Texture};
+use bevy_math::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// How light is computed across a triangle; the sources compare all three.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum Shading {
+    /// One intensity per triangle, from its geometric normal.
+    Flat,
+    /// Intensity per vertex, interpolated across the triangle.
+    #[default]
+    Gouraud,
+    /// Normal interpolated and lit per pixel.
+    Phong,
+}
+
+impl Shading {
+    /// Every mode, in the order the sources present them.
+    pub const ALL: [Shading; 3] = [Shading::Flat, Shading::Gouraud, Shading::Phong];
+}
+
+/// The surface an instance is drawn with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Linear RGB colour in `[0, 1]`, multiplying vertex colours and the texture.
+    pub color: Vec3,
+    /// An image modulating the colour, read at the mesh's texture coordinates.
+    pub texture: Option<Arc<Texture>>,
+    /// How the texture is read.
+    pub sampler: Sampler,
+    /// Texture repetitions along `u` and `v` (texture coordinates are multiplied by it).
+    pub uv_scale: Vec2,
+}
+
+impl Material {
+    /// A plain untextured colour.
+    pub fn colored(color: Vec3) -> Self {
+        Self { color, texture: None, sampler: Sampler::default(), uv_scale: Vec2::ONE }
+    }
+}
+
+/// Number of values interpolated across triangles.
+pub const VARYINGS: usize = 12;
+
+/// The values a vertex hands to the pixels of its triangles, indexed by the [`slot`] constants.
+pub type Varyings = [f32; VARYINGS];
+
+/// Where each value lives in [`Varyings`].
+pub mod slot {
+    /// Base colour, RGB: material colour times vertex colour.
+    pub const COLOR: usize = 0;
+    /// The light's diffuse term at the vertex (Gouraud).
+    pub const DIFFUSE: usize = 3;
+    /// World-space unit normal, xyz (Phong).
+    pub const NORMAL: usize = 4;
+    /// Texture coordinates, uv.
+    pub const UV: usize = 7;
+    /// Shadow-map position: texel x, texel y, light depth.
+    pub const SHADOW: usize = 9;
+}
+
+/// The combination a pixel loop is compiled for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Pass {
+    pub shading: Shading,
+    pub textured: bool,
+    pub shadowed: bool,
+}
+
+impl Pass {
+    /// Whether the pixel needs the varying at `slot`.
+    pub fn uses(self, index: usize) -> bool {
+        match index {
+            0..3 => true,
+            slot::DIFFUSE => self.shading == Shading::Gouraud,
+            4..7 => self.shading == Shading::Phong,
+            7..9 => self.textured,
+            _ => self.shadowed,
+        }
+    }
+}
+
+/// Converts a linear colour in `[0, 1]` to opaque RGBA8.
+#[inline(always)]
+pub(crate) fn to_rgba8(color: Vec3) -> [u8; 4] {
+    let c = color.clamp(Vec3::ZERO, Vec3::ONE) * 255.0 + 0.5;
+    [c.x as u8, c.y as u8, c.z as u8, 255]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn passes_interpolate_only_what_they_use() {
+        let count = |pass: Pass| (0..VARYINGS).filter(|&i| pass.uses(i)).count();
+        let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
+        assert_eq!(count(pass(Shading::Flat, false, false)), 3);
+        assert_eq!(count(pass(Shading::Gouraud, false, false)), 4);
+        assert_eq!(count(pass(Shading::Phong, true, true)), VARYINGS - 1);
+    }
+
+    #[test]
+    fn rgba8_rounds_and_clamps() {
+        assert_eq!(to_rgba8(Vec3::new(0.5, 1.5, -1.0)), [128, 255, 0, 255]);
+    }
+}

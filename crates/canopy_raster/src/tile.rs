@@ -1,0 +1,382 @@
+//! The tile stage: triangle setup against one tile and the pixel loops.
+//!
+//! Coverage uses exact integer edge functions on screen coordinates snapped to
+//! 1/[`SUBPIXEL_STEPS`] of a pixel, sampled at pixel centres and stepped incrementally, with the
+//! top-left fill rule: a pixel whose centre lies on an edge shared by two triangles is drawn by
+//! exactly one of them. Depth is interpolated linearly in screen space (as the projection
+//! demands); every other value perspective-correctly: the pixel's barycentric weights are
+//! divided by `w` at each vertex and renormalized with the interpolated `1/w`, then weigh the
+//! vertex values.
+//!
+//! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
+//! it is skipped before setup reaches its pixels.
+
+use crate::framebuffer::{Band, FAR_DEPTH};
+use crate::pipeline::{
+    BinEntry, CLIPPED_BIT, Chunk, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH, edge,
+    flat_diffuse, pixel_bounds,
+};
+use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, slot, to_rgba8};
+use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
+use bevy_math::{Vec2, Vec3};
+
+/// Triangles drawn into a tile between two refreshes of its farthest depth.
+const OCCLUSION_REFRESH: u32 = 32;
+
+/// What the colour tiles read, shared by every band.
+pub(crate) struct TileContext<'a> {
+    pub frame: &'a Frame<'a>,
+    pub chunks: &'a [Chunk],
+    pub world: &'a [Vec3],
+    pub vertices: &'a [ScreenVertex],
+    pub varyings: &'a [Varyings],
+    pub spans: &'a [Span],
+    pub shadow: Option<&'a ShadowMap>,
+    pub tiles_x: u32,
+}
+
+/// A horizontal band of the shadow map.
+pub(crate) struct DepthBand<'a> {
+    pub y0: u32,
+    pub width: u32,
+    pub depth: &'a mut [f32],
+}
+
+/// A triangle as the tile stage sees it.
+struct Triangle<'a> {
+    vertices: [&'a ScreenVertex; 3],
+    varyings: [&'a Varyings; 3],
+    flat_diffuse: f32,
+    material: &'a Material,
+}
+
+impl TileContext<'_> {
+    fn resolve<'b>(&'b self, chunk: &'b Chunk, entry: BinEntry, flat: bool) -> Triangle<'b> {
+        let instance = &self.frame.instances[entry.instance as usize];
+        if entry.triangle & CLIPPED_BIT != 0 {
+            let clipped = &chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize];
+            return Triangle {
+                vertices: clipped.vertices.each_ref(),
+                varyings: clipped.varyings.each_ref(),
+                flat_diffuse: clipped.flat_diffuse,
+                material: &instance.material,
+            };
+        }
+        let first = self.spans[entry.instance as usize].first_vertex;
+        let indices = instance.mesh.triangles[entry.triangle as usize].map(|i| first + i as usize);
+        Triangle {
+            vertices: indices.map(|i| &self.vertices[i]),
+            varyings: indices.map(|i| &self.varyings[i]),
+            flat_diffuse: if flat { flat_diffuse(indices.map(|i| self.world[i]), &self.frame.light) } else { 0.0 },
+            material: &instance.material,
+        }
+    }
+}
+
+/// The pixel rectangle of tile column `tx` in a band.
+fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
+    PixelBounds {
+        min_x: tx * TILE_WIDTH,
+        max_x: ((tx + 1) * TILE_WIDTH).min(width) - 1,
+        min_y: y0,
+        max_y: y0 + rows - 1,
+    }
+}
+
+/// Clears one band of the framebuffer and draws every triangle binned into its tiles.
+/// Returns the fragments covered and the triangle-tile pairs skipped as occluded.
+pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u64) {
+    let background = context.frame.background;
+    for pixel in band.color.chunks_exact_mut(4) {
+        pixel.copy_from_slice(&background);
+    }
+    band.depth.fill(FAR_DEPTH);
+    let pass =
+        |textured: bool| Pass { shading: context.frame.settings.shading, textured, shadowed: context.shadow.is_some() };
+    let flat = context.frame.settings.shading == Shading::Flat;
+    let (rows, width) = (band.rows(), band.width);
+    let mut target = band;
+    let (mut fragments, mut occluded) = (0, 0);
+    for tx in 0..context.tiles_x {
+        let rect = tile_rect(tx, target.y0, width, rows);
+        let tile = (row * context.tiles_x + tx) as usize;
+        let mut farthest = FAR_DEPTH;
+        let mut drawn = 0;
+        for chunk in context.chunks {
+            for &entry in &chunk.bins[tile] {
+                let triangle = context.resolve(chunk, entry, flat);
+                let Some(setup) = Setup::new(triangle.vertices, rect, true) else { continue };
+                if setup.nearest >= farthest {
+                    occluded += 1;
+                    continue;
+                }
+                let pass = pass(triangle.material.texture.is_some());
+                fragments += fill(pass, &setup, &triangle, context, &mut target);
+                drawn += 1;
+                if drawn % OCCLUSION_REFRESH == 0 {
+                    farthest = farthest_depth(target.depth, width, target.y0, rect);
+                }
+            }
+        }
+    }
+    (fragments, occluded)
+}
+
+/// The farthest depth held in `rect` of a band.
+fn farthest_depth(depth: &[f32], width: u32, y0: u32, rect: PixelBounds) -> f32 {
+    (rect.min_y..=rect.max_y)
+        .map(|y| {
+            let row = ((y - y0) * width) as usize;
+            depth[row + rect.min_x as usize..=row + rect.max_x as usize].iter().fold(0.0f32, |m, &d| m.max(d))
+        })
+        .fold(0.0, f32::max)
+}
+
+/// Clears one band of the shadow map and draws the depths of every triangle binned into its
+/// tiles, pushed back by the slope-scaled bias.
+pub(crate) fn draw_depth_band(
+    frame: &Frame,
+    chunks: &[Chunk],
+    vertices: &[ScreenVertex],
+    spans: &[Span],
+    row: u32,
+    band: DepthBand,
+) {
+    band.depth.fill(FAR_DEPTH);
+    let width = band.width;
+    let rows = (band.depth.len() / width as usize) as u32;
+    let tiles_x = width.div_ceil(TILE_WIDTH);
+    for tx in 0..tiles_x {
+        let rect = tile_rect(tx, band.y0, width, rows);
+        let tile = (row * tiles_x + tx) as usize;
+        for chunk in chunks {
+            for &entry in &chunk.bins[tile] {
+                let corners = if entry.triangle & CLIPPED_BIT != 0 {
+                    chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize].vertices.each_ref()
+                } else {
+                    let first = spans[entry.instance as usize].first_vertex;
+                    let mesh = &frame.instances[entry.instance as usize].mesh;
+                    mesh.triangles[entry.triangle as usize].map(|i| &vertices[first + i as usize])
+                };
+                if let Some(setup) = Setup::new(corners, rect, false) {
+                    fill_depth(&setup, band.y0, width, band.depth);
+                }
+            }
+        }
+    }
+}
+
+/// A triangle set up for one tile: its vertices reordered to a positive area, its edge
+/// functions at the first pixel, and its depth and `1/w` at the vertices.
+struct Setup {
+    /// Vertex order: setup vertex `k` is input vertex `order[k]`.
+    order: [usize; 3],
+    /// The pixels to visit: the triangle's bounds within the tile.
+    rect: PixelBounds,
+    /// Edge functions at the centre of the rect's first pixel, top-left bias included; edge `k`
+    /// is opposite vertex `k` and weighs it.
+    start: [i64; 3],
+    /// Edge function steps per pixel to the right.
+    step_x: [i64; 3],
+    /// Edge function steps per pixel down.
+    step_y: [i64; 3],
+    /// `1 / (2 * area)` in sub-pixel units squared.
+    inv_area: f32,
+    z: [f32; 3],
+    inv_w: [f32; 3],
+    /// The least depth of the three vertices.
+    nearest: f32,
+}
+
+impl Setup {
+    /// Sets the triangle up against `tile`; `None` when it is culled (zero area, or facing
+    /// away when `cull_back_faces`) or covers no pixel centre of the tile.
+    #[inline(always)]
+    fn new(vertices: [&ScreenVertex; 3], tile: PixelBounds, cull_back_faces: bool) -> Option<Self> {
+        let p = vertices.map(|v| (v.x as i64, v.y as i64));
+        let area = edge(p[0], p[1], p[2]);
+        // Front faces are negative on the y-down screen; swapping two vertices makes the area
+        // positive, as the inside test expects.
+        let order = match area {
+            0 => return None,
+            a if a < 0 => [0, 2, 1],
+            _ if cull_back_faces => return None,
+            _ => [0, 1, 2],
+        };
+        let p = order.map(|k| p[k]);
+        let bounds = pixel_bounds(p, u32::MAX, u32::MAX)?;
+        let rect = PixelBounds {
+            min_x: bounds.min_x.max(tile.min_x),
+            max_x: bounds.max_x.min(tile.max_x),
+            min_y: bounds.min_y.max(tile.min_y),
+            max_y: bounds.max_y.min(tile.max_y),
+        };
+        if rect.min_x > rect.max_x || rect.min_y > rect.max_y {
+            return None;
+        }
+        let sample = (
+            rect.min_x as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+            rect.min_y as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+        );
+        let edges = [(1, 2), (2, 0), (0, 1)];
+        let start = edges.map(|(a, b)| {
+            let bias = if is_top_left(p[a], p[b]) { 0 } else { -1 };
+            edge(p[a], p[b], sample) + bias
+        });
+        let z = order.map(|k| vertices[k].z);
+        Some(Self {
+            order,
+            rect,
+            start,
+            step_x: edges.map(|(a, b)| (p[a].1 - p[b].1) * SUBPIXEL_STEPS),
+            step_y: edges.map(|(a, b)| (p[b].0 - p[a].0) * SUBPIXEL_STEPS),
+            inv_area: 1.0 / area.abs() as f32,
+            z,
+            inv_w: order.map(|k| vertices[k].inv_w),
+            nearest: z[0].min(z[1]).min(z[2]),
+        })
+    }
+}
+
+/// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
+/// pixels are drawn (the top-left fill rule).
+#[inline(always)]
+fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
+    (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
+}
+
+/// Advances edge functions by one step.
+#[inline(always)]
+fn step(edges: &mut [i64; 3], by: [i64; 3]) {
+    for (edge, by) in edges.iter_mut().zip(by) {
+        *edge += by;
+    }
+}
+
+/// Shading mode numbers for the const-generic pixel loops.
+const FLAT: u8 = 0;
+const GOURAUD: u8 = 1;
+const PHONG: u8 = 2;
+
+/// Draws a set-up triangle with the pixel loop compiled for `pass`; returns the fragments.
+fn fill(pass: Pass, setup: &Setup, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
+    macro_rules! dispatch {
+        ($($shading:ident => $mode:ident),*) => {
+            match (pass.shading, pass.textured, pass.shadowed) {
+                $(
+                    (Shading::$shading, false, false) => fill_pass::<$mode, false, false>(setup, triangle, context, band),
+                    (Shading::$shading, true, false) => fill_pass::<$mode, true, false>(setup, triangle, context, band),
+                    (Shading::$shading, false, true) => fill_pass::<$mode, false, true>(setup, triangle, context, band),
+                    (Shading::$shading, true, true) => fill_pass::<$mode, true, true>(setup, triangle, context, band),
+                )*
+            }
+        };
+    }
+    dispatch!(Flat => FLAT, Gouraud => GOURAUD, Phong => PHONG)
+}
+
+/// The shading mode number of a [`Shading`].
+const fn shading_of(mode: u8) -> Shading {
+    match mode {
+        FLAT => Shading::Flat,
+        GOURAUD => Shading::Gouraud,
+        _ => Shading::Phong,
+    }
+}
+
+/// The colour pixel loop for one combination of shading mode, texture and shadows.
+#[inline(always)]
+fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
+    setup: &Setup,
+    triangle: &Triangle,
+    context: &TileContext,
+    band: &mut Band,
+) -> u64 {
+    let pass = Pass { shading: shading_of(MODE), textured: TEXTURED, shadowed: SHADOWED };
+    let light = &context.frame.light;
+    let material = triangle.material;
+    let texture = material.texture.as_deref();
+    let pcf = context.frame.settings.pcf;
+    let [v0, v1, v2] = setup.order.map(|k| triangle.varyings[k]);
+    // Vertex 0's values and the differences to vertices 1 and 2, for the values this pass reads.
+    let mut base = [0.0; VARYINGS];
+    let mut to_1 = [0.0; VARYINGS];
+    let mut to_2 = [0.0; VARYINGS];
+    for k in 0..VARYINGS {
+        if pass.uses(k) {
+            base[k] = v0[k];
+            to_1[k] = v1[k] - v0[k];
+            to_2[k] = v2[k] - v0[k];
+        }
+    }
+    let [z0, z1, z2] = setup.z;
+    let [w0, w1, w2] = setup.inv_w;
+    let (dz1, dz2, dw1, dw2) = (z1 - z0, z2 - z0, w1 - w0, w2 - w0);
+    let width = band.width as usize;
+    let mut row_edges = setup.start;
+    let mut fragments = 0;
+    for py in setup.rect.min_y..=setup.rect.max_y {
+        let row = (py - band.y0) as usize * width;
+        let mut e = row_edges;
+        for px in setup.rect.min_x..=setup.rect.max_x {
+            if (e[0] | e[1] | e[2]) >= 0 {
+                fragments += 1;
+                let l1 = e[1] as f32 * setup.inv_area;
+                let l2 = e[2] as f32 * setup.inv_area;
+                let z = z0 + l1 * dz1 + l2 * dz2;
+                let slot_index = row + px as usize;
+                if z < band.depth[slot_index] {
+                    band.depth[slot_index] = z;
+                    let w = 1.0 / (w0 + l1 * dw1 + l2 * dw2);
+                    let (p1, p2) = (l1 * w1 * w, l2 * w2 * w);
+                    let value = |k: usize| base[k] + p1 * to_1[k] + p2 * to_2[k];
+                    let vec3 = |k: usize| Vec3::new(value(k), value(k + 1), value(k + 2));
+                    let diffuse = match MODE {
+                        FLAT => triangle.flat_diffuse,
+                        GOURAUD => value(slot::DIFFUSE),
+                        _ => light.diffuse_term(vec3(slot::NORMAL).normalize_or_zero()),
+                    };
+                    let visibility = match context.shadow {
+                        Some(map) if SHADOWED => map.visibility(vec3(slot::SHADOW), pcf),
+                        _ => 1.0,
+                    };
+                    let mut color = vec3(slot::COLOR) * light.combine(diffuse, visibility);
+                    if let Some(texture) = texture.filter(|_| TEXTURED) {
+                        let uv = Vec2::new(value(slot::UV), value(slot::UV + 1));
+                        color *= texture.sample(uv, material.sampler);
+                    }
+                    band.color[slot_index * 4..slot_index * 4 + 4].copy_from_slice(&to_rgba8(color));
+                }
+            }
+            step(&mut e, setup.step_x);
+        }
+        step(&mut row_edges, setup.step_y);
+    }
+    fragments
+}
+
+/// The depth-only pixel loop of the shadow map, with the slope-scaled bias.
+fn fill_depth(setup: &Setup, y0: u32, width: u32, depth: &mut [f32]) {
+    let [z0, z1, z2] = setup.z;
+    let (dz1, dz2) = (z1 - z0, z2 - z0);
+    let slope = |step: [i64; 3]| (step[1] as f32 * dz1 + step[2] as f32 * dz2).abs() * setup.inv_area;
+    let bias = CONSTANT_BIAS + SLOPE_BIAS * slope(setup.step_x).max(slope(setup.step_y));
+    let mut row_edges = setup.start;
+    for py in setup.rect.min_y..=setup.rect.max_y {
+        let row = ((py - y0) * width) as usize;
+        let mut e = row_edges;
+        for px in setup.rect.min_x..=setup.rect.max_x {
+            if (e[0] | e[1] | e[2]) >= 0 {
+                let l1 = e[1] as f32 * setup.inv_area;
+                let l2 = e[2] as f32 * setup.inv_area;
+                let z = z0 + l1 * dz1 + l2 * dz2 + bias;
+                let texel = &mut depth[row + px as usize];
+                if z < *texel {
+                    *texel = z;
+                }
+            }
+            step(&mut e, setup.step_x);
+        }
+        step(&mut row_edges, setup.step_y);
+    }
+}
