@@ -77,7 +77,7 @@ pub struct RenderParams {
     pub shading: ShadingMode,
     /// Whether the light casts shadows.
     pub shadows: bool,
-    /// Whether shadow edges are filtered over 3 x 3 map texels.
+    /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
     pub pcf: bool,
 }
 

@@ -60,7 +60,7 @@ pub struct RenderSettings {
     pub shading: Shading,
     /// Whether the directional light casts shadows.
     pub shadows: bool,
-    /// Whether shadow edges are filtered over 3 x 3 map texels.
+    /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
     pub pcf: bool,
     /// Shadow map side in texels, at most [`MAX_TARGET_SIZE`].
     pub shadow_map_size: u32,

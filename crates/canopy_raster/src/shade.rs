@@ -87,13 +87,6 @@ impl Pass {
     }
 }
 
-/// Converts a linear colour in `[0, 1]` to opaque RGBA8.
-#[inline(always)]
-pub(crate) fn to_rgba8(color: Vec3) -> [u8; 4] {
-    let c = color.clamp(Vec3::ZERO, Vec3::ONE) * 255.0 + 0.5;
-    [c.x as u8, c.y as u8, c.z as u8, 255]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -105,10 +98,5 @@ mod tests {
         assert_eq!(count(pass(Shading::Flat, false, false)), 3);
         assert_eq!(count(pass(Shading::Gouraud, false, false)), 4);
         assert_eq!(count(pass(Shading::Phong, true, true)), VARYINGS - 1);
-    }
-
-    #[test]
-    fn rgba8_rounds_and_clamps() {
-        assert_eq!(to_rgba8(Vec3::new(0.5, 1.5, -1.0)), [128, 255, 0, 255]);
     }
 }

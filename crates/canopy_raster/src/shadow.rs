@@ -4,8 +4,8 @@
 //! the part of the scene the camera can see (see [`fit_light`]). It is drawn by the same tiled
 //! rasterizer, depth only, with a slope-scaled bias added to every stored depth so that lit
 //! surfaces do not shadow themselves. A pixel is lit when its own depth from the light is no
-//! greater than what the map holds there, optionally averaged over a 3 x 3 neighbourhood
-//! (percentage-closer filtering).
+//! greater than what the map holds there, optionally filtered over the four nearest texels
+//! (bilinear percentage-closer filtering).
 
 use crate::camera::{Camera, Light};
 use bevy_math::{Mat4, Vec3, Vec4};
@@ -75,20 +75,20 @@ impl ShadowMap {
     }
 
     /// How much light reaches a point located at `at` (see [`ShadowMap::locate`]): 1 lit, 0 in
-    /// shadow, in between at filtered edges. Points outside the map are lit.
+    /// shadow. Filtered, the four texels around the point are compared and their results
+    /// weighted bilinearly, so shadow edges fade over a texel instead of stepping. Points
+    /// outside the map are lit.
     #[inline(always)]
     pub fn visibility(&self, at: Vec3, filtered: bool) -> f32 {
-        let (x, y) = (at.x.floor() as i32, at.y.floor() as i32);
         if !filtered {
-            return self.lit(x, y, at.z);
+            return self.lit(floor(at.x), floor(at.y), at.z);
         }
-        let mut sum = 0.0;
-        for dy in -1..=1 {
-            for dx in -1..=1 {
-                sum += self.lit(x + dx, y + dy, at.z);
-            }
-        }
-        sum / 9.0
+        let (x, y) = (at.x - 0.5, at.y - 0.5);
+        let (x0, y0) = (floor(x), floor(y));
+        let (tx, ty) = (x - x0 as f32, y - y0 as f32);
+        let top = self.lit(x0, y0, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0, at.z) * tx;
+        let bottom = self.lit(x0, y0 + 1, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0 + 1, at.z) * tx;
+        top * (1.0 - ty) + bottom * ty
     }
 
     #[inline(always)]
@@ -99,6 +99,14 @@ impl ShadowMap {
         }
         if depth <= self.depth[(y * size + x) as usize] { 1.0 } else { 0.0 }
     }
+}
+
+/// The largest whole number not above `x`, for coordinates well within `i32` (the saturating
+/// cast keeps others harmless: they fall outside the map).
+#[inline(always)]
+fn floor(x: f32) -> i32 {
+    let truncated = x as i32;
+    if (truncated as f32) > x { truncated - 1 } else { truncated }
 }
 
 /// The light's world-to-clip matrix for a frame: an orthographic view along the light's
@@ -212,8 +220,13 @@ mod tests {
         assert_eq!(map.visibility(Vec3::new(0.5, 1.5, 0.2), false), 1.0);
         assert_eq!(map.visibility(Vec3::new(3.5, 1.5, 0.6), false), 1.0);
         assert_eq!(map.visibility(Vec3::new(-3.0, 1.5, 0.6), false), 1.0);
-        // On the boundary column PCF sees one shadowed column out of three.
-        let edge = map.visibility(Vec3::new(2.5, 1.5, 0.6), true);
-        assert!((edge - 2.0 / 3.0).abs() < 1e-6, "{edge}");
+        // Filtered, the light fades across the boundary between texel columns 1 and 2.
+        let at = |x: f32| map.visibility(Vec3::new(x, 1.5, 0.6), true);
+        assert_eq!(at(1.5), 0.0);
+        assert!((at(2.0) - 0.5).abs() < 1e-6, "{}", at(2.0));
+        assert!((at(2.25) - 0.75).abs() < 1e-6, "{}", at(2.25));
+        assert_eq!(at(2.5), 1.0);
+        // Negative coordinates round down: the texel left of 0 is outside, so lit.
+        assert_eq!(map.visibility(Vec3::new(-0.5, 1.5, 0.6), false), 1.0);
     }
 }

@@ -16,9 +16,9 @@ use crate::pipeline::{
     BinEntry, CLIPPED_BIT, Chunk, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH, edge,
     flat_diffuse, pixel_bounds,
 };
-use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, slot, to_rgba8};
+use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, slot};
 use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
-use bevy_math::{Vec2, Vec3};
+use bevy_math::{Vec2, Vec3, Vec4};
 
 /// Triangles drawn into a tile between two refreshes of its farthest depth.
 const OCCLUSION_REFRESH: u32 = 32;
@@ -284,7 +284,19 @@ const fn shading_of(mode: u8) -> Shading {
     }
 }
 
+/// Pixels shaded together: a horizontal run of four, one per SIMD lane of a [`Vec4`].
+const LANES: usize = 4;
+
+/// 2^23: added to a float in `[0, 2^23)`, it leaves the rounded whole number in the low bits.
+const ROUNDING_BIAS: f32 = 8_388_608.0;
+
+/// Each lane's offset from the run's first pixel.
+const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
+
 /// The colour pixel loop for one combination of shading mode, texture and shadows.
+///
+/// Coverage and depth are decided per pixel, exactly; the arithmetic of interpolation and
+/// lighting runs on runs of [`LANES`] pixels at once.
 #[inline(always)]
 fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     setup: &Setup,
@@ -312,43 +324,103 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     let [z0, z1, z2] = setup.z;
     let [w0, w1, w2] = setup.inv_w;
     let (dz1, dz2, dw1, dw2) = (z1 - z0, z2 - z0, w1 - w0, w2 - w0);
+    // Barycentric weights of vertices 1 and 2 change by these per pixel to the right.
+    let step_l1 = setup.step_x[1] as f32 * setup.inv_area;
+    let step_l2 = setup.step_x[2] as f32 * setup.inv_area;
+    let run_step = setup.step_x.map(|s| s * LANES as i64);
     let width = band.width as usize;
     let mut row_edges = setup.start;
     let mut fragments = 0;
     for py in setup.rect.min_y..=setup.rect.max_y {
         let row = (py - band.y0) as usize * width;
         let mut e = row_edges;
-        for px in setup.rect.min_x..=setup.rect.max_x {
-            if (e[0] | e[1] | e[2]) >= 0 {
+        let mut px = setup.rect.min_x;
+        while px <= setup.rect.max_x {
+            let e_run = e;
+            // Coverage, pixel by pixel from the exact edge functions; runs the triangle misses
+            // cost no more than this.
+            let mut covered = [false; LANES];
+            let mut lane_edges = e;
+            for (lane, covered) in covered.iter_mut().enumerate() {
+                *covered =
+                    px + (lane as u32) <= setup.rect.max_x && (lane_edges[0] | lane_edges[1] | lane_edges[2]) >= 0;
+                step(&mut lane_edges, setup.step_x);
+            }
+            step(&mut e, run_step);
+            if !covered.contains(&true) {
+                px += LANES as u32;
+                continue;
+            }
+            // Depth, written at once for the covered pixels that are nearer.
+            let l1 = Vec4::splat(e_run[1] as f32 * setup.inv_area) + LANE_OFFSETS * step_l1;
+            let l2 = Vec4::splat(e_run[2] as f32 * setup.inv_area) + LANE_OFFSETS * step_l2;
+            let z = (Vec4::splat(z0) + l1 * dz1 + l2 * dz2).to_array();
+            let mut drawn = [false; LANES];
+            for lane in (0..LANES).filter(|&lane| covered[lane]) {
                 fragments += 1;
-                let l1 = e[1] as f32 * setup.inv_area;
-                let l2 = e[2] as f32 * setup.inv_area;
-                let z = z0 + l1 * dz1 + l2 * dz2;
-                let slot_index = row + px as usize;
-                if z < band.depth[slot_index] {
-                    band.depth[slot_index] = z;
-                    let w = 1.0 / (w0 + l1 * dw1 + l2 * dw2);
-                    let (p1, p2) = (l1 * w1 * w, l2 * w2 * w);
-                    let value = |k: usize| base[k] + p1 * to_1[k] + p2 * to_2[k];
-                    let vec3 = |k: usize| Vec3::new(value(k), value(k + 1), value(k + 2));
-                    let diffuse = match MODE {
-                        FLAT => triangle.flat_diffuse,
-                        GOURAUD => value(slot::DIFFUSE),
-                        _ => light.diffuse_term(vec3(slot::NORMAL).normalize_or_zero()),
-                    };
-                    let visibility = match context.shadow {
-                        Some(map) if SHADOWED => map.visibility(vec3(slot::SHADOW), pcf),
-                        _ => 1.0,
-                    };
-                    let mut color = vec3(slot::COLOR) * light.combine(diffuse, visibility);
-                    if let Some(texture) = texture.filter(|_| TEXTURED) {
-                        let uv = Vec2::new(value(slot::UV), value(slot::UV + 1));
-                        color *= texture.sample(uv, material.sampler);
-                    }
-                    band.color[slot_index * 4..slot_index * 4 + 4].copy_from_slice(&to_rgba8(color));
+                let depth = &mut band.depth[row + px as usize + lane];
+                if z[lane] < *depth {
+                    *depth = z[lane];
+                    drawn[lane] = true;
                 }
             }
-            step(&mut e, setup.step_x);
+            if drawn.contains(&true) {
+                let w = (Vec4::splat(w0) + l1 * dw1 + l2 * dw2).recip();
+                let (p1, p2) = (l1 * w1 * w, l2 * w2 * w);
+                let value = |k: usize| Vec4::splat(base[k]) + p1 * to_1[k] + p2 * to_2[k];
+                let diffuse = match MODE {
+                    FLAT => Vec4::splat(triangle.flat_diffuse),
+                    GOURAUD => value(slot::DIFFUSE),
+                    _ => {
+                        let (nx, ny, nz) = (value(slot::NORMAL), value(slot::NORMAL + 1), value(slot::NORMAL + 2));
+                        let towards = -light.direction;
+                        let cosine = (nx * towards.x + ny * towards.y + nz * towards.z)
+                            / (nx * nx + ny * ny + nz * nz).max(Vec4::splat(1e-12)).sqrt();
+                        cosine.max(Vec4::ZERO) * light.diffuse
+                    }
+                };
+                let mut visibility = Vec4::ONE;
+                if SHADOWED && let Some(map) = context.shadow {
+                    let (sx, sy, sz) = (value(slot::SHADOW), value(slot::SHADOW + 1), value(slot::SHADOW + 2));
+                    let (sx, sy, sz) = (sx.to_array(), sy.to_array(), sz.to_array());
+                    let mut lanes = [1.0; LANES];
+                    for lane in 0..LANES {
+                        if drawn[lane] {
+                            lanes[lane] = map.visibility(Vec3::new(sx[lane], sy[lane], sz[lane]), pcf);
+                        }
+                    }
+                    visibility = Vec4::from_array(lanes);
+                }
+                let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
+                let mut rgb =
+                    [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)].map(|c| c * intensity);
+                if TEXTURED && let Some(texture) = texture {
+                    let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
+                    let mut texels = [[0.0; LANES]; 3];
+                    for lane in 0..LANES {
+                        if drawn[lane] {
+                            let texel = texture.sample(Vec2::new(u[lane], v[lane]), material.sampler);
+                            for (channel, texels) in texels.iter_mut().enumerate() {
+                                texels[lane] = texel[channel];
+                            }
+                        }
+                    }
+                    for (c, texels) in rgb.iter_mut().zip(texels) {
+                        *c *= Vec4::from_array(texels);
+                    }
+                }
+                // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole
+                // number, in the low mantissa bits: a cheap exact conversion to bytes.
+                let [r, g, b] = rgb.map(|c| (c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_array());
+                for lane in 0..LANES {
+                    if drawn[lane] {
+                        let at = (row + px as usize + lane) * 4;
+                        let byte = |c: f32| c.to_bits() as u8;
+                        band.color[at..at + 4].copy_from_slice(&[byte(r[lane]), byte(g[lane]), byte(b[lane]), 255]);
+                    }
+                }
+            }
+            px += LANES as u32;
         }
         step(&mut row_edges, setup.step_y);
     }
@@ -359,23 +431,23 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
 fn fill_depth(setup: &Setup, y0: u32, width: u32, depth: &mut [f32]) {
     let [z0, z1, z2] = setup.z;
     let (dz1, dz2) = (z1 - z0, z2 - z0);
-    let slope = |step: [i64; 3]| (step[1] as f32 * dz1 + step[2] as f32 * dz2).abs() * setup.inv_area;
-    let bias = CONSTANT_BIAS + SLOPE_BIAS * slope(setup.step_x).max(slope(setup.step_y));
+    // Depth changes by these per pixel right and down.
+    let slope = |step: [i64; 3]| (step[1] as f32 * dz1 + step[2] as f32 * dz2) * setup.inv_area;
+    let (dz_dx, dz_dy) = (slope(setup.step_x), slope(setup.step_y));
+    let bias = CONSTANT_BIAS + SLOPE_BIAS * dz_dx.abs().max(dz_dy.abs());
     let mut row_edges = setup.start;
     for py in setup.rect.min_y..=setup.rect.max_y {
         let row = ((py - y0) * width) as usize;
         let mut e = row_edges;
-        for px in setup.rect.min_x..=setup.rect.max_x {
-            if (e[0] | e[1] | e[2]) >= 0 {
-                let l1 = e[1] as f32 * setup.inv_area;
-                let l2 = e[2] as f32 * setup.inv_area;
-                let z = z0 + l1 * dz1 + l2 * dz2 + bias;
-                let texel = &mut depth[row + px as usize];
-                if z < *texel {
-                    *texel = z;
-                }
+        let l1 = e[1] as f32 * setup.inv_area;
+        let l2 = e[2] as f32 * setup.inv_area;
+        let mut z = z0 + l1 * dz1 + l2 * dz2 + bias;
+        for texel in &mut depth[row + setup.rect.min_x as usize..=row + setup.rect.max_x as usize] {
+            if (e[0] | e[1] | e[2]) >= 0 && z < *texel {
+                *texel = z;
             }
             step(&mut e, setup.step_x);
+            z += dz_dx;
         }
         step(&mut row_edges, setup.step_y);
     }
