@@ -62,7 +62,7 @@ pub struct RenderSettings {
     pub shadows: bool,
     /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
     pub pcf: bool,
-    /// Shadow map side in texels, at most [`MAX_TARGET_SIZE`].
+    /// Shadow map side in texels: a multiple of [`TILE_HEIGHT`], at most [`MAX_TARGET_SIZE`].
     pub shadow_map_size: u32,
 }
 
@@ -138,10 +138,18 @@ impl ScreenVertex {
         let steps = SUBPIXEL_STEPS as f32;
         // The clamp only guards against rounding past the guard band after clipping.
         let limit = 3.0 * MAX_TARGET_SIZE as f32 * steps;
-        let x = ((ndc.x + 1.0) * 0.5 * width as f32 * steps).round().clamp(-limit, limit) as i32;
-        let y = ((1.0 - ndc.y) * 0.5 * height as f32 * steps).round().clamp(-limit, limit) as i32;
+        let x = floor_i32(((ndc.x + 1.0) * 0.5 * width as f32 * steps).clamp(-limit, limit) + 0.5);
+        let y = floor_i32(((1.0 - ndc.y) * 0.5 * height as f32 * steps).clamp(-limit, limit) + 0.5);
         Self { clip, code: 0, x, y, z: ndc.z.max(0.0), inv_w }
     }
+}
+
+/// The largest whole number not above `x`, for `x` well within `i32` (the baseline x86-64
+/// target has no rounding instruction, and the library call is slow).
+#[inline(always)]
+pub(crate) fn floor_i32(x: f32) -> i32 {
+    let truncated = x as i32;
+    if (truncated as f32) > x { truncated - 1 } else { truncated }
 }
 
 /// A triangle made by clipping, kept whole with its projected vertices.
@@ -229,13 +237,18 @@ impl Renderer {
     /// Draws `frame` into `target` (cleared first), spreading the work over `pool`.
     ///
     /// # Panics
-    /// If the target or the shadow map is larger than [`MAX_TARGET_SIZE`] on a side.
+    /// If the target or the shadow map is larger than [`MAX_TARGET_SIZE`] on a side, or the
+    /// shadow map size is not a positive multiple of [`TILE_HEIGHT`].
     pub fn render(&mut self, target: &mut Framebuffer, pool: &TaskPool, frame: &Frame) -> RenderStats {
         let (width, height) = (target.width(), target.height());
         let settings = frame.settings;
         assert!(
             width <= MAX_TARGET_SIZE && height <= MAX_TARGET_SIZE && settings.shadow_map_size <= MAX_TARGET_SIZE,
             "render targets are limited to {MAX_TARGET_SIZE} pixels a side"
+        );
+        assert!(
+            settings.shadow_map_size > 0 && settings.shadow_map_size.is_multiple_of(TILE_HEIGHT),
+            "the shadow map size must be a positive multiple of {TILE_HEIGHT}"
         );
         let mut stats = RenderStats {
             triangles_submitted: frame.instances.iter().map(|i| i.mesh.triangle_count()).sum(),
@@ -321,6 +334,7 @@ impl Renderer {
         let threads = pool.thread_num().max(1);
         let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
         let (spans, shadow, map_size) = (&self.spans, &self.shadow, frame.settings.shadow_map_size);
+        let lit = frame.settings.shading == Shading::Gouraud && light_clip.is_none();
         let mut light_runs = self.light_vertices.chunks_mut(run);
         pool.scope(|scope| {
             let runs = self.world.chunks_mut(run).zip(self.vertices.chunks_mut(run)).zip(self.varyings.chunks_mut(run));
@@ -343,7 +357,7 @@ impl Renderer {
                         let normal = (span.normal_matrix * instance.mesh.normals[local]).normalize_or_zero();
                         *world = position;
                         *screen = ScreenVertex::new(view_projection * position.extend(1.0), width, height);
-                        *varyings = vertex_varyings(instance, local, normal, &frame.light);
+                        *varyings = vertex_varyings(instance, local, normal, &frame.light, lit);
                         if let (Some(light_clip), Some(light_vertex)) =
                             (light_clip, light_run.as_mut().and_then(Iterator::next))
                         {
@@ -373,14 +387,21 @@ impl Renderer {
 }
 
 /// The varyings of one vertex before the shadow position is known.
-fn vertex_varyings(instance: &Instance, local: usize, normal: Vec3, light: &Light) -> Varyings {
+///
+/// When `lit` the colour is the lit colour (Gouraud without shadows: nothing is left to light
+/// per pixel).
+fn vertex_varyings(instance: &Instance, local: usize, normal: Vec3, light: &Light, lit: bool) -> Varyings {
     let material = &instance.material;
     let mesh = &instance.mesh;
-    let color = material.color * mesh.colors.get(local).copied().unwrap_or(Vec3::ONE);
+    let diffuse = light.diffuse_term(normal);
+    let mut color = material.color * mesh.colors.get(local).copied().unwrap_or(Vec3::ONE);
+    if lit {
+        color *= light.combine(diffuse, 1.0);
+    }
     let uv = mesh.uvs.get(local).copied().unwrap_or(Vec2::ZERO) * material.uv_scale;
     let mut varyings = [0.0; VARYINGS];
     varyings[slot::COLOR..slot::COLOR + 3].copy_from_slice(&color.to_array());
-    varyings[slot::DIFFUSE] = light.diffuse_term(normal);
+    varyings[slot::DIFFUSE] = diffuse;
     varyings[slot::NORMAL..slot::NORMAL + 3].copy_from_slice(&normal.to_array());
     varyings[slot::UV..slot::UV + 2].copy_from_slice(&uv.to_array());
     varyings

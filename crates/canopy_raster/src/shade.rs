@@ -54,7 +54,8 @@ pub type Varyings = [f32; VARYINGS];
 
 /// Where each value lives in [`Varyings`].
 pub mod slot {
-    /// Base colour, RGB: material colour times vertex colour.
+    /// Base colour, RGB: material colour times vertex colour (times the light's intensity for
+    /// Gouraud shading without shadows).
     pub const COLOR: usize = 0;
     /// The light's diffuse term at the vertex (Gouraud).
     pub const DIFFUSE: usize = 3;
@@ -79,7 +80,8 @@ impl Pass {
     pub fn uses(self, index: usize) -> bool {
         match index {
             0..3 => true,
-            slot::DIFFUSE => self.shading == Shading::Gouraud,
+            // Gouraud without shadows interpolates the colour lit at the vertices.
+            slot::DIFFUSE => self.shading == Shading::Gouraud && self.shadowed,
             4..7 => self.shading == Shading::Phong,
             7..9 => self.textured,
             _ => self.shadowed,
@@ -96,7 +98,8 @@ mod tests {
         let count = |pass: Pass| (0..VARYINGS).filter(|&i| pass.uses(i)).count();
         let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
         assert_eq!(count(pass(Shading::Flat, false, false)), 3);
-        assert_eq!(count(pass(Shading::Gouraud, false, false)), 4);
+        assert_eq!(count(pass(Shading::Gouraud, false, false)), 3);
+        assert_eq!(count(pass(Shading::Gouraud, false, true)), 7);
         assert_eq!(count(pass(Shading::Phong, true, true)), VARYINGS - 1);
     }
 }

@@ -8,6 +8,7 @@
 //! (bilinear percentage-closer filtering).
 
 use crate::camera::{Camera, Light};
+use crate::pipeline::floor_i32;
 use bevy_math::{Mat4, Vec3, Vec4};
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
@@ -33,9 +34,13 @@ impl ShadowMap {
         self.size
     }
 
-    /// The depths, row by row from the top-left texel.
-    pub fn depth(&self) -> &[f32] {
-        &self.depth
+    /// The depth of texel (`x`, `y`), counted from the top-left corner.
+    ///
+    /// # Panics
+    /// If the texel is outside the map.
+    pub fn depth_at(&self, x: u32, y: u32) -> f32 {
+        assert!(x < self.size && y < self.size, "texel ({x}, {y}) outside the shadow map");
+        self.depth[texel_index(x as usize, y as usize, self.size as usize)]
     }
 
     /// Whether the last frame drew a map (shadows on and something in view to shadow).
@@ -50,7 +55,11 @@ impl ShadowMap {
 
     /// Prepares an empty map of `size` x `size` texels drawn through `clip_from_world`, or
     /// marks it inactive. Keeps the allocation.
+    ///
+    /// # Panics
+    /// If `size` is not a positive multiple of [`BLOCK`].
     pub(crate) fn reset(&mut self, size: u32, clip_from_world: Option<Mat4>) {
+        assert!(size > 0 && size.is_multiple_of(BLOCK as u32), "shadow maps are a multiple of {BLOCK} texels a side");
         self.active = clip_from_world.is_some();
         self.clip_from_world = clip_from_world.unwrap_or(Mat4::IDENTITY);
         self.size = size;
@@ -61,7 +70,7 @@ impl ShadowMap {
         }
     }
 
-    /// Mutable depths for drawing the map in bands.
+    /// Mutable depths for drawing the map in bands of whole block rows (see [`texel_index`]).
     pub(crate) fn depth_mut(&mut self) -> &mut [f32] {
         &mut self.depth
     }
@@ -81,10 +90,10 @@ impl ShadowMap {
     #[inline(always)]
     pub fn visibility(&self, at: Vec3, filtered: bool) -> f32 {
         if !filtered {
-            return self.lit(floor(at.x), floor(at.y), at.z);
+            return self.lit(floor_i32(at.x), floor_i32(at.y), at.z);
         }
         let (x, y) = (at.x - 0.5, at.y - 0.5);
-        let (x0, y0) = (floor(x), floor(y));
+        let (x0, y0) = (floor_i32(x), floor_i32(y));
         let (tx, ty) = (x - x0 as f32, y - y0 as f32);
         let top = self.lit(x0, y0, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0, at.z) * tx;
         let bottom = self.lit(x0, y0 + 1, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0 + 1, at.z) * tx;
@@ -97,16 +106,20 @@ impl ShadowMap {
         if x < 0 || y < 0 || x >= size || y >= size {
             return 1.0;
         }
-        if depth <= self.depth[(y * size + x) as usize] { 1.0 } else { 0.0 }
+        if depth <= self.depth[texel_index(x as usize, y as usize, size as usize)] { 1.0 } else { 0.0 }
     }
 }
 
-/// The largest whole number not above `x`, for coordinates well within `i32` (the saturating
-/// cast keeps others harmless: they fall outside the map).
+/// Side of the square blocks the map is stored in.
+pub(crate) const BLOCK: usize = 8;
+
+/// Where texel (`x`, `y`) of a map `size` texels wide is stored: the map is kept in
+/// [`BLOCK`] x [`BLOCK`] blocks, block rows top to bottom, so that the texels a pixel's
+/// neighbourhood reads share cache lines whichever way the light looks. A band of whole block
+/// rows is one contiguous slice.
 #[inline(always)]
-fn floor(x: f32) -> i32 {
-    let truncated = x as i32;
-    if (truncated as f32) > x { truncated - 1 } else { truncated }
+pub(crate) fn texel_index(x: usize, y: usize, size: usize) -> usize {
+    ((y / BLOCK) * (size / BLOCK) + x / BLOCK) * BLOCK * BLOCK + (y % BLOCK) * BLOCK + x % BLOCK
 }
 
 /// The light's world-to-clip matrix for a frame: an orthographic view along the light's
@@ -207,18 +220,36 @@ mod tests {
     }
 
     #[test]
-    fn visibility_compares_depths_and_filters() {
-        let mut map = ShadowMap::default();
-        map.reset(4, Some(Mat4::IDENTITY));
-        // Left half holds an occluder at depth 0.3.
-        for y in 0..4 {
-            for x in 0..2 {
-                map.depth_mut()[y * 4 + x] = 0.3;
+    fn blocks_store_every_texel_once() {
+        let size = 24;
+        let mut seen = vec![false; size * size];
+        for y in 0..size {
+            for x in 0..size {
+                let index = texel_index(x, y, size);
+                assert!(!seen[index], "({x}, {y})");
+                seen[index] = true;
             }
         }
+        // A band of eight rows is one contiguous slice.
+        assert!((0..size).flat_map(|x| (8..16).map(move |y| texel_index(x, y, size))).all(|i| (192..384).contains(&i)));
+    }
+
+    #[test]
+    fn visibility_compares_depths_and_filters() {
+        let mut map = ShadowMap::default();
+        map.reset(8, Some(Mat4::IDENTITY));
+        // Columns 0 and 1 hold an occluder at depth 0.3.
+        for y in 0..8 {
+            for x in 0..2 {
+                map.depth_mut()[texel_index(x, y, 8)] = 0.3;
+            }
+        }
+        assert_eq!(map.depth_at(1, 5), 0.3);
+        assert_eq!(map.depth_at(2, 5), 1.0);
         assert_eq!(map.visibility(Vec3::new(0.5, 1.5, 0.6), false), 0.0);
         assert_eq!(map.visibility(Vec3::new(0.5, 1.5, 0.2), false), 1.0);
         assert_eq!(map.visibility(Vec3::new(3.5, 1.5, 0.6), false), 1.0);
+        assert_eq!(map.visibility(Vec3::new(9.5, 1.5, 0.6), false), 1.0);
         assert_eq!(map.visibility(Vec3::new(-3.0, 1.5, 0.6), false), 1.0);
         // Filtered, the light fades across the boundary between texel columns 1 and 2.
         let at = |x: f32| map.visibility(Vec3::new(x, 1.5, 0.6), true);

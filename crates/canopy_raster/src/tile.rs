@@ -17,11 +17,13 @@ use crate::pipeline::{
     flat_diffuse, pixel_bounds,
 };
 use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, slot};
-use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
+use crate::shadow::{BLOCK, CONSTANT_BIAS, SLOPE_BIAS, ShadowMap, texel_index};
 use bevy_math::{Vec2, Vec3, Vec4};
 
-/// Triangles drawn into a tile between two refreshes of its farthest depth.
-const OCCLUSION_REFRESH: u32 = 32;
+/// A tile's farthest depth is read anew once this many pixels have been covered in it since the
+/// last reading, times the tile's area: the reading then costs at most one depth read per
+/// covered pixel.
+const OCCLUSION_REFRESH: u64 = 1;
 
 /// What the colour tiles read, shared by every band.
 pub(crate) struct TileContext<'a> {
@@ -86,10 +88,14 @@ fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
 /// Clears one band of the framebuffer and draws every triangle binned into its tiles.
 /// Returns the fragments covered and the triangle-tile pairs skipped as occluded.
 pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u64) {
-    let background = context.frame.background;
-    for pixel in band.color.chunks_exact_mut(4) {
-        pixel.copy_from_slice(&background);
+    // Cleared sixteen pixels at a time from a repeated pattern.
+    let pattern: [u8; 64] = std::array::from_fn(|i| context.frame.background[i % 4]);
+    let mut runs = band.color.chunks_exact_mut(pattern.len());
+    for run in &mut runs {
+        run.copy_from_slice(&pattern);
     }
+    let rest = runs.into_remainder();
+    rest.copy_from_slice(&pattern[..rest.len()]);
     band.depth.fill(FAR_DEPTH);
     let pass =
         |textured: bool| Pass { shading: context.frame.settings.shading, textured, shadowed: context.shadow.is_some() };
@@ -101,7 +107,8 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
         let rect = tile_rect(tx, target.y0, width, rows);
         let tile = (row * context.tiles_x + tx) as usize;
         let mut farthest = FAR_DEPTH;
-        let mut drawn = 0;
+        let mut covered_since_refresh = 0;
+        let area = u64::from(rect.max_x - rect.min_x + 1) * u64::from(rows);
         for chunk in context.chunks {
             for &entry in &chunk.bins[tile] {
                 let triangle = context.resolve(chunk, entry, flat);
@@ -111,9 +118,11 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
                     continue;
                 }
                 let pass = pass(triangle.material.texture.is_some());
-                fragments += fill(pass, &setup, &triangle, context, &mut target);
-                drawn += 1;
-                if drawn % OCCLUSION_REFRESH == 0 {
+                let covered = fill(pass, &setup, &triangle, context, &mut target);
+                fragments += covered;
+                covered_since_refresh += covered;
+                if covered_since_refresh >= area * OCCLUSION_REFRESH {
+                    covered_since_refresh = 0;
                     farthest = farthest_depth(target.depth, width, target.y0, rect);
                 }
             }
@@ -127,7 +136,9 @@ fn farthest_depth(depth: &[f32], width: u32, y0: u32, rect: PixelBounds) -> f32 
     (rect.min_y..=rect.max_y)
         .map(|y| {
             let row = ((y - y0) * width) as usize;
-            depth[row + rect.min_x as usize..=row + rect.max_x as usize].iter().fold(0.0f32, |m, &d| m.max(d))
+            depth[row + rect.min_x as usize..=row + rect.max_x as usize]
+                .iter()
+                .fold(0.0f32, |m, &d| if d > m { d } else { m })
         })
         .fold(0.0, f32::max)
 }
@@ -224,11 +235,12 @@ impl Setup {
             edge(p[a], p[b], sample) + bias
         });
         let z = order.map(|k| vertices[k].z);
+        let step_x = edges.map(|(a, b)| (p[a].1 - p[b].1) * SUBPIXEL_STEPS);
         Some(Self {
             order,
             rect,
             start,
-            step_x: edges.map(|(a, b)| (p[a].1 - p[b].1) * SUBPIXEL_STEPS),
+            step_x,
             step_y: edges.map(|(a, b)| (p[b].0 - p[a].0) * SUBPIXEL_STEPS),
             inv_area: 1.0 / area.abs() as f32,
             z,
@@ -238,11 +250,68 @@ impl Setup {
     }
 }
 
+/// The pixels of one row inside a triangle: `first..end`, and the edge functions at `first`.
+struct RowSpan {
+    first: u32,
+    end: u32,
+    edges: [i64; 3],
+}
+
+impl Setup {
+    /// The covered pixels of the row whose first pixel (at `rect.min_x`) has edge functions
+    /// `row_edges`. They form one interval (the triangle is convex), found from coverage masks
+    /// of [`MASK_PIXELS`] pixels at a time, without a branch per pixel.
+    #[inline(always)]
+    fn span(&self, row_edges: [i64; 3]) -> Option<RowSpan> {
+        let mask_step = self.step_x.map(|s| s * i64::from(MASK_PIXELS));
+        let mut e = row_edges;
+        let mut x = self.rect.min_x;
+        let mut first = None;
+        let mut end = x;
+        while x <= self.rect.max_x {
+            let remaining = self.rect.max_x - x + 1;
+            let valid = if remaining >= MASK_PIXELS { u32::MAX >> (32 - MASK_PIXELS) } else { (1 << remaining) - 1 };
+            let mask = coverage_mask(e, self.step_x) & valid;
+            if mask != 0 {
+                first.get_or_insert(x + mask.trailing_zeros());
+                end = x + 32 - mask.leading_zeros();
+                if end < x + remaining.min(MASK_PIXELS) {
+                    break;
+                }
+            } else if first.is_some() {
+                break;
+            }
+            x += MASK_PIXELS;
+            step(&mut e, mask_step);
+        }
+        let first = first?;
+        let offset = i64::from(first - self.rect.min_x);
+        let edges = [0, 1, 2].map(|k| row_edges[k] + offset * self.step_x[k]);
+        Some(RowSpan { first, end, edges })
+    }
+}
+
 /// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
 /// pixels are drawn (the top-left fill rule).
 #[inline(always)]
 fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
     (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
+}
+
+/// Pixels whose coverage one mask holds.
+const MASK_PIXELS: u32 = 8;
+
+/// Which of [`MASK_PIXELS`] pixels in a row, the first with edge functions `e` and each next
+/// one `step` further, are inside: bit `k` for pixel `k`.
+#[inline(always)]
+fn coverage_mask(e: [i64; 3], step: [i64; 3]) -> u32 {
+    let mut mask = 0;
+    for k in 0..MASK_PIXELS {
+        let k = i64::from(k);
+        let edges = (e[0] + k * step[0]) | (e[1] + k * step[1]) | (e[2] + k * step[2]);
+        mask |= u32::from(edges >= 0) << k;
+    }
+    mask
 }
 
 /// Advances edge functions by one step.
@@ -295,9 +364,8 @@ const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
 
 /// The colour pixel loop for one combination of shading mode, texture and shadows.
 ///
-/// Coverage and depth are decided per pixel, exactly; the arithmetic of interpolation and
-/// lighting runs on runs of [`LANES`] pixels at once.
-#[inline(always)]
+/// Coverage is decided per pixel, exactly, as one interval per row; depth tests, interpolation
+/// and lighting run on runs of [`LANES`] pixels of that interval at once.
 fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     setup: &Setup,
     triangle: &Triangle,
@@ -327,40 +395,32 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     // Barycentric weights of vertices 1 and 2 change by these per pixel to the right.
     let step_l1 = setup.step_x[1] as f32 * setup.inv_area;
     let step_l2 = setup.step_x[2] as f32 * setup.inv_area;
-    let run_step = setup.step_x.map(|s| s * LANES as i64);
     let width = band.width as usize;
     let mut row_edges = setup.start;
     let mut fragments = 0;
     for py in setup.rect.min_y..=setup.rect.max_y {
         let row = (py - band.y0) as usize * width;
-        let mut e = row_edges;
-        let mut px = setup.rect.min_x;
-        while px <= setup.rect.max_x {
-            let e_run = e;
-            // Coverage, pixel by pixel from the exact edge functions; runs the triangle misses
-            // cost no more than this.
-            let mut covered = [false; LANES];
-            let mut lane_edges = e;
-            for (lane, covered) in covered.iter_mut().enumerate() {
-                *covered =
-                    px + (lane as u32) <= setup.rect.max_x && (lane_edges[0] | lane_edges[1] | lane_edges[2]) >= 0;
-                step(&mut lane_edges, setup.step_x);
-            }
-            step(&mut e, run_step);
-            if !covered.contains(&true) {
-                px += LANES as u32;
-                continue;
-            }
-            // Depth, written at once for the covered pixels that are nearer.
-            let l1 = Vec4::splat(e_run[1] as f32 * setup.inv_area) + LANE_OFFSETS * step_l1;
-            let l2 = Vec4::splat(e_run[2] as f32 * setup.inv_area) + LANE_OFFSETS * step_l2;
+        let Some(span) = setup.span(row_edges) else {
+            step(&mut row_edges, setup.step_y);
+            continue;
+        };
+        step(&mut row_edges, setup.step_y);
+        let (first, end, first_edges) = (span.first, span.end, span.edges);
+        fragments += u64::from(end - first);
+        let l1_first = first_edges[1] as f32 * setup.inv_area;
+        let l2_first = first_edges[2] as f32 * setup.inv_area;
+        let mut run = first;
+        while run < end {
+            let lanes = ((end - run) as usize).min(LANES);
+            let offset = (run - first) as f32;
+            let l1 = Vec4::splat(l1_first + offset * step_l1) + LANE_OFFSETS * step_l1;
+            let l2 = Vec4::splat(l2_first + offset * step_l2) + LANE_OFFSETS * step_l2;
             let z = (Vec4::splat(z0) + l1 * dz1 + l2 * dz2).to_array();
+            let at = row + run as usize;
             let mut drawn = [false; LANES];
-            for lane in (0..LANES).filter(|&lane| covered[lane]) {
-                fragments += 1;
-                let depth = &mut band.depth[row + px as usize + lane];
-                if z[lane] < *depth {
-                    *depth = z[lane];
+            for (lane, (depth, z)) in band.depth[at..at + lanes].iter_mut().zip(z).enumerate() {
+                if z < *depth {
+                    *depth = z;
                     drawn[lane] = true;
                 }
             }
@@ -370,6 +430,7 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
                 let value = |k: usize| Vec4::splat(base[k]) + p1 * to_1[k] + p2 * to_2[k];
                 let diffuse = match MODE {
                     FLAT => Vec4::splat(triangle.flat_diffuse),
+                    GOURAUD if !SHADOWED => Vec4::ZERO,
                     GOURAUD => value(slot::DIFFUSE),
                     _ => {
                         let (nx, ny, nz) = (value(slot::NORMAL), value(slot::NORMAL + 1), value(slot::NORMAL + 2));
@@ -391,9 +452,13 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
                     }
                     visibility = Vec4::from_array(lanes);
                 }
-                let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
-                let mut rgb =
-                    [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)].map(|c| c * intensity);
+                let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
+                if MODE != GOURAUD || SHADOWED {
+                    let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
+                    for c in &mut rgb {
+                        *c *= intensity;
+                    }
+                }
                 if TEXTURED && let Some(texture) = texture {
                     let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
                     let mut texels = [[0.0; LANES]; 3];
@@ -414,15 +479,19 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
                 let [r, g, b] = rgb.map(|c| (c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_array());
                 for lane in 0..LANES {
                     if drawn[lane] {
-                        let at = (row + px as usize + lane) * 4;
                         let byte = |c: f32| c.to_bits() as u8;
-                        band.color[at..at + 4].copy_from_slice(&[byte(r[lane]), byte(g[lane]), byte(b[lane]), 255]);
+                        let pixel = (at + lane) * 4;
+                        band.color[pixel..pixel + 4].copy_from_slice(&[
+                            byte(r[lane]),
+                            byte(g[lane]),
+                            byte(b[lane]),
+                            255,
+                        ]);
                     }
                 }
             }
-            px += LANES as u32;
+            run += LANES as u32;
         }
-        step(&mut row_edges, setup.step_y);
     }
     fragments
 }
@@ -437,18 +506,19 @@ fn fill_depth(setup: &Setup, y0: u32, width: u32, depth: &mut [f32]) {
     let bias = CONSTANT_BIAS + SLOPE_BIAS * dz_dx.abs().max(dz_dy.abs());
     let mut row_edges = setup.start;
     for py in setup.rect.min_y..=setup.rect.max_y {
-        let row = ((py - y0) * width) as usize;
-        let mut e = row_edges;
-        let l1 = e[1] as f32 * setup.inv_area;
-        let l2 = e[2] as f32 * setup.inv_area;
+        let span = setup.span(row_edges);
+        step(&mut row_edges, setup.step_y);
+        let Some(span) = span else { continue };
+        let l1 = span.edges[1] as f32 * setup.inv_area;
+        let l2 = span.edges[2] as f32 * setup.inv_area;
         let mut z = z0 + l1 * dz1 + l2 * dz2 + bias;
-        for texel in &mut depth[row + setup.rect.min_x as usize..=row + setup.rect.max_x as usize] {
-            if (e[0] | e[1] | e[2]) >= 0 && z < *texel {
+        let row = texel_index(0, (py - y0) as usize, width as usize);
+        for px in span.first as usize..span.end as usize {
+            let texel = &mut depth[row + (px / BLOCK) * BLOCK * BLOCK + px % BLOCK];
+            if z < *texel {
                 *texel = z;
             }
-            step(&mut e, setup.step_x);
             z += dz_dx;
         }
-        step(&mut row_edges, setup.step_y);
     }
 }
