@@ -7,7 +7,7 @@ use crate::controls::{HelpVisible, KeyMap, ReloadScene};
 use crate::params::{ParamEntry, ParamValue, list_params, set_param};
 use crate::raster::RenderSystems;
 use crate::raster::plugin::RasterTarget;
-use crate::scene::{ActiveScene, SceneEntity, SceneStatus};
+use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneEntity, SceneStatus};
 use crate::schedule::{SimClock, SimControl};
 use crate::view::CameraParams;
 use bevy::asset::RenderAssetUsages;
@@ -199,9 +199,13 @@ fn draw_ui(world: &mut World) {
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
     state.frame_ms += (frame_seconds * 1000.0 - state.frame_ms) * 0.1;
     if state.selected.is_none() {
-        // Start with the first entity of the file selected (after the camera and the light).
-        state.selected =
-            world.query::<&SceneEntity>().iter(world).filter(|s| s.index == 2).map(|s| s.name.clone()).next();
+        // Start with the first entity of the file selected.
+        state.selected = world
+            .query::<&SceneEntity>()
+            .iter(world)
+            .filter(|s| s.index == FIRST_FILE_ENTITY)
+            .map(|s| s.name.clone())
+            .next();
     }
     let data = PanelData::gather(world, state.selected.as_deref());
     let mut actions = PanelActions::default();

@@ -154,3 +154,30 @@ fn referenced_configurations_are_read_and_their_errors_located() {
         assert!(error.message.contains(words), "{error}");
     }
 }
+
+#[test]
+fn textures_are_decoded_with_the_scene_and_bad_ones_name_their_file() {
+    let demo = SceneDef::load(&root().join("scenes/demo.yaml")).unwrap();
+    let textures: Vec<(u32, u32)> = demo
+        .entities
+        .iter()
+        .filter_map(|entity| match &entity.kind {
+            canopy::scene::schema::EntityKind::Shape(shape) => shape.texture.as_ref(),
+            _ => None,
+        })
+        .map(|texture| texture.image.as_ref().map(|i| (i.width(), i.height())).expect("decoded"))
+        .collect();
+    // The checker board is a PNG, the bricks a BMP.
+    assert_eq!(textures, [(64, 64), (64, 64)]);
+
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("scene.yaml");
+    std::fs::write(&scene, "entities:\n  - shape: { primitive: box, texture: { file: wood.png } }\n").unwrap();
+    let error = SceneDef::load(&scene).unwrap_err();
+    assert_eq!(error.path, folder.path().join("wood.png"));
+    assert!(error.message.contains("cannot read the file"), "{error}");
+    std::fs::write(folder.path().join("wood.png"), "not an image").unwrap();
+    let error = SceneDef::load(&scene).unwrap_err();
+    assert_eq!(error.path, folder.path().join("wood.png"));
+    assert!(error.message.contains("entities[0].shape.texture.file: not a readable PNG or BMP image"), "{error}");
+}

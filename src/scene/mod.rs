@@ -211,6 +211,10 @@ fn track_scene_asset(
     info!("scene {} loaded ({} entities)", scene.path.display(), def.entities.len());
 }
 
+/// The [`SceneEntity::index`] of the file's first entity: the camera, the light and the render
+/// settings come before it.
+pub const FIRST_FILE_ENTITY: usize = 3;
+
 /// Spawns the camera, the light, the render settings and every entity of `def`.
 pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMeshes) {
     let scene_entity = |index: usize, name: &str, kind: &'static str| {
@@ -220,7 +224,8 @@ pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMe
     commands.spawn((scene_entity(1, "light", "light"), LightParams::from(&def.light)));
     commands.spawn((scene_entity(2, "render", "render"), RenderParams::from(&def.render)));
     for (index, entity_def) in def.entities.iter().enumerate() {
-        let mut entity = commands.spawn(scene_entity(index + 3, entity_def.display_name(), entity_def.kind.key()));
+        let mut entity =
+            commands.spawn(scene_entity(FIRST_FILE_ENTITY + index, entity_def.display_name(), entity_def.kind.key()));
         match &entity_def.kind {
             EntityKind::Shape(shape) => spawn_shape(&mut entity, shape, meshes),
             EntityKind::Muscle(muscle) => spawn_muscle(&mut entity, muscle, meshes),
