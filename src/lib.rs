@@ -13,7 +13,8 @@
 //! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: framebuffer, egui panel, key help |
 //!
-//! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps.
+//! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps. [`tree`] holds
+//! the pure geometry of trees (tapered segments and the queries over them).
 #![forbid(unsafe_code)]
 
 pub mod app;
@@ -26,6 +27,7 @@ pub mod run;
 pub mod scene;
 pub mod schedule;
 pub mod shape;
+pub mod tree;
 pub mod ui;
 pub mod view;
 pub mod yaml;
