@@ -6,6 +6,7 @@ use crate::raster::{RasterPlugin, RenderSettingsPlugin};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::schedule::SchedulePlugin;
 use crate::shape::ShapePlugin;
+use crate::tree::TreePlugin;
 use crate::ui::{UiPlugin, WindowCapture};
 use crate::view::ViewPlugin;
 use bevy::app::PluginGroupBuilder;
@@ -53,6 +54,7 @@ impl PluginGroup for CanopyPlugins {
             .add(RenderSettingsPlugin)
             .add(ShapePlugin)
             .add(MusclePlugin)
+            .add(TreePlugin)
             .add(RasterPlugin { size, every_frame });
         match self.display {
             Display::Window => group.add(UiPlugin),

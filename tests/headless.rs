@@ -314,3 +314,49 @@ fn shadows_and_shading_switch_at_run_time_by_parameter_and_key() {
         frames.push(output.framebuffer.color().to_vec());
     }
 }
+
+#[test]
+fn tree_scenes_play_and_dump_their_supports() {
+    for scene in ["scenes/branch.yaml", "scenes/fork.yaml", "scenes/tree.yaml", "scenes/forest.yaml"] {
+        let output = run(scene, 1, None, SMALL);
+        let trees: Vec<&Value> =
+            output.dump["entities"].as_array().unwrap().iter().filter(|e| e["kind"] == "tree").collect();
+        assert!(!trees.is_empty(), "{scene}");
+        for tree in trees {
+            for support in tree["supports"].as_array().unwrap() {
+                let (points, radii) = (support["points"].as_array().unwrap(), support["radii"].as_array().unwrap());
+                assert!(points.len() >= 2 && points.len() == radii.len(), "{scene}: {support}");
+                assert!(support["kind"] == "trunk" || support["kind"] == "branch");
+            }
+        }
+        // Something besides the sky was drawn.
+        assert!(count_pixels(&output.framebuffer, output.framebuffer.pixel(0, 0)) < 160 * 120, "{scene}");
+    }
+    let oak = run("scenes/tree.yaml", 1, None, SMALL);
+    let supports = entity(&oak.dump, "oak")["supports"].as_array().unwrap().clone();
+    let kind = |name: &str| supports.iter().find(|s| s["name"] == name).unwrap()["kind"].clone();
+    assert_eq!((kind("trunk"), kind("low"), kind("twig")), ("trunk".into(), "branch".into(), "branch".into()));
+    // The twig starts on its parent branch, 60% along it.
+    let low = supports.iter().find(|s| s["name"] == "low").unwrap();
+    let twig = supports.iter().find(|s| s["name"] == "twig").unwrap();
+    let low_points: Vec<Vec3> = low["points"].as_array().unwrap().iter().map(vec3).collect();
+    let length: f32 = low_points.windows(2).map(|p| p[0].distance(p[1])).sum();
+    let start = vec3(&twig["points"][0]);
+    let along: f32 = {
+        let mut best = f32::INFINITY;
+        let mut walked = 0.0;
+        let mut at = 0.0;
+        for pair in low_points.windows(2) {
+            let span = pair[0].distance(pair[1]);
+            let t = ((start - pair[0]).dot(pair[1] - pair[0]) / (span * span)).clamp(0.0, 1.0);
+            let distance = start.distance(pair[0].lerp(pair[1], t));
+            if distance < best {
+                (best, at) = (distance, walked + t * span);
+            }
+            walked += span;
+        }
+        assert!(best < 1e-4, "the twig starts {best} m off its parent");
+        at / length
+    };
+    assert!((along - 0.6).abs() < 1e-3, "{along}");
+}

@@ -27,6 +27,15 @@ fn shipped_scenes_are_valid() {
 /// the message must contain (the field and what was expected).
 const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("empty.yaml", None, &["the file is empty: expected a scene"]),
+    ("tree_unknown_parent.yaml", Some(6), &["supports[1].parent", "no support is named \"trunks\""]),
+    ("tree_cycle.yaml", Some(5), &["supports[1].parent", "forks from itself"]),
+    ("tree_duplicate_support.yaml", Some(8), &["supports[1].name", "used by an earlier support"]),
+    ("tree_at_outside.yaml", Some(5), &["supports[1].at", "from 0 to 1", "found 1.5"]),
+    ("tree_zero_radius.yaml", Some(6), &["supports[0].radii[1]", "greater than 0", "found 0"]),
+    ("tree_coincident_points.yaml", Some(5), &["supports[0].points", "points 1 and 2 coincide"]),
+    ("tree_nan_point.yaml", Some(5), &["supports[0].points[1][1]", "NaN"]),
+    ("tree_absurd_length.yaml", Some(8), &["supports[1].length", "at most 1000", "found 50000"]),
+    ("tree_radii_mismatch.yaml", Some(6), &["supports[0].radii", "one radius per point (3), found 2"]),
     ("binary.yaml", Some(3), &["not UTF-8"]),
     ("syntax.yaml", Some(3), &["did not find expected key, while parsing a block mapping at line 2"]),
     ("unknown_section.yaml", Some(4), &["unknown field `camra`", "expected one of"]),

@@ -9,6 +9,7 @@ use crate::muscle::{ConfigFile, MuscleDef};
 use crate::raster::Texture;
 use crate::raster::settings::RenderDef;
 use crate::shape::ShapeDef;
+use crate::tree::TreeDef;
 use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
 use bevy::math::Vec3;
@@ -19,7 +20,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// The keys of an entity mapping: its name, then every kind.
-const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle"];
+const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle", "tree"];
 
 /// Names that refer to the scene's camera, light and render settings in parameter names and
 /// dumps.
@@ -113,6 +114,8 @@ pub enum EntityKind {
     Shape(ShapeDef),
     /// A volume-preserving muscle on its arm (`muscle:`).
     Muscle(MuscleDef),
+    /// Trunks and branches (`tree:`).
+    Tree(TreeDef),
 }
 
 impl EntityKind {
@@ -127,6 +130,7 @@ impl EntityKind {
         match self {
             EntityKind::Shape(_) => "shape",
             EntityKind::Muscle(_) => "muscle",
+            EntityKind::Tree(_) => "tree",
         }
     }
 }
@@ -182,6 +186,7 @@ impl<'de> Deserialize<'de> for EntityDef {
                         }
                         "shape" => EntityKind::Shape(map.next_value()?),
                         "muscle" => EntityKind::Muscle(map.next_value()?),
+                        "tree" => EntityKind::Tree(map.next_value()?),
                         other => return Err(de::Error::unknown_field(other, ENTITY_FIELDS)),
                     };
                     if let Some(first) = &kind {
@@ -233,6 +238,7 @@ impl SceneDef {
             .filter_map(|entity| match &entity.kind {
                 EntityKind::Muscle(muscle) => muscle.file.as_ref().map(|f| f.0.clone()),
                 EntityKind::Shape(shape) => shape.texture.as_ref().map(|t| t.file.0.clone()),
+                EntityKind::Tree(_) => None,
             })
             .collect();
         // Each file is read once, however many entities refer to it.
@@ -338,9 +344,10 @@ impl SceneDef {
         if self.light.direction.0.length() < 1e-6 {
             return Err(at_key("direction", 0, "light.direction: expected a non-zero vector".into()));
         }
+        self.check_trees(path, text)?;
         let muscles = self.entities.iter().enumerate().filter_map(|(index, entity)| match &entity.kind {
             EntityKind::Muscle(muscle) => Some((index, muscle)),
-            EntityKind::Shape(_) => None,
+            _ => None,
         });
         // Inline configurations are located by their key; the nth inline muscle has the nth
         // `muscle_config` of the file.
@@ -377,6 +384,36 @@ impl SceneDef {
                 ));
             }
             seen.push(name);
+        }
+        Ok(())
+    }
+}
+
+impl SceneDef {
+    /// Builds every tree; an error is located at its support's field, the nth occurrence of
+    /// that key among the supports of the file.
+    fn check_trees(&self, path: &Path, text: &str) -> Result<(), FileError> {
+        let trees: Vec<(usize, &TreeDef)> = self
+            .entities
+            .iter()
+            .enumerate()
+            .filter_map(|(index, entity)| match &entity.kind {
+                EntityKind::Tree(tree) => Some((index, tree)),
+                _ => None,
+            })
+            .collect();
+        for (position, &(index, tree)) in trees.iter().enumerate() {
+            let Err(error) = tree.build() else { continue };
+            let message = format!("entities[{index}].tree.{error}");
+            // Supports of earlier trees, and earlier supports of this one, holding the key.
+            let earlier =
+                trees[..position].iter().flat_map(|(_, t)| &t.supports).chain(&tree.supports[..error.support]);
+            let mut nth = earlier.filter(|s| s.has_field(error.field)).count();
+            if error.field == "name" {
+                // Entity names come before their kinds' supports in the file.
+                nth += self.entities[..=index].iter().filter(|e| e.name.is_some()).count();
+            }
+            return Err(locate(path, text, error.field, nth, message));
         }
         Ok(())
     }

@@ -92,6 +92,20 @@ checked_number!(
     |v| v > 0.0 && v < 180.0
 );
 checked_number!(
+    /// A radius in metres: positive and at most 100 m.
+    Radius(f32),
+    "a radius in metres greater than 0 and at most 100",
+    |v| v > 0.0 && v <= 100.0
+);
+
+checked_number!(
+    /// A length along a branch in metres: positive and at most 1000 m.
+    Length(f32),
+    "a length in metres greater than 0 and at most 1000",
+    |v| v > 0.0 && v <= 1000.0
+);
+
+checked_number!(
     /// How many times a texture repeats across its surface.
     Repeats(f32),
     "a number of repetitions greater than 0 and at most 10000",

@@ -1,15 +1,260 @@
-//! Trees: supports (trunks and branches) as chains of tapered segments, and the geometry
-//! queries the sloth and the editor need.
+//! The `tree` entity kind: trunks and branches as chains of tapered segments, drawn as smooth
+//! tubes with rounded tips, and the geometry queries the sloth and the editor need.
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`model`] | supports from their descriptions (polylines or forks), trunk or branch |
 //! | [`geometry`] | one tapered segment: signed distance, closest surface point, ray hit |
 //! | [`bvh`] | a bounding volume hierarchy over all segments: ray cast, nearest, within a radius |
+//! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
 //!
-//! Both are pure and tested against brute force.
+//! All four are pure and tested (the queries against brute force); this module adds the scene
+//! format, spawning and the state dump.
 
 pub mod bvh;
 pub mod geometry;
+pub mod mesh;
+pub mod model;
 
 pub use bvh::{Nearest, RayHit, SegmentBvh};
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
+pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
+
+use crate::dump::{DumpState, RegisterDump};
+use crate::raster::RasterMesh;
+use crate::scene::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
+use bevy::color::Srgba;
+use bevy::prelude::*;
+use serde::Deserialize;
+use serde_json::{Map, Value, json};
+use std::sync::Arc;
+
+/// A `tree` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TreeDef {
+    /// Bark colour; brown by default.
+    #[serde(default = "bark")]
+    pub color: Color,
+    /// Vertices around each ring of the tubes (3 to 64; 12 by default).
+    #[serde(deserialize_with = "sides")]
+    #[serde(default = "default_sides")]
+    pub sides: usize,
+    /// The trunks and branches.
+    pub supports: Vec<SupportDef>,
+}
+
+fn bark() -> Color {
+    Color(Srgba::rgb(0.42, 0.3, 0.2))
+}
+
+fn default_sides() -> usize {
+    12
+}
+
+/// Reads `sides`: a whole number from 3 to 64.
+fn sides<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
+    let sides = u64::deserialize(deserializer)?;
+    if (3..=64).contains(&sides) {
+        Ok(sides as usize)
+    } else {
+        Err(serde::de::Error::custom(format_args!("expected 3 to 64 sides, found {sides}")))
+    }
+}
+
+/// One support in a scene file: a polyline (`points`, `radii`) or a fork from a parent
+/// (`parent`, `at`, `yaw_deg`, `pitch_deg`, `length`, `radius`, optionally `bend_deg` and
+/// `sections`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportDef {
+    /// Unique within the tree.
+    pub name: String,
+    /// `trunk` or `branch`; by default a support tilted more than 70 degrees from horizontal is
+    /// a trunk.
+    #[serde(default)]
+    pub kind: Option<SupportKind>,
+    /// Axis points in metres (a polyline).
+    #[serde(default)]
+    pub points: Option<Vec<Point>>,
+    /// A radius in metres at each point (a polyline).
+    #[serde(default)]
+    pub radii: Option<Vec<Radius>>,
+    /// The support this one forks from (a fork).
+    #[serde(default)]
+    pub parent: Option<String>,
+    /// Where along the parent it starts, 0 to 1 of its length.
+    #[serde(default)]
+    pub at: Option<UnitInterval>,
+    /// Initial heading about +y, degrees (0 towards +z, 90 towards +x); 0 by default.
+    #[serde(default)]
+    pub yaw_deg: Option<Degrees>,
+    /// Initial angle above the horizontal, degrees; 0 by default.
+    #[serde(default)]
+    pub pitch_deg: Option<Degrees>,
+    /// Length in metres.
+    #[serde(default)]
+    pub length: Option<Length>,
+    /// Radius at the start and at the tip, metres.
+    #[serde(default)]
+    pub radius: Option<[Radius; 2]>,
+    /// Total change of heading and pitch along the branch, degrees; none by default.
+    #[serde(default)]
+    pub bend_deg: Option<[Degrees; 2]>,
+    /// Straight sections of a fork (1 to 64; 4 by default).
+    #[serde(default)]
+    pub sections: Option<u32>,
+}
+
+/// Fields only forks take.
+const FORK_FIELDS: [&str; 8] = ["parent", "at", "yaw_deg", "pitch_deg", "length", "radius", "bend_deg", "sections"];
+
+impl SupportDef {
+    /// The support's description, or the field at fault and why.
+    fn spec(&self) -> Result<SupportSpec, (&'static str, String)> {
+        let polyline = self.points.is_some() || self.radii.is_some();
+        let fork = self.parent.is_some();
+        let shape = match (polyline, fork) {
+            (true, true) => {
+                return Err((
+                    "parent",
+                    "a support is either a polyline (points, radii) or a fork (parent, ...), not both".into(),
+                ));
+            }
+            (false, false) => {
+                return Err((
+                    "name",
+                    format!("support \"{}\" needs points and radii, or a parent to fork from", self.name),
+                ));
+            }
+            (true, false) => {
+                if let Some(field) = self.fork_field() {
+                    return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
+                }
+                let points = self.points.as_ref().ok_or(("radii", "a polyline needs points too".to_string()))?;
+                let radii = self.radii.as_ref().ok_or(("points", "a polyline needs radii too".to_string()))?;
+                Shape::Polyline {
+                    points: points.iter().map(|p| p.0).collect(),
+                    radii: radii.iter().map(|r| r.0).collect(),
+                }
+            }
+            (false, true) => {
+                let missing = |field: &'static str| ("parent", format!("a fork needs `{field}`"));
+                let sections = self.sections.unwrap_or(4);
+                if !(1..=64).contains(&sections) {
+                    return Err(("sections", format!("expected 1 to 64 sections, found {sections}")));
+                }
+                Shape::Fork {
+                    parent: self.parent.clone().unwrap_or_default(),
+                    at: self.at.ok_or_else(|| missing("at"))?.0,
+                    yaw_deg: self.yaw_deg.map_or(0.0, |d| d.0),
+                    pitch_deg: self.pitch_deg.map_or(0.0, |d| d.0),
+                    length: self.length.ok_or_else(|| missing("length"))?.0,
+                    radius: self.radius.ok_or_else(|| missing("radius"))?.map(|r| r.0),
+                    bend_deg: self.bend_deg.map_or([0.0; 2], |b| b.map(|d| d.0)),
+                    sections,
+                }
+            }
+        };
+        Ok(SupportSpec { name: self.name.clone(), shape, kind: self.kind })
+    }
+
+    /// Every optional field and whether it is given, in file-format order.
+    fn given(&self) -> [(&'static str, bool); 11] {
+        [
+            ("kind", self.kind.is_some()),
+            ("points", self.points.is_some()),
+            ("radii", self.radii.is_some()),
+            ("parent", self.parent.is_some()),
+            ("at", self.at.is_some()),
+            ("yaw_deg", self.yaw_deg.is_some()),
+            ("pitch_deg", self.pitch_deg.is_some()),
+            ("length", self.length.is_some()),
+            ("radius", self.radius.is_some()),
+            ("bend_deg", self.bend_deg.is_some()),
+            ("sections", self.sections.is_some()),
+        ]
+    }
+
+    /// The first fork-only field given, if any.
+    fn fork_field(&self) -> Option<&'static str> {
+        self.given().into_iter().find_map(|(field, given)| (given && FORK_FIELDS.contains(&field)).then_some(field))
+    }
+
+    /// Whether this support's mapping holds `field`, for locating errors in the file.
+    pub fn has_field(&self, field: &str) -> bool {
+        field == "name" || self.given().into_iter().any(|(name, given)| given && name == field)
+    }
+}
+
+impl TreeDef {
+    /// The tree this definition describes, or the support and field at fault and why.
+    pub fn build(&self) -> Result<Tree, TreeError> {
+        let specs = self
+            .supports
+            .iter()
+            .enumerate()
+            .map(|(support, def)| def.spec().map_err(|(field, message)| TreeError { support, field, message }))
+            .collect::<Result<Vec<_>, _>>()?;
+        Tree::build(&specs)
+    }
+}
+
+/// A live tree: its supports and the hierarchy over their segments.
+#[derive(Component, Debug, Clone)]
+pub struct TreeBody {
+    /// The supports.
+    pub tree: Tree,
+    /// Every segment of every support, for queries.
+    pub bvh: SegmentBvh,
+    /// The support each segment of `bvh` belongs to.
+    pub segment_supports: Vec<usize>,
+}
+
+impl DumpState for TreeBody {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let supports: Vec<Value> = self
+            .tree
+            .supports
+            .iter()
+            .map(|s| {
+                json!({
+                    "name": s.name,
+                    "kind": s.kind.key(),
+                    "points": s.points.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+                    "radii": s.radii,
+                })
+            })
+            .collect();
+        out.insert("supports".into(), json!(supports));
+    }
+}
+
+/// Spawns the components of a tree entity onto `entity`.
+pub fn spawn_tree(entity: &mut EntityCommands, def: &TreeDef) {
+    let tree = match def.build() {
+        Ok(tree) => tree,
+        Err(error) => {
+            // Scene files are checked before spawning; a definition built in code may not be.
+            error!("tree not spawned: {error}");
+            return;
+        }
+    };
+    let (segment_supports, segments): (Vec<usize>, Vec<TaperedSegment>) = tree.segments().unzip();
+    let color = def.color.0;
+    let mesh = mesh::tree_mesh(&tree, def.sides.clamp(3, 64));
+    entity.insert((
+        Transform::IDENTITY,
+        RasterMesh::colored(Arc::new(mesh), Vec3::new(color.red, color.green, color.blue)),
+        TreeBody { tree, bvh: SegmentBvh::new(segments), segment_supports },
+    ));
+}
+
+/// Registers the tree kind: its dump fields.
+pub struct TreePlugin;
+
+impl Plugin for TreePlugin {
+    fn build(&self, app: &mut App) {
+        app.register_dump::<TreeBody>();
+    }
+}
