@@ -1,9 +1,13 @@
-//! The `canopy` command: play a scene in a window, run it headless, or check scene files.
+//! The `canopy` command: play a scene in a window, run it headless, check scene files, or
+//! generate tree scenes.
 
 use bevy::math::UVec2;
 use canopy::app::{FIXED_HZ, window_app};
+use canopy::raster::MAX_TARGET_SIZE;
 use canopy::run::{RunOptions, run_headless};
 use canopy::scene::schema::SceneDef;
+use canopy::tree::GeneratorSettings;
+use canopy::tree::generate::{generate, scene_text};
 use canopy::ui::WindowCapture;
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -43,6 +47,45 @@ enum Command {
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
     },
+    /// Tree tools.
+    Tree {
+        #[command(subcommand)]
+        action: TreeCommand,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum TreeCommand {
+    /// Write a scene of seeded, generated trees: an ordinary scene file to play and edit.
+    Generate(GenerateArgs),
+}
+
+#[derive(Args, Debug)]
+struct GenerateArgs {
+    /// The seed: the same seed and settings always give the same trees.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Trees, on a jittered grid.
+    #[arg(long, default_value_t = 1)]
+    trunks: u32,
+    /// Trunk height in metres.
+    #[arg(long, default_value_t = 6.0)]
+    height: f32,
+    /// Forks per support.
+    #[arg(long, default_value_t = 5)]
+    branches: u32,
+    /// Levels of forks below the trunk (at most 4).
+    #[arg(long, default_value_t = 2)]
+    depth: u32,
+    /// Distance between neighbouring trees in metres.
+    #[arg(long, default_value_t = 6.0)]
+    spacing: f32,
+    /// The scene file to write.
+    #[arg(long, value_name = "SCENE.yaml")]
+    out: PathBuf,
+    /// Replace `--out` if it exists (otherwise an existing file is never overwritten).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Args, Debug)]
@@ -77,10 +120,12 @@ fn parse_seconds(text: &str) -> Result<f64, String> {
 }
 
 fn parse_size(text: &str) -> Result<UVec2, String> {
-    let error = || format!("expected WIDTHxHEIGHT with each from 1 to 8192, e.g. 1280x720; found `{text}`");
+    let error =
+        || format!("expected WIDTHxHEIGHT with each from 1 to {MAX_TARGET_SIZE}, e.g. 1280x720; found `{text}`");
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(error)?;
     let (w, h) = (w.parse::<u32>().map_err(|_| error())?, h.parse::<u32>().map_err(|_| error())?);
-    if (1..=8192).contains(&w) && (1..=8192).contains(&h) { Ok(UVec2::new(w, h)) } else { Err(error()) }
+    let valid = 1..=MAX_TARGET_SIZE;
+    if valid.contains(&w) && valid.contains(&h) { Ok(UVec2::new(w, h)) } else { Err(error()) }
 }
 
 fn main() -> ExitCode {
@@ -92,6 +137,7 @@ fn main() -> ExitCode {
         }
         Command::Run(args) => run(args),
         Command::Check { scenes } => check(&scenes),
+        Command::Tree { action: TreeCommand::Generate(args) } => generate_trees(&args),
     }
 }
 
@@ -170,6 +216,37 @@ fn run(args: RunArgs) -> ExitCode {
         return ExitCode::from(1);
     }
     ExitCode::SUCCESS
+}
+
+fn generate_trees(args: &GenerateArgs) -> ExitCode {
+    let settings = GeneratorSettings {
+        seed: args.seed,
+        trunks: args.trunks,
+        height: args.height,
+        branches: args.branches,
+        depth: args.depth,
+        spacing: args.spacing,
+    };
+    if let Err(error) = settings.check() {
+        eprintln!("canopy tree generate: {error}");
+        return ExitCode::from(2);
+    }
+    if args.out.exists() && !args.force {
+        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
+        return ExitCode::from(1);
+    }
+    let trees = generate(&settings);
+    let supports: usize = trees.iter().map(Vec::len).sum();
+    match std::fs::write(&args.out, scene_text(&settings, &trees)) {
+        Ok(()) => {
+            println!("{}: {} trees, {supports} supports", args.out.display(), trees.len());
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("{}: cannot write the scene: {error}", args.out.display());
+            ExitCode::from(1)
+        }
+    }
 }
 
 fn check(scenes: &[PathBuf]) -> ExitCode {

@@ -131,3 +131,44 @@ fn play_without_a_display_renders_headless_and_prints_the_png() {
     let image = image::open(&printed).unwrap().to_rgba8();
     assert_eq!(image.get_pixel(640, 360).0, [255, 0, 0, 255]);
 }
+
+#[test]
+fn generated_forests_are_deterministic_valid_and_never_overwrite() {
+    let folder = tempfile::tempdir().unwrap();
+    let out = |name: &str| folder.path().join(name).to_string_lossy().into_owned();
+    let generate = |seed: &str, file: &str, extra: &[&str]| {
+        let mut args = vec!["tree", "generate", "--seed", seed, "--trunks", "6", "--out"];
+        let file = out(file);
+        args.push(&file);
+        args.extend_from_slice(extra);
+        canopy(&args)
+    };
+    assert!(generate("11", "a.yaml", &[]).status.success());
+    assert!(generate("11", "b.yaml", &[]).status.success());
+    assert!(generate("12", "c.yaml", &[]).status.success());
+    let read = |name: &str| std::fs::read_to_string(out(name)).unwrap();
+    assert_eq!(read("a.yaml"), read("b.yaml"));
+    assert_ne!(read("a.yaml"), read("c.yaml"));
+    assert_eq!(read("a.yaml").matches("tree:").count(), 6);
+
+    // The output is an ordinary scene: it checks and plays.
+    assert!(canopy(&["check", &out("a.yaml")]).status.success());
+    let frame = out("a.png");
+    assert!(
+        canopy(&["run", &out("a.yaml"), "--frames", "1", "--size", "64x48", "--screenshot", &frame]).status.success()
+    );
+
+    // An existing file is kept unless --force.
+    std::fs::write(out("mine.yaml"), "# my scene\n").unwrap();
+    let refused = generate("11", "mine.yaml", &[]);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(stderr(&refused).contains("already exists"), "{}", stderr(&refused));
+    assert_eq!(read("mine.yaml"), "# my scene\n");
+    assert!(generate("11", "mine.yaml", &["--force"]).status.success());
+    assert_eq!(read("mine.yaml"), read("a.yaml"));
+
+    // Settings out of range are a usage error.
+    let bad = generate("11", "d.yaml", &["--depth", "9"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("depth: expected at most 4 levels"), "{}", stderr(&bad));
+}

@@ -317,7 +317,13 @@ fn shadows_and_shading_switch_at_run_time_by_parameter_and_key() {
 
 #[test]
 fn tree_scenes_play_and_dump_their_supports() {
-    for scene in ["scenes/branch.yaml", "scenes/fork.yaml", "scenes/tree.yaml", "scenes/forest.yaml"] {
+    for scene in [
+        "scenes/branch.yaml",
+        "scenes/fork.yaml",
+        "scenes/tree.yaml",
+        "scenes/forest.yaml",
+        "scenes/generated_forest.yaml",
+    ] {
         let output = run(scene, 1, None, SMALL);
         let trees: Vec<&Value> =
             output.dump["entities"].as_array().unwrap().iter().filter(|e| e["kind"] == "tree").collect();

@@ -36,6 +36,7 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("tree_nan_point.yaml", Some(5), &["supports[0].points[1][1]", "NaN"]),
     ("tree_absurd_length.yaml", Some(8), &["supports[1].length", "at most 1000", "found 50000"]),
     ("tree_radii_mismatch.yaml", Some(6), &["supports[0].radii", "one radius per point (3), found 2"]),
+    ("tree_generate_and_supports.yaml", Some(4), &["entities[0].tree.generate", "either supports or generate"]),
     ("binary.yaml", Some(3), &["not UTF-8"]),
     ("syntax.yaml", Some(3), &["did not find expected key, while parsing a block mapping at line 2"]),
     ("unknown_section.yaml", Some(4), &["unknown field `camra`", "expected one of"]),

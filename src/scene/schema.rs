@@ -405,9 +405,19 @@ impl SceneDef {
         for (position, &(index, tree)) in trees.iter().enumerate() {
             let Err(error) = tree.build() else { continue };
             let message = format!("entities[{index}].tree.{error}");
+            let Some(support) = error.support else {
+                // About the tree as a whole: at its `generate` key, or else its `tree` key.
+                let earlier = &trees[..position];
+                return Err(match error.field {
+                    "generate" => {
+                        let nth = earlier.iter().filter(|(_, t)| t.generate.is_some()).count();
+                        locate(path, text, "generate", nth, message)
+                    }
+                    _ => locate(path, text, "tree", earlier.len(), message),
+                });
+            };
             // Supports of earlier trees, and earlier supports of this one, holding the key.
-            let earlier =
-                trees[..position].iter().flat_map(|(_, t)| &t.supports).chain(&tree.supports[..error.support]);
+            let earlier = trees[..position].iter().flat_map(|(_, t)| &t.supports).chain(&tree.supports[..support]);
             let mut nth = earlier.filter(|s| s.has_field(error.field)).count();
             if error.field == "name" {
                 // Entity names come before their kinds' supports in the file.

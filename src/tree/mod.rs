@@ -7,16 +7,19 @@
 //! | [`geometry`] | one tapered segment: signed distance, closest surface point, ray hit |
 //! | [`bvh`] | a bounding volume hierarchy over all segments: ray cast, nearest, within a radius |
 //! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
+//! | [`generate`] | the seeded tree and forest generator |
 //!
-//! All four are pure and tested (the queries against brute force); this module adds the scene
+//! All five are pure and tested (the queries against brute force); this module adds the scene
 //! format, spawning and the state dump.
 
 pub mod bvh;
+pub mod generate;
 pub mod geometry;
 pub mod mesh;
 pub mod model;
 
 pub use bvh::{Nearest, RayHit, SegmentBvh};
+pub use generate::GeneratorSettings;
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 
@@ -40,8 +43,12 @@ pub struct TreeDef {
     #[serde(deserialize_with = "sides")]
     #[serde(default = "default_sides")]
     pub sides: usize,
-    /// The trunks and branches.
+    /// The trunks and branches, written out.
+    #[serde(default)]
     pub supports: Vec<SupportDef>,
+    /// Or: generated from these settings (see `canopy tree generate`).
+    #[serde(default)]
+    pub generate: Option<GeneratorSettings>,
 }
 
 fn bark() -> Color {
@@ -190,14 +197,45 @@ impl SupportDef {
 impl TreeDef {
     /// The tree this definition describes, or the support and field at fault and why.
     pub fn build(&self) -> Result<Tree, TreeError> {
-        let specs = self
-            .supports
-            .iter()
-            .enumerate()
-            .map(|(support, def)| def.spec().map_err(|(field, message)| TreeError { support, field, message }))
-            .collect::<Result<Vec<_>, _>>()?;
-        Tree::build(&specs)
+        let tree_error = |field, message: String| TreeError { support: None, field, message };
+        match (&self.generate, self.supports.is_empty()) {
+            (Some(_), false) => Err(tree_error("generate", "give either supports or generate, not both".into())),
+            (None, true) => Err(tree_error("supports", "a tree needs supports, or generate settings".into())),
+            (Some(settings), true) => {
+                settings.check().map_err(|message| tree_error("generate", message))?;
+                Tree::build(
+                    &generate::generate(settings).into_iter().enumerate().flat_map(prefixed).collect::<Vec<_>>(),
+                )
+            }
+            (None, false) => {
+                let specs = self
+                    .supports
+                    .iter()
+                    .enumerate()
+                    .map(|(support, def)| {
+                        def.spec().map_err(|(field, message)| TreeError { support: Some(support), field, message })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Tree::build(&specs)
+            }
+        }
     }
+}
+
+/// The supports of generated tree `index`, renamed `t<index + 1>-<name>` so that the supports of
+/// all the trees generated into one entity have distinct names.
+fn prefixed((index, supports): (usize, Vec<SupportSpec>)) -> Vec<SupportSpec> {
+    let rename = |name: &str| format!("t{}-{name}", index + 1);
+    supports
+        .into_iter()
+        .map(|mut spec| {
+            spec.name = rename(&spec.name);
+            if let Shape::Fork { parent, .. } = &mut spec.shape {
+                *parent = rename(parent);
+            }
+            spec
+        })
+        .collect()
 }
 
 /// A live tree: its supports and the hierarchy over their segments.

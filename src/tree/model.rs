@@ -133,8 +133,8 @@ impl Support {
 /// and the field at fault.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TreeError {
-    /// Index of the support in the description.
-    pub support: usize,
+    /// Index of the support in the description; `None` for the tree's own fields.
+    pub support: Option<usize>,
     /// The field at fault (`name`, `parent`, `points`, `radii`).
     pub field: &'static str,
     /// What is wrong.
@@ -143,7 +143,10 @@ pub struct TreeError {
 
 impl fmt::Display for TreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "supports[{}].{}: {}", self.support, self.field, self.message)
+        match self.support {
+            Some(support) => write!(f, "supports[{support}].{}: {}", self.field, self.message),
+            None => write!(f, "{}: {}", self.field, self.message),
+        }
     }
 }
 
@@ -161,7 +164,7 @@ impl Tree {
         for (index, spec) in specs.iter().enumerate() {
             if specs[..index].iter().any(|s| s.name == spec.name) {
                 let message = format!("the name \"{}\" is used by an earlier support; names must be unique", spec.name);
-                return Err(TreeError { support: index, field: "name", message });
+                return Err(TreeError { support: Some(index), field: "name", message });
             }
         }
         let mut built: Vec<Option<Support>> = vec![None; specs.len()];
@@ -189,7 +192,7 @@ fn build_support(
         return Ok(());
     }
     let spec = &specs[index];
-    let error = |field, message: String| TreeError { support: index, field, message };
+    let error = |field, message: String| TreeError { support: Some(index), field, message };
     let (points, radii, parent) = match &spec.shape {
         Shape::Polyline { points, radii } => {
             if points.len() < 2 {
@@ -328,7 +331,7 @@ mod tests {
         ];
         for (specs, support, field, words) in cases {
             let error = Tree::build(&specs).unwrap_err();
-            assert_eq!((error.support, error.field), (support, field), "{error}");
+            assert_eq!((error.support, error.field), (Some(support), field), "{error}");
             assert!(error.message.contains(words), "{error}");
         }
     }
