@@ -121,14 +121,19 @@ impl<'de> Deserialize<'de> for TexturePath {
 impl ShapeDef {
     /// The material these settings describe, in the shape's current colour.
     fn material(&self, color: Srgba) -> Material {
-        let mut material = Material::colored(srgb_vec(color));
-        if let Some(texture) = &self.texture {
-            material.texture = texture.image.clone();
-            material.sampler = Sampler { filter: texture.filter, address: texture.address };
-            material.uv_scale = Vec2::new(texture.repeat[0].0, texture.repeat[1].0);
-        }
-        material
+        material(srgb_vec(color), self.texture.as_ref())
     }
+}
+
+/// A material of `color` (linear RGB) with an optional texture.
+pub fn material(color: Vec3, texture: Option<&TextureDef>) -> Material {
+    let mut material = Material::colored(color);
+    if let Some(texture) = texture {
+        material.texture = texture.image.clone();
+        material.sampler = Sampler { filter: texture.filter, address: texture.address };
+        material.uv_scale = Vec2::new(texture.repeat[0].0, texture.repeat[1].0);
+    }
+    material
 }
 
 fn unit_size() -> Size {

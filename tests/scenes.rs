@@ -179,6 +179,10 @@ fn textures_are_decoded_with_the_scene_and_bad_ones_name_their_file() {
         .collect();
     // The checker board is a PNG, the bricks a BMP.
     assert_eq!(textures, [(64, 64), (64, 64)]);
+    // Trees take textures too.
+    let tree = SceneDef::load(&root().join("scenes/tree.yaml")).unwrap();
+    let bark = tree.entities.iter().find_map(|e| e.kind.texture()).and_then(|t| t.image.as_ref()).expect("decoded");
+    assert_eq!((bark.width(), bark.height()), (64, 64));
 
     let folder = tempfile::tempdir().unwrap();
     let scene = folder.path().join("scene.yaml");

@@ -8,7 +8,7 @@ use super::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::muscle::{ConfigFile, MuscleDef};
 use crate::raster::Texture;
 use crate::raster::settings::RenderDef;
-use crate::shape::ShapeDef;
+use crate::shape::{ShapeDef, TextureDef};
 use crate::tree::TreeDef;
 use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
@@ -135,6 +135,26 @@ impl EntityKind {
     }
 }
 
+impl EntityKind {
+    /// The entity's texture, for kinds that take one.
+    pub fn texture(&self) -> Option<&TextureDef> {
+        match self {
+            EntityKind::Shape(shape) => shape.texture.as_ref(),
+            EntityKind::Tree(tree) => tree.texture.as_ref(),
+            EntityKind::Muscle(_) => None,
+        }
+    }
+
+    /// The entity's texture, to fill in its image.
+    fn texture_mut(&mut self) -> Option<&mut TextureDef> {
+        match self {
+            EntityKind::Shape(shape) => shape.texture.as_mut(),
+            EntityKind::Tree(tree) => tree.texture.as_mut(),
+            EntityKind::Muscle(_) => None,
+        }
+    }
+}
+
 impl EntityDef {
     /// The name parameters and dumps use: the given name, else the kind.
     pub fn display_name(&self) -> &str {
@@ -237,8 +257,7 @@ impl SceneDef {
             .iter()
             .filter_map(|entity| match &entity.kind {
                 EntityKind::Muscle(muscle) => muscle.file.as_ref().map(|f| f.0.clone()),
-                EntityKind::Shape(shape) => shape.texture.as_ref().map(|t| t.file.0.clone()),
-                EntityKind::Tree(_) => None,
+                EntityKind::Shape(_) | EntityKind::Tree(_) => entity.kind.texture().map(|t| t.file.0.clone()),
             })
             .collect();
         // Each file is read once, however many entities refer to it.
@@ -249,17 +268,17 @@ impl SceneDef {
 
     /// Fills every entity referring to `file` from its `contents`, read from `shown_path`.
     pub fn resolve(&mut self, file: &str, shown_path: &Path, contents: &[u8]) -> Result<(), FileError> {
-        let textured = self.entities.iter().enumerate().filter_map(|(index, entity)| match &entity.kind {
-            EntityKind::Shape(shape) if shape.texture.as_ref().is_some_and(|t| t.file.0 == file) => Some(index),
-            _ => None,
-        });
-        if let Some(first) = textured.clone().next() {
+        let textured: Vec<usize> = (0..self.entities.len())
+            .filter(|&index| self.entities[index].kind.texture().is_some_and(|t| t.file.0 == file))
+            .collect();
+        if let Some(&first) = textured.first() {
             let texture = Texture::decode(contents).map_err(|error| {
-                FileError::whole_file(shown_path, format!("entities[{first}].shape.texture.file: {error}"))
+                let kind = self.entities[first].kind.key();
+                FileError::whole_file(shown_path, format!("entities[{first}].{kind}.texture.file: {error}"))
             })?;
             let texture = Arc::new(texture);
-            for index in textured.collect::<Vec<_>>() {
-                if let EntityKind::Shape(ShapeDef { texture: Some(def), .. }) = &mut self.entities[index].kind {
+            for index in textured {
+                if let Some(def) = self.entities[index].kind.texture_mut() {
                     def.image = Some(texture.clone());
                 }
             }

@@ -26,6 +26,7 @@ pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 use crate::dump::{DumpState, RegisterDump};
 use crate::raster::RasterMesh;
 use crate::scene::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
+use crate::shape::TextureDef;
 use bevy::color::Srgba;
 use bevy::prelude::*;
 use serde::Deserialize;
@@ -39,6 +40,10 @@ pub struct TreeDef {
     /// Bark colour; brown by default.
     #[serde(default = "bark")]
     pub color: Color,
+    /// Bark image (PNG or BMP in the scene's folder), wrapped once around each support (u) and
+    /// repeating every metre along it (v), times `repeat`.
+    #[serde(default)]
+    pub texture: Option<TextureDef>,
     /// Vertices around each ring of the tubes (3 to 64; 12 by default).
     #[serde(deserialize_with = "sides")]
     #[serde(default = "default_sides")]
@@ -283,7 +288,10 @@ pub fn spawn_tree(entity: &mut EntityCommands, def: &TreeDef) {
     let mesh = mesh::tree_mesh(&tree, def.sides.clamp(3, 64));
     entity.insert((
         Transform::IDENTITY,
-        RasterMesh::colored(Arc::new(mesh), Vec3::new(color.red, color.green, color.blue)),
+        RasterMesh {
+            mesh: Arc::new(mesh),
+            material: crate::shape::material(Vec3::new(color.red, color.green, color.blue), def.texture.as_ref()),
+        },
         TreeBody { tree, bvh: SegmentBvh::new(segments), segment_supports },
     ));
 }
