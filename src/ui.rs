@@ -3,7 +3,7 @@
 //! key help and load errors. Dragging on the view orbits the camera, the wheel zooms; both
 //! go through the camera's parameters like every other edit.
 
-use crate::controls::{HelpVisible, KeyMap, ReloadScene};
+use crate::controls::{HelpVisible, KeyMap, ReloadScene, SelectEntity, ViewClicked};
 use crate::params::{ParamEntry, ParamValue, list_params, set_param};
 use crate::raster::RenderSystems;
 use crate::raster::plugin::RasterTarget;
@@ -198,6 +198,9 @@ fn draw_ui(world: &mut World) {
     let frame_seconds = world.resource::<Time<Real>>().delta_secs();
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
     state.frame_ms += (frame_seconds * 1000.0 - state.frame_ms) * 0.1;
+    if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {
+        state.selected = Some(name);
+    }
     if state.selected.is_none() {
         // Start with the first entity of the file selected.
         state.selected = world
@@ -238,9 +241,15 @@ fn draw_ui(world: &mut World) {
                 egui::Image::new(egui::load::SizedTexture::new(texture, size)).sense(egui::Sense::click_and_drag());
             let response = ui.add(picture);
             let scroll = if response.hovered() { ui.input(|input| input.smooth_scroll_delta.y) } else { 0.0 };
-            (response.dragged().then(|| response.drag_delta()), scroll)
+            let rect = response.rect;
+            let click = response.clicked().then(|| response.interact_pointer_pos()).flatten().map(|pos| {
+                let at = (pos - rect.min) / rect.size();
+                ViewClicked { ndc: Vec2::new(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0), aspect: rect.aspect_ratio() }
+            });
+            ((response.dragged().then(|| response.drag_delta()), scroll), click)
         })
         .inner;
+    let (view, click) = view;
     if data.help {
         egui::Window::new("Keys").anchor(egui::Align2::LEFT_TOP, [8.0, 8.0]).show(&ctx, |ui| {
             egui::Grid::new("keys").striped(true).show(ui, |ui| {
@@ -274,6 +283,9 @@ fn draw_ui(world: &mut World) {
     control.step_once |= actions.step && control.paused;
     if actions.reload {
         world.write_message(ReloadScene);
+    }
+    if let Some(click) = click {
+        world.write_message(click);
     }
     world.insert_resource(state);
 }

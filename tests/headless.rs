@@ -366,3 +366,40 @@ fn tree_scenes_play_and_dump_their_supports() {
     };
     assert!((along - 0.6).abs() < 1e-3, "{along}");
 }
+
+#[test]
+fn a_ray_through_a_branch_on_screen_picks_that_branch() {
+    use canopy::tree::{TreeBody, pick};
+    use canopy::view::CameraParams;
+    let mut app = canopy::app::headless_app(&path("scenes/tree.yaml"), SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    app.update();
+    let world = app.world_mut();
+    let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
+    let aspect = SMALL.x as f32 / SMALL.y as f32;
+    let mut trees = world.query::<(bevy::prelude::Entity, &TreeBody)>();
+    let (_, body) = trees.single(world).unwrap();
+    let index = |name: &str| body.tree.supports.iter().position(|s| s.name == name).unwrap();
+    for (name, fraction) in [("low", 0.7), ("high", 0.5), ("trunk", 0.2)] {
+        let (point, _, _) = body.tree.supports[index(name)].at(fraction);
+        let ndc = camera.view_projection(aspect).project_point3(point);
+        let (origin, direction) = camera.ray(ndc.truncate(), aspect);
+        let picked = pick(trees.iter(world), origin, direction).expect("a hit");
+        assert_eq!(picked.support, index(name), "aiming at {name}");
+        // The hit is on the near side of the axis point aimed at.
+        assert!(picked.point.distance(point) < 0.3 && picked.distance < (point - origin).length(), "{picked:?}");
+    }
+    // Aiming at the sky hits nothing.
+    let (origin, direction) = camera.ray(bevy::math::Vec2::new(0.9, 0.9), aspect);
+    assert!(pick(trees.iter(world), origin, direction).is_none());
+
+    // A click in the view selects the support under it.
+    let (low, _, _) = body.tree.supports[index("low")].at(0.7);
+    let low_index = index("low");
+    let ndc = camera.view_projection(aspect).project_point3(low).truncate();
+    world.write_message(canopy::controls::ViewClicked { ndc, aspect });
+    app.update();
+    let world = app.world_mut();
+    let selected = world.query::<&canopy::tree::SelectedSupport>().single(world).unwrap();
+    assert_eq!(selected.0, low_index);
+}

@@ -94,6 +94,20 @@ pub struct ReloadScene;
 #[derive(Message, Debug, Clone, Copy)]
 pub struct SaveScreenshot;
 
+/// A click on the 3D view: where, in normalized device coordinates (x right, y up, -1 to 1),
+/// and the view's width / height ratio.
+#[derive(Message, Debug, Clone, Copy, PartialEq)]
+pub struct ViewClicked {
+    /// The point clicked.
+    pub ndc: Vec2,
+    /// Width / height of the view.
+    pub aspect: f32,
+}
+
+/// Asks the window to select (show the parameters of) the scene entity with this name.
+#[derive(Message, Debug, Clone, PartialEq, Eq)]
+pub struct SelectEntity(pub String);
+
 /// Whether the key help is shown; it is at start, until F1 hides it.
 #[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HelpVisible(pub bool);
@@ -120,6 +134,8 @@ impl Plugin for ControlsPlugin {
         app.init_resource::<HelpVisible>()
             .add_message::<ReloadScene>()
             .add_message::<SaveScreenshot>()
+            .add_message::<ViewClicked>()
+            .add_message::<SelectEntity>()
             .register_keys(&global)
             .add_plugins(timeline::TimelinePlugin)
             .add_systems(Update, global_keys.in_set(ControlSystems::Input));

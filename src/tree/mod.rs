@@ -23,12 +23,18 @@ pub use generate::GeneratorSettings;
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 
+use crate::controls::{SelectEntity, ViewClicked};
 use crate::dump::{DumpState, RegisterDump};
 use crate::raster::RasterMesh;
+use crate::scene::SceneEntity;
 use crate::scene::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
+use crate::schedule::ControlSystems;
 use crate::shape::TextureDef;
+use crate::ui::RegisterPanel;
+use crate::view::CameraParams;
 use bevy::color::Srgba;
 use bevy::prelude::*;
+use bevy_egui::egui;
 use serde::Deserialize;
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
@@ -273,6 +279,40 @@ impl DumpState for TreeBody {
     }
 }
 
+/// A support hit by a ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pick {
+    /// The tree entity.
+    pub entity: Entity,
+    /// The support's index in the tree.
+    pub support: usize,
+    /// Distance along the ray, metres.
+    pub distance: f32,
+    /// The point hit.
+    pub point: Vec3,
+}
+
+/// The first support any tree shows along the ray from `origin` along the unit `direction`
+/// (trees are placed in scene coordinates).
+pub fn pick<'a>(
+    trees: impl IntoIterator<Item = (Entity, &'a TreeBody)>,
+    origin: Vec3,
+    direction: Vec3,
+) -> Option<Pick> {
+    trees
+        .into_iter()
+        .filter_map(|(entity, body)| {
+            let hit = body.bvh.ray_cast(origin, direction, f32::MAX)?;
+            Some(Pick {
+                entity,
+                support: body.segment_supports[hit.segment],
+                distance: hit.hit.distance,
+                point: hit.hit.surface.point,
+            })
+        })
+        .min_by(|a, b| a.distance.total_cmp(&b.distance))
+}
+
 /// Spawns the components of a tree entity onto `entity`.
 pub fn spawn_tree(entity: &mut EntityCommands, def: &TreeDef) {
     let tree = match def.build() {
@@ -296,11 +336,75 @@ pub fn spawn_tree(entity: &mut EntityCommands, def: &TreeDef) {
     ));
 }
 
-/// Registers the tree kind: its dump fields.
+/// The support of a tree entity last picked in the view.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SelectedSupport(pub usize);
+
+/// Registers the tree kind: its dump fields, picking supports in the view, its panel section.
 pub struct TreePlugin;
 
 impl Plugin for TreePlugin {
     fn build(&self, app: &mut App) {
-        app.register_dump::<TreeBody>();
+        app.register_dump::<TreeBody>()
+            .register_panel_section("tree", tree_section)
+            .add_systems(Update, select_clicked_support.in_set(ControlSystems::Input));
     }
+}
+
+/// Picks the support under a click in the view and selects its tree in the panel.
+fn select_clicked_support(
+    mut clicks: MessageReader<ViewClicked>,
+    cameras: Query<&CameraParams>,
+    trees: Query<(Entity, &TreeBody, &SceneEntity)>,
+    mut selections: MessageWriter<SelectEntity>,
+    mut commands: Commands,
+) {
+    let Some(camera) = cameras.iter().next().map(CameraParams::camera) else { return };
+    for click in clicks.read() {
+        let (origin, direction) = camera.ray(click.ndc, click.aspect);
+        let Some(picked) = pick(trees.iter().map(|(entity, body, _)| (entity, body)), origin, direction) else {
+            continue;
+        };
+        commands.entity(picked.entity).insert(SelectedSupport(picked.support));
+        if let Ok((_, _, scene_entity)) = trees.get(picked.entity) {
+            selections.write(SelectEntity(scene_entity.name.clone()));
+        }
+    }
+}
+
+/// The tree's section of the panel: its supports, and the one picked in the view.
+fn tree_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
+    let Ok(entity_ref) = world.get_entity(entity) else { return };
+    let Some(body) = entity_ref.get::<TreeBody>() else { return };
+    let tree = &body.tree;
+    let trunks = tree.supports.iter().filter(|s| s.kind == SupportKind::Trunk).count();
+    egui::Grid::new("tree-counts").num_columns(2).show(ui, |ui| {
+        let counts =
+            [("trunks", trunks), ("branches", tree.supports.len() - trunks), ("segments", body.segment_supports.len())];
+        for (label, count) in counts {
+            ui.label(label);
+            ui.label(count.to_string());
+            ui.end_row();
+        }
+    });
+    let Some(support) = entity_ref.get::<SelectedSupport>().and_then(|s| tree.supports.get(s.0)) else {
+        ui.label("Click a support in the view to select it.");
+        return;
+    };
+    egui::Grid::new("tree-support").num_columns(2).show(ui, |ui| {
+        let parent = support.parent.map_or("none", |p| tree.supports[p].name.as_str());
+        let rows = [
+            ("support", support.name.clone()),
+            ("kind", support.kind.key().to_string()),
+            ("parent", parent.to_string()),
+            ("points", support.points.len().to_string()),
+            ("length", format!("{:.3} m", support.length())),
+            ("radius", format!("{:.3} to {:.3} m", support.radii[0], support.radii[support.radii.len() - 1])),
+        ];
+        for (label, value) in rows {
+            ui.label(label);
+            ui.label(value);
+            ui.end_row();
+        }
+    });
 }

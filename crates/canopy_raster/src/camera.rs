@@ -1,6 +1,6 @@
 //! The perspective camera and the directional light the rasterizer draws with.
 
-use bevy_math::{Mat4, Vec3};
+use bevy_math::{Mat4, Vec2, Vec3};
 
 /// A perspective camera looking from `eye` towards `target`, with +y up (or +z when looking
 /// straight up or down).
@@ -41,6 +41,15 @@ impl Camera {
     /// The world-to-clip matrix.
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
         self.projection(aspect) * self.view()
+    }
+
+    /// The ray through a point of the image, given in normalized device coordinates (x right,
+    /// y up, both -1 to 1): its start on the near plane and its unit direction.
+    pub fn ray(&self, ndc: Vec2, aspect: f32) -> (Vec3, Vec3) {
+        let world_from_ndc = self.view_projection(aspect).inverse();
+        let near = world_from_ndc.project_point3(ndc.extend(0.0));
+        let far = world_from_ndc.project_point3(ndc.extend(1.0));
+        (near, (far - near).normalize_or(Vec3::NEG_Z))
     }
 }
 
@@ -91,6 +100,17 @@ mod tests {
         let near = clip.project_point3(Vec3::new(0.0, 0.0, 4.5));
         let far = clip.project_point3(Vec3::new(0.0, 0.0, -15.0));
         assert!(near.z.abs() < 1e-5 && (far.z - 1.0).abs() < 1e-5, "{near} {far}");
+    }
+
+    #[test]
+    fn the_ray_through_a_projected_point_passes_through_it() {
+        let camera = Camera { eye: Vec3::new(1.0, 2.0, 5.0), target: Vec3::ZERO, fov_y: 0.9, near: 0.1, far: 50.0 };
+        let point = Vec3::new(0.7, -0.4, 1.3);
+        let ndc = camera.view_projection(1.6).project_point3(point);
+        let (origin, direction) = camera.ray(ndc.truncate(), 1.6);
+        let along = (point - origin).dot(direction);
+        assert!((origin + direction * along).distance(point) < 1e-4);
+        assert!((direction.length() - 1.0).abs() < 1e-6 && along > 0.0);
     }
 
     #[test]
