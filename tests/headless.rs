@@ -403,3 +403,35 @@ fn a_ray_through_a_branch_on_screen_picks_that_branch() {
     let selected = world.query::<&canopy::tree::SelectedSupport>().single(world).unwrap();
     assert_eq!(selected.0, low_index);
 }
+
+#[test]
+fn tree_edits_rebuild_the_tree_and_undo_restores_it() {
+    use canopy::tree::edit::{Edit, ForkField};
+    use canopy::tree::{TreeBody, edit_tree, undo_tree_edit};
+    let mut app = canopy::app::headless_app(&path("scenes/tree.yaml"), SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    app.update();
+    let world = app.world_mut();
+    let (oak, body) = world.query::<(bevy::prelude::Entity, &TreeBody)>().single(world).unwrap();
+    let low = body.tree.supports.iter().position(|s| s.name == "low").unwrap();
+    let supports = |world: &mut bevy::prelude::World| dump_state(world)["entities"][4]["supports"].clone();
+    let before = supports(world);
+
+    edit_tree(world, oak, Edit::Fork { support: low, field: ForkField::Length, value: 3.0 }).unwrap();
+    let longer = world.get::<TreeBody>(oak).unwrap().tree.supports[low].length();
+    assert!((longer - 3.0).abs() < 1e-4, "{longer}");
+    edit_tree(world, oak, Edit::AddChild { parent: low }).unwrap();
+    assert_eq!(world.get::<TreeBody>(oak).unwrap().tree.supports.len(), 6);
+    // A refused edit changes nothing.
+    let error = edit_tree(world, oak, Edit::Fork { support: low, field: ForkField::At, value: 2.0 }).unwrap_err();
+    assert!(error.contains("0 to 1"), "{error}");
+    // Deleting `low` takes its twig and the new child with it.
+    edit_tree(world, oak, Edit::Delete { support: low }).unwrap();
+    assert_eq!(world.get::<TreeBody>(oak).unwrap().tree.supports.len(), 3);
+
+    for _ in 0..3 {
+        assert!(undo_tree_edit(world, oak));
+    }
+    assert!(!undo_tree_edit(world, oak));
+    assert_eq!(supports(world), before);
+}

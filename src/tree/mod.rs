@@ -8,11 +8,13 @@
 //! | [`bvh`] | a bounding volume hierarchy over all segments: ray cast, nearest, within a radius |
 //! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
 //! | [`generate`] | the seeded tree and forest generator |
+//! | [`edit`] | checked edits of a written-out tree |
 //!
-//! All five are pure and tested (the queries against brute force); this module adds the scene
+//! All six are pure and tested (the queries against brute force); this module adds the scene
 //! format, spawning and the state dump.
 
 pub mod bvh;
+pub mod edit;
 pub mod generate;
 pub mod geometry;
 pub mod mesh;
@@ -25,7 +27,7 @@ pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 
 use crate::controls::{SelectEntity, ViewClicked};
 use crate::dump::{DumpState, RegisterDump};
-use crate::raster::RasterMesh;
+use crate::raster::{MeshData, RasterMesh};
 use crate::scene::SceneEntity;
 use crate::scene::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
 use crate::schedule::ControlSystems;
@@ -323,17 +325,70 @@ pub fn spawn_tree(entity: &mut EntityCommands, def: &TreeDef) {
             return;
         }
     };
-    let (segment_supports, segments): (Vec<usize>, Vec<TaperedSegment>) = tree.segments().unzip();
+    let (mesh, body) = body_of(def, tree);
     let color = def.color.0;
-    let mesh = mesh::tree_mesh(&tree, def.sides.clamp(3, 64));
+    let material = crate::shape::material(Vec3::new(color.red, color.green, color.blue), def.texture.as_ref());
     entity.insert((
         Transform::IDENTITY,
-        RasterMesh {
-            mesh: Arc::new(mesh),
-            material: crate::shape::material(Vec3::new(color.red, color.green, color.blue), def.texture.as_ref()),
-        },
-        TreeBody { tree, bvh: SegmentBvh::new(segments), segment_supports },
+        RasterMesh { mesh: Arc::new(mesh), material },
+        body,
+        TreeSource { def: def.clone(), undo: Vec::new() },
     ));
+}
+
+/// The mesh and the body of a built tree.
+fn body_of(def: &TreeDef, tree: Tree) -> (MeshData, TreeBody) {
+    let (segment_supports, segments): (Vec<usize>, Vec<TaperedSegment>) = tree.segments().unzip();
+    let mesh = mesh::tree_mesh(&tree, def.sides.clamp(3, 64));
+    (mesh, TreeBody { tree, bvh: SegmentBvh::new(segments), segment_supports })
+}
+
+/// A tree's description as edited in the window, and the descriptions before each edit.
+#[derive(Component, Debug, Clone)]
+pub struct TreeSource {
+    /// The current description.
+    pub def: TreeDef,
+    /// Earlier descriptions, the latest last.
+    pub undo: Vec<TreeDef>,
+}
+
+/// Applies `edit` to the tree `entity` and rebuilds it, or says why not (nothing changes).
+pub fn edit_tree(world: &mut World, entity: Entity, change: edit::Edit) -> Result<(), String> {
+    let source = world.get::<TreeSource>(entity).ok_or("not a tree")?;
+    let def = edit::apply(&source.def, change)?;
+    replace_tree(world, entity, def, true);
+    Ok(())
+}
+
+/// Takes the tree `entity` back to its description before the last edit; false if there is none.
+pub fn undo_tree_edit(world: &mut World, entity: Entity) -> bool {
+    let Some(def) = world.get_mut::<TreeSource>(entity).and_then(|mut source| source.undo.pop()) else {
+        return false;
+    };
+    replace_tree(world, entity, def, false);
+    true
+}
+
+/// Makes `def` the tree's description (keeping the old one for undo when `remember`), and
+/// rebuilds its body and mesh. `def` builds: edits are checked first.
+fn replace_tree(world: &mut World, entity: Entity, def: TreeDef, remember: bool) {
+    let Ok(tree) = def.build() else { return };
+    let (mesh, body) = body_of(&def, tree);
+    let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
+    if let Some(mut source) = entity_mut.get_mut::<TreeSource>() {
+        let old = std::mem::replace(&mut source.def, def);
+        if remember {
+            source.undo.push(old);
+        }
+    }
+    let supports = body.tree.supports.len();
+    if let Some(mut raster) = entity_mut.get_mut::<RasterMesh>() {
+        raster.mesh = Arc::new(mesh);
+    }
+    entity_mut.insert(body);
+    if entity_mut.get::<SelectedSupport>().is_some_and(|s| s.0 >= supports) {
+        entity_mut.remove::<SelectedSupport>();
+    }
 }
 
 /// The support of a tree entity last picked in the view.
@@ -372,10 +427,14 @@ fn select_clicked_support(
     }
 }
 
-/// The tree's section of the panel: its supports, and the one picked in the view.
+/// Why the last edit of a tree in the panel was refused.
+#[derive(Component, Debug, Clone)]
+struct EditRefused(String);
+
+/// The tree's section of the panel: its supports, the one picked in the view and its editor.
 fn tree_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     let Ok(entity_ref) = world.get_entity(entity) else { return };
-    let Some(body) = entity_ref.get::<TreeBody>() else { return };
+    let (Some(body), Some(source)) = (entity_ref.get::<TreeBody>(), entity_ref.get::<TreeSource>()) else { return };
     let tree = &body.tree;
     let trunks = tree.supports.iter().filter(|s| s.kind == SupportKind::Trunk).count();
     egui::Grid::new("tree-counts").num_columns(2).show(ui, |ui| {
@@ -387,24 +446,82 @@ fn tree_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             ui.end_row();
         }
     });
-    let Some(support) = entity_ref.get::<SelectedSupport>().and_then(|s| tree.supports.get(s.0)) else {
-        ui.label("Click a support in the view to select it.");
-        return;
-    };
-    egui::Grid::new("tree-support").num_columns(2).show(ui, |ui| {
-        let parent = support.parent.map_or("none", |p| tree.supports[p].name.as_str());
-        let rows = [
-            ("support", support.name.clone()),
-            ("kind", support.kind.key().to_string()),
-            ("parent", parent.to_string()),
-            ("points", support.points.len().to_string()),
-            ("length", format!("{:.3} m", support.length())),
-            ("radius", format!("{:.3} to {:.3} m", support.radii[0], support.radii[support.radii.len() - 1])),
-        ];
-        for (label, value) in rows {
-            ui.label(label);
-            ui.label(value);
-            ui.end_row();
+    let can_undo = !source.undo.is_empty();
+    let refused = entity_ref.get::<EditRefused>().map(|r| r.0.clone());
+    let selected = entity_ref.get::<SelectedSupport>().map(|s| s.0).filter(|&i| i < tree.supports.len());
+    let mut change = None;
+    match selected {
+        None => {
+            ui.label("Click a support in the view to select it.");
         }
-    });
+        Some(index) => {
+            let support = &tree.supports[index];
+            egui::Grid::new("tree-support").num_columns(2).show(ui, |ui| {
+                let parent = support.parent.map_or("none", |p| tree.supports[p].name.as_str());
+                let rows = [
+                    ("support", support.name.clone()),
+                    ("kind", support.kind.key().to_string()),
+                    ("parent", parent.to_string()),
+                    ("points", support.points.len().to_string()),
+                    ("length", format!("{:.3} m", support.length())),
+                ];
+                for (label, value) in rows {
+                    ui.label(label);
+                    ui.label(value);
+                    ui.end_row();
+                }
+                // Sliders for what the description holds: a fork's numbers, or a polyline's radii.
+                match source.def.supports.get(index) {
+                    Some(def) if def.parent.is_some() => {
+                        for (field, label, low, high) in edit::ForkField::ALL {
+                            let Some(mut value) = edit::fork_value(def, field) else { continue };
+                            ui.label(label);
+                            if ui.add(egui::Slider::new(&mut value, low..=high)).changed() {
+                                change = Some(edit::Edit::Fork { support: index, field, value });
+                            }
+                            ui.end_row();
+                        }
+                    }
+                    Some(_) => {
+                        for (point, &radius) in support.radii.iter().enumerate() {
+                            let mut value = radius;
+                            ui.label(format!("radius {point}"));
+                            if ui.add(egui::Slider::new(&mut value, 0.005..=2.0)).changed() {
+                                change = Some(edit::Edit::Radius { support: index, point, value });
+                            }
+                            ui.end_row();
+                        }
+                    }
+                    None => {}
+                }
+            });
+            ui.horizontal(|ui| {
+                if ui.button("Add branch").clicked() {
+                    change = Some(edit::Edit::AddChild { parent: index });
+                }
+                if ui.button("Delete").clicked() {
+                    change = Some(edit::Edit::Delete { support: index });
+                }
+            });
+        }
+    }
+    let undo = ui.add_enabled(can_undo, egui::Button::new("Undo")).clicked();
+    if let Some(reason) = &refused {
+        ui.colored_label(egui::Color32::LIGHT_RED, reason);
+    }
+    if undo {
+        undo_tree_edit(world, entity);
+    }
+    if let Some(change) = change {
+        let result = edit_tree(world, entity, change);
+        let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
+        match result {
+            Ok(()) => {
+                entity_mut.remove::<EditRefused>();
+            }
+            Err(reason) => {
+                entity_mut.insert(EditRefused(reason));
+            }
+        }
+    }
 }
