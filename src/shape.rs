@@ -17,13 +17,13 @@ use crate::yaml::deserialize_str_with;
 use bevy::color::Srgba;
 use bevy::math::{EulerRot, Quat, Vec3};
 use bevy::prelude::*;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
 
 /// Which solid a shape is. Each fits the box of its `size`: a sphere of size `[2, 1, 1]` is an
 /// ellipsoid, a cylinder stands along y, a plane lies in xz facing +y.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Reflect)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Reflect)]
 #[serde(rename_all = "snake_case")]
 pub enum Primitive {
     /// A cuboid.
@@ -49,7 +49,7 @@ impl Primitive {
 }
 
 /// A `shape` entity in a scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeDef {
     /// Which solid.
@@ -70,12 +70,12 @@ pub struct ShapeDef {
     #[serde(default = "no_angles")]
     pub spin_deg_per_s: Angles,
     /// An image on the surface; none by default.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<TextureDef>,
 }
 
 /// A shape's texture in a scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TextureDef {
     /// The image file.
@@ -100,7 +100,8 @@ fn once() -> [Repeats; 2] {
 
 /// A path to a texture: relative, inside the scene's folder (no `..`), ending in `.png` or
 /// `.bmp`.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
 pub struct TexturePath(pub String);
 
 impl<'de> Deserialize<'de> for TexturePath {

@@ -7,7 +7,7 @@ use crate::controls::{HelpVisible, KeyMap, ReloadScene, SelectEntity, ViewClicke
 use crate::params::{ParamEntry, ParamValue, list_params, set_param};
 use crate::raster::RenderSystems;
 use crate::raster::plugin::RasterTarget;
-use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneEntity, SceneStatus};
+use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneEntity, SceneStatus, save_live_scene};
 use crate::schedule::{SimClock, SimControl};
 use crate::view::CameraParams;
 use bevy::asset::RenderAssetUsages;
@@ -19,6 +19,10 @@ use bevy_egui::{
     EguiContext, EguiGlobalSettings, EguiPrimaryContextPass, EguiTextureHandle, EguiUserTextures, PrimaryEguiContext,
 };
 use std::path::PathBuf;
+
+/// What the Save button does, shown when hovering it.
+const SAVE_HINT: &str = "Write the scene, with its trees as edited, to its file. The file is first copied to \
+                         <file>.<n>.bak; comments are not kept in the new file.";
 
 /// Degrees the camera turns per point of mouse drag.
 const DRAG_DEG_PER_POINT: f32 = 0.3;
@@ -95,6 +99,8 @@ struct UiState {
     selected: Option<String>,
     /// Smoothed wall-clock frame time, milliseconds.
     frame_ms: f32,
+    /// What the last save did.
+    saved: Option<String>,
 }
 
 fn image_of(size: UVec2, data: Vec<u8>) -> Image {
@@ -185,6 +191,7 @@ struct PanelActions {
     toggle_pause: bool,
     step: bool,
     reload: bool,
+    save: bool,
     view_size: egui::Vec2,
 }
 
@@ -284,6 +291,13 @@ fn draw_ui(world: &mut World) {
     if actions.reload {
         world.write_message(ReloadScene);
     }
+    if actions.save {
+        state.saved = Some(match save_live_scene(world) {
+            Ok((path, Some(backup))) => format!("saved {}; the previous file is {}", path.display(), backup.display()),
+            Ok((path, None)) => format!("saved {}", path.display()),
+            Err(error) => format!("not saved: {error}"),
+        });
+    }
     if let Some(click) = click {
         world.write_message(click);
     }
@@ -336,7 +350,11 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
         actions.toggle_pause = ui.button(if data.control.paused { "Resume" } else { "Pause" }).clicked();
         actions.step = ui.add_enabled(data.control.paused, egui::Button::new("Step")).clicked();
         actions.reload = ui.button("Reload").clicked();
+        actions.save = ui.button("Save").on_hover_text(SAVE_HINT).clicked();
     });
+    if let Some(saved) = &state.saved {
+        ui.small(saved);
+    }
     ui.separator();
     egui::Grid::new("figures").show(ui, |ui| {
         ui.label("frame time");

@@ -386,6 +386,10 @@ fn a_ray_through_a_branch_on_screen_picks_that_branch() {
         let (origin, direction) = camera.ray(ndc.truncate(), aspect);
         let picked = pick(trees.iter(world), origin, direction).expect("a hit");
         assert_eq!(picked.support, index(name), "aiming at {name}");
+        // The hit lies about where the axis point aimed at does (within the branch's radius).
+        let length = body.tree.supports[index(name)].length();
+        assert!((picked.fraction - fraction).abs() * length < 0.3, "{name}: {} vs {fraction}", picked.fraction);
+        assert!(picked.normal.dot(direction) < 0.0, "the normal faces the ray");
         // The hit is on the near side of the axis point aimed at.
         assert!(picked.point.distance(point) < 0.3 && picked.distance < (point - origin).length(), "{picked:?}");
     }
@@ -434,4 +438,41 @@ fn tree_edits_rebuild_the_tree_and_undo_restores_it() {
     }
     assert!(!undo_tree_edit(world, oak));
     assert_eq!(supports(world), before);
+}
+
+#[test]
+fn saving_an_edited_tree_keeps_a_backup_and_reloads_as_edited() {
+    use canopy::scene::save_live_scene;
+    use canopy::tree::edit::{Edit, ForkField};
+    use canopy::tree::{TreeBody, edit_tree};
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("grove.yaml");
+    let original = "# my grove\nentities:\n  - name: oak\n    tree:\n      supports:\n        \
+        - { name: trunk, points: [[0, 0, 0], [0, 3, 0]], radii: [0.2, 0.1] }\n        \
+        - { name: limb, parent: trunk, at: 0.5, length: 1, radius: [0.08, 0.03] }\n";
+    std::fs::write(&scene, original).unwrap();
+    let mut app = canopy::app::headless_app(&scene, SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    app.update();
+    let world = app.world_mut();
+    let (oak, _) = world.query::<(bevy::prelude::Entity, &TreeBody)>().single(world).unwrap();
+    edit_tree(world, oak, Edit::Fork { support: 1, field: ForkField::Length, value: 2.5 }).unwrap();
+    edit_tree(world, oak, Edit::AddChild { parent: 1 }).unwrap();
+
+    let (saved, backup) = save_live_scene(world).unwrap();
+    assert_eq!(saved, scene);
+    let backup = backup.expect("the file existed");
+    assert_eq!(backup, folder.path().join("grove.yaml.1.bak"));
+    assert_eq!(std::fs::read_to_string(&backup).unwrap(), original);
+    // A second save keeps the first backup.
+    let (_, second) = save_live_scene(world).unwrap();
+    assert_eq!(second.unwrap(), folder.path().join("grove.yaml.2.bak"));
+    assert_eq!(std::fs::read_to_string(&backup).unwrap(), original);
+
+    let reread = canopy::scene::schema::SceneDef::load(&scene).unwrap();
+    let canopy::scene::schema::EntityKind::Tree(tree) = &reread.entities[0].kind else { panic!("not a tree") };
+    let built = tree.build().unwrap();
+    let names: Vec<&str> = built.supports.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["trunk", "limb", "limb-1"]);
+    assert!((built.supports[1].length() - 2.5).abs() < 1e-5);
 }

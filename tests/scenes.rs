@@ -195,3 +195,21 @@ fn textures_are_decoded_with_the_scene_and_bad_ones_name_their_file() {
     assert_eq!(error.path, folder.path().join("wood.png"));
     assert!(error.message.contains("entities[0].shape.texture.file: not a readable PNG or BMP image"), "{error}");
 }
+
+#[test]
+fn every_shipped_scene_survives_being_written_and_read_back() {
+    let mut checked = 0;
+    for entry in std::fs::read_dir(root().join("scenes")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "yaml") {
+            continue;
+        }
+        let scene = SceneDef::load(&path).unwrap();
+        let text = scene.to_yaml().unwrap();
+        // Read back from the same folder, so that referenced files resolve alike.
+        let again = SceneDef::parse(&path, text.as_bytes()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_eq!(again, scene, "{}", path.display());
+        checked += 1;
+    }
+    assert!(checked >= 8, "{checked} scenes");
+}

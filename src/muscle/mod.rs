@@ -30,7 +30,7 @@ use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
 use carcass::Carcass;
 use model::Muscle;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
 
@@ -60,7 +60,7 @@ checked_number!(
 );
 
 /// The source program's `muscle_config`, verbatim.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MuscleConfig {
     /// Node radii (the source's spelling).
@@ -81,7 +81,7 @@ impl MuscleConfig {
 }
 
 /// The source program's `carcass_config`, verbatim.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CarcassConfig {
     /// `[[a1, b1], [a2, b2]]`: rod 1 split at its attachment, rod 2 split at its attachment.
@@ -119,18 +119,18 @@ fn no_rotation() -> Angles {
 }
 
 /// A `muscle` entity in a scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MuscleDef {
     /// A file holding `muscle_config` and `carcass_config`, relative to the scene's folder;
     /// instead of giving them inline.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<ConfigPath>,
-    /// The node model.
-    #[serde(default)]
+    /// The node model (not written back when it came from `file`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub muscle_config: Option<MuscleConfig>,
-    /// The arm.
-    #[serde(default)]
+    /// The arm (not written back when it came from `file`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub carcass_config: Option<CarcassConfig>,
     /// Shortest node spacing, relative to rest (default 0.5).
     #[serde(default = "default_min_part")]
@@ -175,7 +175,7 @@ impl MuscleDef {
 }
 
 /// A file holding exactly the source program's configuration.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConfigFile {
     /// The node model.
@@ -186,7 +186,8 @@ pub struct ConfigFile {
 
 /// A path to a configuration file: relative, inside the scene's folder (no `..`), ending in
 /// `.yaml` or `.yml`.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
 pub struct ConfigPath(pub String);
 
 impl<'de> Deserialize<'de> for ConfigPath {

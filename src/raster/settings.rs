@@ -10,7 +10,7 @@ use crate::dump::{DumpState, RegisterDump};
 use crate::params::RegisterParams;
 use crate::schedule::ControlSystems;
 use bevy::prelude::*;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 
 /// Key that cycles the shading mode.
@@ -19,7 +19,7 @@ const SHADING_KEY: KeyCode = KeyCode::KeyV;
 const SHADOWS_KEY: KeyCode = KeyCode::KeyH;
 
 /// The shading modes as a scene value and parameter.
-#[derive(Reflect, Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Reflect, Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum ShadingMode {
     /// One intensity per triangle.
@@ -52,7 +52,7 @@ impl ShadingMode {
 }
 
 /// The `render` section of a scene file.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderDef {
     /// Shading mode: `flat`, `gouraud` (the default) or `phong`.

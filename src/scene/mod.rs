@@ -18,7 +18,7 @@ use crate::muscle::spawn_muscle;
 use crate::raster::RenderParams;
 use crate::schedule::{ControlSystems, SimClock, SimControl};
 use crate::shape::{PrimitiveMeshes, spawn_shape};
-use crate::tree::spawn_tree;
+use crate::tree::{TreeSource, spawn_tree};
 use crate::view::{Background, CameraParams, LightParams};
 use crate::yaml::FileError;
 use bevy::asset::io::{AssetSourceBuilder, Reader};
@@ -210,6 +210,45 @@ fn track_scene_asset(
     *clock = SimClock::default();
     control.live = true;
     info!("scene {} loaded ({} entities)", scene.path.display(), def.entities.len());
+}
+
+/// Writes `scene` to `path`. An existing file there is first copied to the first free
+/// `<path>.<n>.bak`, whose path is returned: nothing the user wrote is lost, comments included.
+pub fn save_scene(scene: &SceneDef, path: &Path) -> std::io::Result<Option<PathBuf>> {
+    let text = scene.to_yaml().map_err(std::io::Error::other)?;
+    let backup = if path.exists() {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let backup = (1..)
+            .map(|n| path.with_file_name(format!("{name}.{n}.bak")))
+            .find(|candidate| !candidate.exists())
+            .expect("an unbounded range always yields a free name");
+        std::fs::copy(path, &backup)?;
+        Some(backup)
+    } else {
+        None
+    };
+    std::fs::write(path, text)?;
+    Ok(backup)
+}
+
+/// Saves the playing scene to its file (see [`save_scene`]), with its trees as edited in the
+/// window. Returns the file and the backup of its previous contents.
+pub fn save_live_scene(world: &mut World) -> Result<(PathBuf, Option<PathBuf>), String> {
+    let active = world.resource::<ActiveScene>();
+    let path = active.path.clone();
+    let handle = active.handle.clone();
+    let mut def = world.resource::<Assets<SceneAsset>>().get(&handle).ok_or("no scene is loaded")?.0.clone();
+    let mut trees = world.query::<(&SceneEntity, &TreeSource)>();
+    for (scene_entity, source) in trees.iter(world) {
+        let entity = scene_entity.index.checked_sub(FIRST_FILE_ENTITY).and_then(|index| def.entities.get_mut(index));
+        if let Some(entity) = entity
+            && matches!(entity.kind, EntityKind::Tree(_))
+        {
+            entity.kind = EntityKind::Tree(source.def.clone());
+        }
+    }
+    let backup = save_scene(&def, &path).map_err(|error| format!("{}: {error}", path.display()))?;
+    Ok((path, backup))
 }
 
 /// The [`SceneEntity::index`] of the file's first entity: the camera, the light and the render

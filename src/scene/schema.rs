@@ -13,8 +13,8 @@ use crate::tree::TreeDef;
 use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
 use bevy::math::Vec3;
-use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
 use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
@@ -27,7 +27,7 @@ const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle", "tree"];
 pub const RESERVED_NAMES: [&str; 3] = ["camera", "light", "render"];
 
 /// A whole scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneDef {
     /// The viewpoint; a default camera looks at the origin from the front and above.
@@ -48,7 +48,7 @@ pub struct SceneDef {
 }
 
 /// The camera of a scene file.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraDef {
     /// Eye position in metres.
@@ -76,7 +76,7 @@ impl Default for CameraDef {
 }
 
 /// The directional light of a scene file.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LightDef {
     /// The direction the light travels in (from the light into the scene); any non-zero
@@ -178,6 +178,22 @@ impl<'de> Deserialize<'de> for EntityName {
                 Ok(EntityName(name.to_string()))
             }
         })
+    }
+}
+
+impl Serialize for EntityDef {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(None)?;
+        if let Some(name) = &self.name {
+            map.serialize_entry("name", name)?;
+        }
+        match &self.kind {
+            EntityKind::Shape(shape) => map.serialize_entry("shape", shape)?,
+            EntityKind::Muscle(muscle) => map.serialize_entry("muscle", muscle)?,
+            EntityKind::Tree(tree) => map.serialize_entry("tree", tree)?,
+        }
+        map.end()
     }
 }
 
@@ -298,6 +314,22 @@ impl SceneDef {
             }
         }
         Ok(())
+    }
+
+    /// The scene as YAML text, as a file holds it. Referenced muscle configurations stay
+    /// references; textures stay file names.
+    pub fn to_yaml(&self) -> Result<String, serde_yaml::Error> {
+        let mut scene = self.clone();
+        for entity in &mut scene.entities {
+            if let EntityKind::Muscle(muscle) = &mut entity.kind
+                && muscle.file.is_some()
+            {
+                muscle.muscle_config = None;
+                muscle.carcass_config = None;
+            }
+        }
+        let text = serde_yaml::to_string(&scene)?;
+        Ok(format!("# Saved by Canopy; the scene format is described in the README (\"Scene files\").\n{text}"))
     }
 
     /// Parses scene text read from `path`, leaving references to other files unread; the

@@ -28,6 +28,12 @@ macro_rules! checked_number {
         #[derive(Debug, Clone, Copy, PartialEq)]
         pub struct $name(pub $inner);
 
+        impl serde::Serialize for $name {
+            fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                self.0.serialize(serializer)
+            }
+        }
+
         impl<'de> serde::Deserialize<'de> for $name {
             fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
                 struct NumberVisitor;
@@ -155,9 +161,20 @@ impl From<PositiveMetres> for f32 {
     }
 }
 
+/// Writes a vector as `[x, y, z]`.
+fn serialize_vec3<S: serde::Serializer>(v: Vec3, serializer: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&v.to_array(), serializer)
+}
+
 /// A point or displacement `[x, y, z]` in metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Point(pub Vec3);
+
+impl serde::Serialize for Point {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serialize_vec3(self.0, serializer)
+    }
+}
 
 impl<'de> Deserialize<'de> for Point {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -169,6 +186,12 @@ impl<'de> Deserialize<'de> for Point {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Angles(pub Vec3);
 
+impl serde::Serialize for Angles {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serialize_vec3(self.0, serializer)
+    }
+}
+
 impl<'de> Deserialize<'de> for Angles {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         vec3_from::<Degrees, D>(deserializer).map(Self)
@@ -179,6 +202,12 @@ impl<'de> Deserialize<'de> for Angles {
 /// the same size along every axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Size(pub Vec3);
+
+impl serde::Serialize for Size {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serialize_vec3(self.0, serializer)
+    }
+}
 
 impl<'de> Deserialize<'de> for Size {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -217,6 +246,12 @@ impl<'de> Deserialize<'de> for Size {
 /// An sRGB colour: `[r, g, b]` with channels from 0 to 1, or `"#rrggbb"`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Color(pub Srgba);
+
+impl serde::Serialize for Color {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serde::Serialize::serialize(&[self.0.red, self.0.green, self.0.blue], serializer)
+    }
+}
 
 impl<'de> Deserialize<'de> for Color {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {

@@ -11,7 +11,7 @@ use bevy::math::Vec3;
 use std::fmt::Write;
 
 /// What to generate.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GeneratorSettings {
     /// The seed: equal seeds give equal trees.

@@ -37,12 +37,12 @@ use crate::view::CameraParams;
 use bevy::color::Srgba;
 use bevy::prelude::*;
 use bevy_egui::egui;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
 
 /// A `tree` entity in a scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TreeDef {
     /// Bark colour; brown by default.
@@ -50,17 +50,17 @@ pub struct TreeDef {
     pub color: Color,
     /// Bark image (PNG or BMP in the scene's folder), wrapped once around each support (u) and
     /// repeating every metre along it (v), times `repeat`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<TextureDef>,
     /// Vertices around each ring of the tubes (3 to 64; 12 by default).
     #[serde(deserialize_with = "sides")]
     #[serde(default = "default_sides")]
     pub sides: usize,
     /// The trunks and branches, written out.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub supports: Vec<SupportDef>,
     /// Or: generated from these settings (see `canopy tree generate`).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub generate: Option<GeneratorSettings>,
 }
 
@@ -85,44 +85,44 @@ fn sides<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::
 /// One support in a scene file: a polyline (`points`, `radii`) or a fork from a parent
 /// (`parent`, `at`, `yaw_deg`, `pitch_deg`, `length`, `radius`, optionally `bend_deg` and
 /// `sections`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SupportDef {
     /// Unique within the tree.
     pub name: String,
     /// `trunk` or `branch`; by default a support tilted more than 70 degrees from horizontal is
     /// a trunk.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kind: Option<SupportKind>,
     /// Axis points in metres (a polyline).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub points: Option<Vec<Point>>,
     /// A radius in metres at each point (a polyline).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radii: Option<Vec<Radius>>,
     /// The support this one forks from (a fork).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parent: Option<String>,
     /// Where along the parent it starts, 0 to 1 of its length.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub at: Option<UnitInterval>,
     /// Initial heading about +y, degrees (0 towards +z, 90 towards +x); 0 by default.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub yaw_deg: Option<Degrees>,
     /// Initial angle above the horizontal, degrees; 0 by default.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pitch_deg: Option<Degrees>,
     /// Length in metres.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub length: Option<Length>,
     /// Radius at the start and at the tip, metres.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<[Radius; 2]>,
     /// Total change of heading and pitch along the branch, degrees; none by default.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bend_deg: Option<[Degrees; 2]>,
     /// Straight sections of a fork (1 to 64; 4 by default).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sections: Option<u32>,
 }
 
@@ -262,6 +262,20 @@ pub struct TreeBody {
     pub segment_supports: Vec<usize>,
 }
 
+impl TreeBody {
+    /// Where a point `along` (0 to 1) segment `segment` lies on its support, as a fraction of
+    /// the support's length.
+    pub fn fraction_along(&self, segment: usize, along: f32) -> f32 {
+        let index = self.segment_supports[segment];
+        let first = self.segment_supports.iter().position(|&s| s == index).unwrap_or(segment);
+        let support = &self.tree.supports[index];
+        let lengths: Vec<f32> = support.points.windows(2).map(|p| p[0].distance(p[1])).collect();
+        let local = segment - first;
+        let before: f32 = lengths[..local].iter().sum();
+        (before + along * lengths[local]) / lengths.iter().sum::<f32>().max(f32::MIN_POSITIVE)
+    }
+}
+
 impl DumpState for TreeBody {
     fn dump(&self, out: &mut Map<String, Value>) {
         let supports: Vec<Value> = self
@@ -292,6 +306,10 @@ pub struct Pick {
     pub distance: f32,
     /// The point hit.
     pub point: Vec3,
+    /// The surface normal there.
+    pub normal: Vec3,
+    /// Where along the support, as a fraction of its length (0 at its first point).
+    pub fraction: f32,
 }
 
 /// The first support any tree shows along the ray from `origin` along the unit `direction`
@@ -310,6 +328,8 @@ pub fn pick<'a>(
                 support: body.segment_supports[hit.segment],
                 distance: hit.hit.distance,
                 point: hit.hit.surface.point,
+                normal: hit.hit.surface.normal,
+                fraction: body.fraction_along(hit.segment, hit.hit.surface.along),
             })
         })
         .min_by(|a, b| a.distance.total_cmp(&b.distance))

@@ -13,7 +13,7 @@ pub const TRUNK_TILT_DEG: f32 = 70.0;
 const COINCIDENT: f32 = 1e-6;
 
 /// Whether a support is climbed (a trunk) or hung from (a branch).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SupportKind {
     /// Steeper than [`TRUNK_TILT_DEG`].

@@ -7,7 +7,7 @@
 use bevy_math::{Vec2, Vec3};
 
 /// How texels are combined at a sample point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Filter {
     /// The texel containing the point.
@@ -18,7 +18,7 @@ pub enum Filter {
 }
 
 /// What coordinates outside `[0, 1]` read.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Address {
     /// The texture tiles the plane.
