@@ -147,6 +147,14 @@ fn runs_are_deterministic() {
     assert_eq!(a.framebuffer.color(), b.framebuffer.color());
 }
 
+/// A headless app with `scene` loaded and spawned.
+fn live_app(scene: &Path) -> bevy::app::App {
+    let mut app = canopy::app::headless_app(scene, SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    app.update();
+    app
+}
+
 /// Steps `app` until `done` holds, failing after a generous wall-clock limit (file loads run
 /// on the IO threads).
 fn update_until(app: &mut bevy::app::App, done: impl Fn(&ActiveScene) -> bool) {
@@ -371,9 +379,7 @@ fn tree_scenes_play_and_dump_their_supports() {
 fn a_ray_through_a_branch_on_screen_picks_that_branch() {
     use canopy::tree::{TreeBody, pick};
     use canopy::view::CameraParams;
-    let mut app = canopy::app::headless_app(&path("scenes/tree.yaml"), SMALL, false).unwrap();
-    update_until(&mut app, |s| s.status == SceneStatus::Live);
-    app.update();
+    let mut app = live_app(&path("scenes/tree.yaml"));
     let world = app.world_mut();
     let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
     let aspect = SMALL.x as f32 / SMALL.y as f32;
@@ -412,9 +418,7 @@ fn a_ray_through_a_branch_on_screen_picks_that_branch() {
 fn tree_edits_rebuild_the_tree_and_undo_restores_it() {
     use canopy::tree::edit::{Edit, ForkField};
     use canopy::tree::{TreeBody, edit_tree, undo_tree_edit};
-    let mut app = canopy::app::headless_app(&path("scenes/tree.yaml"), SMALL, false).unwrap();
-    update_until(&mut app, |s| s.status == SceneStatus::Live);
-    app.update();
+    let mut app = live_app(&path("scenes/tree.yaml"));
     let world = app.world_mut();
     let (oak, body) = world.query::<(bevy::prelude::Entity, &TreeBody)>().single(world).unwrap();
     let low = body.tree.supports.iter().position(|s| s.name == "low").unwrap();
@@ -451,9 +455,7 @@ fn saving_an_edited_tree_keeps_a_backup_and_reloads_as_edited() {
         - { name: trunk, points: [[0, 0, 0], [0, 3, 0]], radii: [0.2, 0.1] }\n        \
         - { name: limb, parent: trunk, at: 0.5, length: 1, radius: [0.08, 0.03] }\n";
     std::fs::write(&scene, original).unwrap();
-    let mut app = canopy::app::headless_app(&scene, SMALL, false).unwrap();
-    update_until(&mut app, |s| s.status == SceneStatus::Live);
-    app.update();
+    let mut app = live_app(&scene);
     let world = app.world_mut();
     let (oak, _) = world.query::<(bevy::prelude::Entity, &TreeBody)>().single(world).unwrap();
     edit_tree(world, oak, Edit::Fork { support: 1, field: ForkField::Length, value: 2.5 }).unwrap();
