@@ -60,6 +60,11 @@ impl SegmentBvh {
         bvh
     }
 
+    /// The segment indices of a leaf node.
+    fn leaf(&self, node: &Node) -> &[u32] {
+        &self.order[node.first as usize..(node.first + node.count) as usize]
+    }
+
     /// The segments, in their original order.
     pub fn segments(&self) -> &[TaperedSegment] {
         &self.segments
@@ -116,7 +121,7 @@ impl SegmentBvh {
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             if node.count > 0 {
-                for &segment in &self.order[node.first as usize..(node.first + node.count) as usize] {
+                for &segment in self.leaf(&node) {
                     if let Some(hit) = self.segments[segment as usize].ray_hit(origin, direction, limit)
                         && hit.distance <= limit
                     {
@@ -155,7 +160,7 @@ impl SegmentBvh {
                 continue;
             }
             if node.count > 0 {
-                for &segment in &self.order[node.first as usize..(node.first + node.count) as usize] {
+                for &segment in self.leaf(&node) {
                     let surface = self.segments[segment as usize].closest(p);
                     if surface.distance <= limit && best.is_none_or(|b| surface.distance < b.surface.distance) {
                         limit = surface.distance;
@@ -185,9 +190,11 @@ impl SegmentBvh {
                 continue;
             }
             if node.count > 0 {
-                let members = &self.order[node.first as usize..(node.first + node.count) as usize];
                 found.extend(
-                    members.iter().map(|&i| i as usize).filter(|&i| self.segments[i].closest(p).distance <= radius),
+                    self.leaf(&node)
+                        .iter()
+                        .map(|&i| i as usize)
+                        .filter(|&i| self.segments[i].closest(p).distance <= radius),
                 );
             } else {
                 stack.extend([node.first, node.first + 1]);
@@ -312,7 +319,7 @@ mod tests {
         let mut seen = vec![0; 1000];
         for node in bvh.nodes.iter().filter(|n| n.count > 0) {
             assert!(node.count as usize <= LEAF_SIZE);
-            for &i in &bvh.order[node.first as usize..(node.first + node.count) as usize] {
+            for &i in bvh.leaf(node) {
                 seen[i as usize] += 1;
             }
         }
