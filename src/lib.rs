@@ -27,6 +27,7 @@ pub mod run;
 pub mod scene;
 pub mod schedule;
 pub mod shape;
+pub mod sloth;
 pub mod tree;
 pub mod ui;
 pub mod view;
