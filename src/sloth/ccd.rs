@@ -119,7 +119,7 @@ fn refine(rig: &LimbRig, frame: &BodyFrame, angles: &mut [f32; JOINTS], target: 
 }
 
 /// Damped least-squares steps after stalled sweeps.
-const REFINE_STEPS: usize = 12;
+const REFINE_STEPS: usize = 40;
 
 fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)

@@ -1,0 +1,130 @@
+//! Where a lifted foot lands: the source's FindNextStep against the tree queries.
+//!
+//! The first candidate lies a full stride ahead along the foot's support; each retry tries
+//! [`RETRY_STEP`] closer, never closer than the paired limb's foot. A candidate is valid when
+//! - it lies on the support, away from its ends, on the limb's side (right limbs grip the right
+//!   side of the branch, left limbs the left), half the branch's thickness from its axis;
+//! - it moves the foot at least [`MIN_STEP`] the way the sloth is going;
+//! - the leg order holds: a leading foot never lands behind its pair, a trailing foot never
+//!   passes the leading foot on its side (hind feet stay behind fore feet walking forward);
+//! - the limb reaches it, within its joint limits, from where the body will be at touch-down
+//!   and at the end of the contact that follows (checked by solving the IK).
+//!
+//! While changing branch, a foot first looks for a grip on the new support beside its stride,
+//! forelimbs first; hind limbs follow once both forelimbs hold the new support.
+
+use super::ccd;
+use super::locomotion::{END_MARGIN, Foot, GRIP_TOLERANCE, MIN_STEP, RETRY_STEP, Sloth, Step};
+use super::rig::{BodyFrame, Limb};
+use super::supports::Supports;
+use bevy::math::Vec3;
+
+/// How far behind the leading foot on its side a trailing foot stays, metres.
+const ORDER_GAP: f32 = 0.05;
+
+/// How far from the shoulders, sideways, a neighbouring branch is looked for, metres.
+const NEIGHBOUR_REACH: f32 = 0.45;
+
+impl Sloth {
+    /// The next grip for `limb` moving in `direction` (+1 forward, -1 back), if there is one.
+    pub fn find_next_step(&self, limb: Limb, direction: f32, supports: &Supports) -> Option<Step> {
+        let foot = &self.feet[limb.index()];
+        let motion = self.frame.forward * direction;
+        if let Some(target) = self.change_to
+            && foot.support != target
+            && (limb.is_fore() || Limb::ALL.iter().filter(|l| l.is_fore()).all(|l| self.feet[l.index()].support == target))
+            && let Some(step) = self.step_onto(limb, target, motion, supports)
+        {
+            return Some(step);
+        }
+        let path = &supports.paths[foot.support];
+        let along = if path.at(foot.s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
+        let pair = &self.feet[limb.pair().index()];
+        let mut step = self.timing().stride;
+        while step >= MIN_STEP {
+            let s = foot.s + along * step;
+            if s >= END_MARGIN && s <= path.length() - END_MARGIN {
+                let grip = path.surface_towards(s, self.frame.right() * limb.side());
+                let candidate = Step { support: foot.support, s, grip };
+                if ahead(&candidate, pair, along, motion) < 0.0 {
+                    break;
+                }
+                if self.valid(limb, &candidate, along, motion, false) {
+                    return Some(candidate);
+                }
+            }
+            step -= RETRY_STEP;
+        }
+        None
+    }
+
+    /// A grip for `limb` on the support it is changing to, beside its stride or closer.
+    fn step_onto(&self, limb: Limb, target: usize, motion: Vec3, supports: &Supports) -> Option<Step> {
+        let foot = &self.feet[limb.index()];
+        let path = &supports.paths[target];
+        let stride = self.timing().stride;
+        (0..=8).rev().find_map(|k| {
+            let probe = foot.grip + motion * (stride * k as f32 / 8.0);
+            let (_, s) = path.nearest(probe);
+            if s < END_MARGIN || s > path.length() - END_MARGIN {
+                return None;
+            }
+            let along = if path.at(s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
+            let grip = path.surface_towards(s, self.frame.right() * limb.side());
+            let candidate = Step { support: target, s, grip };
+            self.valid(limb, &candidate, along, motion, true).then_some(candidate)
+        })
+    }
+
+    /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
+    /// may step sideways without moving ahead. `along` is the way arc length grows in the
+    /// direction of motion on the step's support.
+    fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool) -> bool {
+        let foot = &self.feet[limb.index()];
+        if ahead(step, foot, along, motion) < if changing { 0.0 } else { MIN_STEP } {
+            return false;
+        }
+        let leading = limb.is_fore() == (motion.dot(self.frame.forward) > 0.0);
+        let ordered = if leading {
+            ahead(step, &self.feet[limb.pair().index()], along, motion) >= 0.0
+        } else {
+            ahead(step, &self.feet[limb.same_side().index()], along, motion) <= -ORDER_GAP
+        };
+        if !ordered {
+            return false;
+        }
+        let timing = self.timing();
+        let rig = &self.rigs[limb.index()];
+        [timing.swing, timing.cycle].iter().all(|&seconds| {
+            let frame = BodyFrame { centre: self.frame.centre + motion * (self.speed * seconds), ..self.frame };
+            let mut angles = foot.angles;
+            ccd::solve(rig, &frame, &mut angles, step.grip, &self.ccd).error <= GRIP_TOLERANCE
+        })
+    }
+
+    /// The nearest other support on `side` (+1 right, -1 left) that the forelimbs could reach.
+    pub fn neighbour(&self, side: f32, supports: &Supports) -> Option<usize> {
+        let shoulders = self.frame.shoulders(&self.proportions);
+        let sideways = self.frame.right() * side;
+        let grips = shoulders + self.frame.up * self.proportions.hang;
+        let current = self.support();
+        let (mut segments, mut found) = (Vec::new(), Vec::new());
+        supports.near(grips, NEIGHBOUR_REACH, &mut segments, &mut found);
+        found
+            .iter()
+            .filter(|&&index| index != current)
+            .filter_map(|&index| {
+                let (surface, _) = supports.paths[index].nearest(grips + sideways * 0.1);
+                let beside = (surface.point - grips).dot(sideways);
+                (beside > 0.05).then_some((index, surface.point.distance(grips)))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(index, _)| index)
+    }
+}
+
+/// How far `step` lies ahead of `foot` in the direction of motion: along the support when both
+/// are on the same one (round bends count in full), else along `motion`.
+fn ahead(step: &Step, foot: &Foot, along: f32, motion: Vec3) -> f32 {
+    if step.support == foot.support { (step.s - foot.s) * along } else { (step.grip - foot.grip).dot(motion) }
+}

@@ -1,0 +1,131 @@
+//! Gait timing: stride, cycle, contact and swing from the walking speed, the footfall
+//! sequences, and the arc a foot swings along.
+//!
+//! The source's data: free speed 0.11 +- 0.04 m/s; strides of 0.21-0.83 m (mean about 0.6 m);
+//! contact about twice as long as swing; at 0.2-0.3 m/s the forelimbs' contact lasts 1.50 s and
+//! swing 0.84 s, the hindlimbs' 1.66 s and 0.67 s. Stride grows with speed here as
+//! `0.15 m + 1.5 s * speed`, within the measured range and capped by what the limbs reach; the
+//! cycle is stride over speed, and a third of it is swing. At 0.25 m/s that gives a 0.525 m
+//! stride, 1.4 s of contact and 0.7 s of swing; at 0.11 m/s 0.315 m, 1.9 s and 0.95 s.
+
+use super::rig::Limb;
+use bevy::math::Vec3;
+
+/// The slowest and fastest walking speeds the gait accepts, metres per second.
+pub const SPEED_RANGE: (f32, f32) = (0.05, 0.35);
+
+/// Shortest stride the source measured, metres.
+pub const MIN_STRIDE: f32 = 0.21;
+
+/// Part of a cycle a foot swings: contact lasts twice as long.
+pub const SWING_FRACTION: f32 = 1.0 / 3.0;
+
+/// The timing of one gait.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaitTiming {
+    /// How far each foot moves per cycle, metres.
+    pub stride: f32,
+    /// One full cycle, seconds.
+    pub cycle: f32,
+    /// One swing, seconds.
+    pub swing: f32,
+}
+
+impl GaitTiming {
+    /// The timing at `speed` (m/s, clamped to [`SPEED_RANGE`]) for limbs that comfortably step
+    /// at most `max_stride` metres.
+    pub fn at(speed: f32, max_stride: f32) -> Self {
+        let speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
+        let stride = (0.15 + 1.5 * speed).clamp(MIN_STRIDE.min(max_stride), max_stride);
+        let cycle = stride / speed;
+        Self { stride, cycle, swing: cycle * SWING_FRACTION }
+    }
+
+    /// Contact time, seconds.
+    pub fn contact(&self) -> f32 {
+        self.cycle - self.swing
+    }
+}
+
+/// Which footfall sequence the limbs follow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sequence {
+    /// Diagonal sequence: right hind, left fore, left hind, right fore (free walking).
+    Diagonal,
+    /// Lateral sequence: right hind, right fore, left hind, left fore (transitions).
+    Lateral,
+}
+
+impl Sequence {
+    /// When in the cycle (0 to 1) `limb` lifts off.
+    pub fn offset(self, limb: Limb) -> f32 {
+        let order = match self {
+            Sequence::Diagonal => [Limb::RightHind, Limb::LeftFore, Limb::LeftHind, Limb::RightFore],
+            Sequence::Lateral => [Limb::RightHind, Limb::RightFore, Limb::LeftHind, Limb::LeftFore],
+        };
+        order.iter().position(|&l| l == limb).unwrap_or(0) as f32 * 0.25
+    }
+}
+
+/// A foot on its way from one grip to the next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SwingArc {
+    /// Where it lifted off, metres.
+    pub from: Vec3,
+    /// Where it lands, metres.
+    pub to: Vec3,
+    /// Unit direction it bulges out to clear the support.
+    pub clear: Vec3,
+    /// How far it bulges at mid-swing, metres.
+    pub height: f32,
+}
+
+impl SwingArc {
+    /// The foot at `t` (0 lift-off to 1 touch-down): eased along the chord, bulging out on a
+    /// half sine, so it leaves and lands at rest.
+    pub fn at(&self, t: f32) -> Vec3 {
+        let t = t.clamp(0.0, 1.0);
+        let eased = t * t * (3.0 - 2.0 * t);
+        self.from.lerp(self.to, eased) + self.clear * (self.height * (std::f32::consts::PI * t).sin())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contact_lasts_twice_the_swing_and_speed_is_stride_per_cycle() {
+        for speed in [0.07, 0.11, 0.2, 0.3] {
+            let gait = GaitTiming::at(speed, 0.6);
+            assert!((gait.contact() - 2.0 * gait.swing).abs() < 1e-5);
+            assert!((gait.stride / gait.cycle - speed).abs() < 1e-6);
+            assert!((MIN_STRIDE..=0.83).contains(&gait.stride));
+        }
+        let steady = GaitTiming::at(0.25, 0.6);
+        assert!((1.3..=1.8).contains(&steady.contact()) && (0.6..=0.9).contains(&steady.swing));
+    }
+
+    #[test]
+    fn faster_walking_takes_longer_strides_in_shorter_cycles() {
+        let (slow, fast) = (GaitTiming::at(0.08, 0.6), GaitTiming::at(0.28, 0.6));
+        assert!(fast.stride > slow.stride && fast.cycle < slow.cycle);
+        assert_eq!(GaitTiming::at(0.3, 0.3).stride, 0.3);
+    }
+
+    #[test]
+    fn the_diagonal_sequence_is_rh_lf_lh_rf() {
+        let mut limbs = Limb::ALL;
+        limbs.sort_by(|a, b| Sequence::Diagonal.offset(*a).total_cmp(&Sequence::Diagonal.offset(*b)));
+        assert_eq!(limbs, [Limb::RightHind, Limb::LeftFore, Limb::LeftHind, Limb::RightFore]);
+        assert_eq!(Sequence::Lateral.offset(Limb::RightFore), 0.25);
+    }
+
+    #[test]
+    fn a_swing_starts_and_ends_on_its_grips_and_clears_in_between() {
+        let arc = SwingArc { from: Vec3::ZERO, to: Vec3::X * 0.3, clear: Vec3::NEG_Y, height: 0.05 };
+        assert_eq!(arc.at(0.0), Vec3::ZERO);
+        assert!(arc.at(1.0).distance(Vec3::X * 0.3) < 1e-6);
+        assert!((arc.at(0.5).y + 0.05).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,329 @@
+//! One sloth's locomotion, a fixed step at a time: the gait clock lifts each foot in turn, the
+//! foothold search picks where it lands, the swing carries it there, the body follows the
+//! grips, and every limb's IK reaches for its foot's target.
+
+use super::body::{self, HEADING_EASE};
+use super::ccd::{self, CcdSettings};
+use super::gait::{GaitTiming, Sequence, SwingArc};
+use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
+use super::supports::Supports;
+use bevy::math::Vec3;
+
+/// How a foot stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Foot {
+    /// The support it grips (or will grip, while swinging): index into [`Supports::paths`].
+    pub support: usize,
+    /// Arc length of its grip along that support, metres.
+    pub s: f32,
+    /// The grip point on the support's surface, metres.
+    pub grip: Vec3,
+    /// The swing in progress, if any.
+    pub swing: Option<Swing>,
+    /// The limb's joint angles, radians.
+    pub angles: [f32; JOINTS],
+    /// Where the limb's grip point is (forward kinematics of `angles`), metres.
+    pub position: Vec3,
+}
+
+impl Foot {
+    /// Where the limb's IK aims: the grip, or the point of the swing arc.
+    pub fn target(&self) -> Vec3 {
+        self.swing.map_or(self.grip, |swing| swing.arc.at(swing.elapsed / swing.duration))
+    }
+
+    /// Planted (not swinging)?
+    pub fn planted(&self) -> bool {
+        self.swing.is_none()
+    }
+}
+
+/// A swing in progress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Swing {
+    /// The path of the foot.
+    pub arc: SwingArc,
+    /// Seconds since lift-off.
+    pub elapsed: f32,
+    /// Seconds from lift-off to touch-down.
+    pub duration: f32,
+}
+
+/// A foot touching down, for the gait record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Footfall {
+    /// Which foot.
+    pub limb: Limb,
+    /// Seconds since the sloth was placed.
+    pub time: f32,
+}
+
+/// What the controls ask of the sloth this step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Drive {
+    /// +1 forward (head first), -1 back, 0 stand.
+    pub direction: f32,
+    /// Change to the neighbouring branch on this side (+1 right, -1 left), asked this step.
+    pub change: Option<f32>,
+}
+
+/// Why a sloth could not be placed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlaceError {
+    /// The named support does not exist.
+    #[error("no support `{0}` in the scene")]
+    UnknownSupport(String),
+    /// The feet cannot all reach the support from a body hanging there.
+    #[error("the sloth cannot hang at {fraction} along `{support}`: its feet do not reach the surface")]
+    Unreachable {
+        /// The support's label.
+        support: String,
+        /// Where along it.
+        fraction: f32,
+    },
+}
+
+/// Largest distance, metres, between an IK grip point and its grip that still counts as
+/// holding on: the foothold search only accepts grips the limb reaches this closely.
+pub const GRIP_TOLERANCE: f32 = 0.004;
+
+/// Shortest step, metres: a search that can only find shorter ones fails.
+pub const MIN_STEP: f32 = 0.02;
+
+/// How much closer each retry of the foothold search tries, metres.
+pub const RETRY_STEP: f32 = 0.01;
+
+/// How far the feet keep from a support's ends, metres.
+pub const END_MARGIN: f32 = 0.06;
+
+/// A sloth and everything its locomotion remembers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sloth {
+    /// Body proportions.
+    pub proportions: Proportions,
+    /// The limbs' rigs, indexed like [`Limb::ALL`].
+    pub rigs: [LimbRig; 4],
+    /// Mean walking speed asked for, metres per second.
+    pub speed: f32,
+    /// The feet, indexed like [`Limb::ALL`].
+    pub feet: [Foot; 4],
+    /// The body's pose.
+    pub frame: BodyFrame,
+    /// Where in the gait cycle the clock is, 0 to 1.
+    pub phase: f32,
+    /// The footfall sequence in use.
+    pub sequence: Sequence,
+    /// The support the sloth is changing to, if it is.
+    pub change_to: Option<usize>,
+    /// The direction in which no foothold was found; the sloth waits until asked otherwise.
+    pub blocked: Option<f32>,
+    /// Every touch-down so far, in order.
+    pub footfalls: Vec<Footfall>,
+    /// Seconds since placing.
+    pub time: f32,
+    /// Seconds spent asked to move and not blocked.
+    pub moving_time: f32,
+    /// Path length of the body's centre, metres.
+    pub distance: f32,
+    /// Current distance from the body to the nearest support, metres.
+    pub clearance: f32,
+    /// Smallest `clearance` so far.
+    pub min_clearance: f32,
+    /// IK settings for all limbs.
+    pub ccd: CcdSettings,
+}
+
+impl Sloth {
+    /// The longest stride the limbs comfortably take, metres.
+    pub fn max_stride(&self) -> f32 {
+        0.5 * (self.proportions.torso_length + 0.2)
+    }
+
+    /// The gait at the current speed.
+    pub fn timing(&self) -> GaitTiming {
+        GaitTiming::at(self.speed, self.max_stride())
+    }
+
+    /// A sloth hanging at `fraction` along `support`, facing the direction of increasing arc
+    /// length if `facing` is positive, with its feet staggered as in the middle of a
+    /// diagonal-sequence walk.
+    pub fn place(
+        supports: &Supports,
+        support: usize,
+        fraction: f32,
+        facing: f32,
+        proportions: Proportions,
+        speed: f32,
+    ) -> Result<Self, PlaceError> {
+        let path = supports.paths.get(support).ok_or_else(|| PlaceError::UnknownSupport(format!("#{support}")))?;
+        let rigs = limb_rigs(&proportions);
+        let s0 = fraction.clamp(0.0, 1.0) * path.length();
+        let axis = path.at(s0);
+        let forward = axis.tangent * facing.signum();
+        let up = body::perpendicular_towards(Vec3::Y, forward);
+        let frame = BodyFrame { centre: axis.point - up * proportions.hang, forward, up };
+        let mut sloth = Self {
+            proportions,
+            rigs,
+            speed,
+            feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point }; 4],
+            frame,
+            phase: 1.0 - 1e-4,
+            sequence: Sequence::Diagonal,
+            change_to: None,
+            blocked: None,
+            footfalls: Vec::new(),
+            time: 0.0,
+            moving_time: 0.0,
+            distance: 0.0,
+            clearance: f32::INFINITY,
+            min_clearance: f32::INFINITY,
+            ccd: CcdSettings::default(),
+        };
+        let stride = sloth.timing().stride;
+        // Feet where a steady walk would have them when the right hind is about to lift.
+        let stagger = [-0.5, -0.125, 0.25, 0.5];
+        for limb in Limb::ALL {
+            let rig = &sloth.rigs[limb.index()];
+            let neutral = rig.effector(&BodyFrame { centre: Vec3::ZERO, ..frame }, &rig.rest).dot(forward);
+            let s = (s0 + facing.signum() * (neutral + stagger[limb.index()] * stride)).clamp(0.0, path.length());
+            let foot = &mut sloth.feet[limb.index()];
+            foot.s = s;
+            foot.grip = path.surface_towards(s, frame.right() * limb.side());
+            foot.angles = rig.rest;
+        }
+        sloth.settle(supports, 0.0);
+        let unreachable = sloth.feet.iter().any(|f| f.position.distance(f.grip) > GRIP_TOLERANCE);
+        if unreachable {
+            return Err(PlaceError::Unreachable { support: path.label.clone(), fraction });
+        }
+        sloth.min_clearance = sloth.clearance;
+        Ok(sloth)
+    }
+
+    /// The support the forelimbs lead on.
+    pub fn support(&self) -> usize {
+        self.feet[Limb::RightFore.index()].support
+    }
+
+    /// Advances one fixed step of `dt` seconds.
+    pub fn step(&mut self, dt: f32, drive: Drive, supports: &Supports) {
+        self.time += dt;
+        if let Some(side) = drive.change {
+            self.change_to = self.neighbour(side, supports);
+            if self.change_to.is_some() {
+                self.blocked = None;
+            }
+        }
+        let direction = drive.direction.signum();
+        if self.blocked.is_some_and(|b| b != direction) {
+            self.blocked = None;
+        }
+        if direction != 0.0 && self.blocked.is_none() {
+            self.moving_time += dt;
+            self.advance_clock(dt, direction, supports);
+        }
+        self.advance_swings(dt);
+        if let Some(target) = self.change_to
+            && self.feet.iter().all(|f| f.support == target && f.planted())
+        {
+            self.change_to = None;
+        }
+        self.settle(supports, dt);
+    }
+
+    /// Moves the gait clock and lifts each foot whose turn it is, if it has somewhere to go.
+    fn advance_clock(&mut self, dt: f32, direction: f32, supports: &Supports) {
+        let timing = self.timing();
+        let before = self.phase;
+        self.phase = (self.phase + dt / timing.cycle).fract();
+        for limb in Limb::ALL {
+            let offset = self.sequence.offset(limb);
+            let crossed = if self.phase >= before {
+                offset > before && offset <= self.phase
+            } else {
+                offset > before || offset <= self.phase
+            };
+            if !crossed || !self.feet[limb.index()].planted() {
+                continue;
+            }
+            match self.find_next_step(limb, direction, supports) {
+                Some(step) => self.lift(limb, step, timing.swing, supports),
+                None => {
+                    let leading = limb.is_fore() == (direction > 0.0);
+                    if leading {
+                        self.blocked = Some(direction);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Starts `limb`'s swing to `step`.
+    fn lift(&mut self, limb: Limb, step: Step, duration: f32, supports: &Supports) {
+        let foot = &mut self.feet[limb.index()];
+        let path = &supports.paths[foot.support];
+        let axis = path.at(foot.s).point;
+        let outward = (foot.grip - axis).normalize_or_zero();
+        let clear = (outward - self.frame.up).normalize_or_zero();
+        let height = path.at(foot.s).radius + 0.03;
+        let arc = SwingArc { from: foot.grip, to: step.grip, clear, height };
+        foot.swing = Some(Swing { arc, elapsed: 0.0, duration });
+        foot.support = step.support;
+        foot.s = step.s;
+        foot.grip = step.grip;
+    }
+
+    fn advance_swings(&mut self, dt: f32) {
+        for limb in Limb::ALL {
+            let foot = &mut self.feet[limb.index()];
+            if let Some(swing) = &mut foot.swing {
+                swing.elapsed += dt;
+                if swing.elapsed >= swing.duration {
+                    foot.swing = None;
+                    self.footfalls.push(Footfall { limb, time: self.time });
+                }
+            }
+        }
+    }
+
+    /// Places the body under the feet and solves every limb's IK.
+    fn settle(&mut self, supports: &Supports, dt: f32) {
+        let targets = self.feet.map(|f| f.target());
+        let [rh, lf, lh, rf] = targets;
+        let wanted = body::heading_of(rh, rf, lh, lf).unwrap_or(self.frame.forward);
+        let forward = if dt > 0.0 { body::ease_towards(self.frame.forward, wanted, dt, HEADING_EASE) } else { wanted };
+        let up = body::perpendicular_towards(Vec3::Y, forward);
+        let mean = targets.iter().copied().sum::<Vec3>() / 4.0;
+        let mut frame = BodyFrame { centre: mean - up * self.proportions.hang, forward, up };
+        body::push_clear(&mut frame, &self.proportions, supports);
+        if dt > 0.0 {
+            self.distance += frame.centre.distance(self.frame.centre);
+        }
+        self.frame = frame;
+        for limb in Limb::ALL {
+            let rig = &self.rigs[limb.index()];
+            let foot = &mut self.feet[limb.index()];
+            ccd::solve(rig, &self.frame, &mut foot.angles, targets[limb.index()], &self.ccd);
+            foot.position = rig.effector(&self.frame, &foot.angles);
+        }
+        self.clearance = body::clearance(&self.frame, &self.proportions, supports);
+        self.min_clearance = self.min_clearance.min(self.clearance);
+    }
+
+    /// Mean speed while moving, metres per second.
+    pub fn mean_speed(&self) -> f32 {
+        if self.moving_time > 0.0 { self.distance / self.moving_time } else { 0.0 }
+    }
+}
+
+/// Where a foot will land.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Index of the support.
+    pub support: usize,
+    /// Arc length along it, metres.
+    pub s: f32,
+    /// The grip point on its surface, metres.
+    pub grip: Vec3,
+}
