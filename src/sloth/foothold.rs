@@ -1,7 +1,9 @@
 //! Where a lifted foot lands: the source's FindNextStep against the tree queries.
 //!
 //! The first candidate lies a full stride ahead along the foot's support; each retry tries
-//! [`RETRY_STEP`] closer, never closer than the paired limb's foot. A candidate is valid when
+//! [`RETRY_STEP`] closer, never closer than the paired limb's foot. A leading foot also never
+//! lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such that
+//! the pair can always overtake it again. A candidate is valid when
 //! - it lies on the support, away from its ends, on the limb's side (right limbs grip the right
 //!   side of the branch, left limbs the left), half the branch's thickness from its axis;
 //! - it moves the foot at least [`MIN_STEP`] the way the sloth is going;
@@ -16,11 +18,15 @@
 use super::ccd;
 use super::locomotion::{END_MARGIN, Foot, GRIP_TOLERANCE, MIN_STEP, RETRY_STEP, Sloth, Step};
 use super::rig::{BodyFrame, Limb};
-use super::supports::Supports;
+use super::supports::{SupportPath, Supports};
 use bevy::math::Vec3;
 
 /// How far behind the leading foot on its side a trailing foot stays, metres.
 const ORDER_GAP: f32 = 0.05;
+
+/// How far, in strides, a leading foot may land ahead of its pair: enough for the usual
+/// half-stride stagger, little enough that the pair can always overtake it again.
+const MAX_LEAD: f32 = 0.75;
 
 /// How far from the shoulders, sideways, a neighbouring branch is looked for, metres.
 const NEIGHBOUR_REACH: f32 = 0.45;
@@ -40,22 +46,45 @@ impl Sloth {
         let path = &supports.paths[foot.support];
         let along = if path.at(foot.s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
         let pair = &self.feet[limb.pair().index()];
-        let mut step = self.timing().stride;
+        let range = path.grip_range(END_MARGIN);
+        let leading = limb.is_fore() == (direction > 0.0);
+        let stride = self.timing().stride;
+        let mut step = stride;
         while step >= MIN_STEP {
             let s = foot.s + along * step;
-            if s >= END_MARGIN && s <= path.length() - END_MARGIN {
-                let grip = path.surface_towards(s, self.frame.right() * limb.side());
+            if (range.0..=range.1).contains(&s) {
+                let grip = path.surface_towards(s, self.side_on(path, s, limb));
                 let candidate = Step { support: foot.support, s, grip };
-                if ahead(&candidate, pair, along, motion) < 0.0 {
+                let lead = ahead(&candidate, pair, along, motion);
+                if lead < 0.0 {
                     break;
                 }
-                if self.valid(limb, &candidate, along, motion, false) {
+                if (!leading || lead <= MAX_LEAD * stride) && self.valid(limb, &candidate, along, motion, false) {
                     return Some(candidate);
                 }
             }
             step -= RETRY_STEP;
         }
+        if leading && self.change_to.is_none() {
+            return self.continuation(limb, motion, supports);
+        }
         None
+    }
+
+    /// At the end of its support, a leading foot looks for another support ahead within half a
+    /// stride (a branch it turns onto, or the one it grows from) and steps onto it.
+    fn continuation(&self, limb: Limb, motion: Vec3, supports: &Supports) -> Option<Step> {
+        let foot = &self.feet[limb.index()];
+        let probe = foot.grip + motion * (self.timing().stride * 0.5);
+        let (mut segments, mut found) = (Vec::new(), Vec::new());
+        supports.near(probe, self.timing().stride * 0.5, &mut segments, &mut found);
+        let mut candidates: Vec<(usize, f32)> = found
+            .iter()
+            .filter(|&&index| index != foot.support)
+            .map(|&index| (index, supports.paths[index].distance(probe)))
+            .collect();
+        candidates.sort_by(|a, b| a.1.total_cmp(&b.1));
+        candidates.iter().find_map(|&(index, _)| self.step_onto(limb, index, motion, supports))
     }
 
     /// A grip for `limb` on the support it is changing to, beside its stride or closer.
@@ -66,18 +95,19 @@ impl Sloth {
         (0..=8).rev().find_map(|k| {
             let probe = foot.grip + motion * (stride * k as f32 / 8.0);
             let (_, s) = path.nearest(probe);
-            if s < END_MARGIN || s > path.length() - END_MARGIN {
+            let range = path.grip_range(END_MARGIN);
+            if !(range.0..=range.1).contains(&s) {
                 return None;
             }
             let along = if path.at(s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
-            let grip = path.surface_towards(s, self.frame.right() * limb.side());
+            let grip = path.surface_towards(s, self.side_on(path, s, limb));
             let candidate = Step { support: target, s, grip };
             self.valid(limb, &candidate, along, motion, true).then_some(candidate)
         })
     }
 
     /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
-    /// may step sideways without moving ahead. `along` is the way arc length grows in the
+    /// may step sideways without moving ahead, and a leading foot may land beside its pair. `along` is the way arc length grows in the
     /// direction of motion on the step's support.
     fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool) -> bool {
         let foot = &self.feet[limb.index()];
@@ -86,7 +116,7 @@ impl Sloth {
         }
         let leading = limb.is_fore() == (motion.dot(self.frame.forward) > 0.0);
         let ordered = if leading {
-            ahead(step, &self.feet[limb.pair().index()], along, motion) >= 0.0
+            changing || ahead(step, &self.feet[limb.pair().index()], along, motion) >= 0.0
         } else {
             ahead(step, &self.feet[limb.same_side().index()], along, motion) <= -ORDER_GAP
         };
@@ -100,6 +130,14 @@ impl Sloth {
             let mut angles = foot.angles;
             ccd::solve(rig, &frame, &mut angles, step.grip, &self.ccd).error <= GRIP_TOLERANCE
         })
+    }
+
+    /// The limb's side of `path` at `s`: its right for right limbs, relative to the way the
+    /// body faces along the support there, so a foot keeps its side round a turn.
+    pub fn side_on(&self, path: &SupportPath, s: f32, limb: Limb) -> Vec3 {
+        let tangent = path.at(s).tangent;
+        let facing = if tangent.dot(self.frame.forward) >= 0.0 { tangent } else { -tangent };
+        self.frame.up.cross(facing) * limb.side()
     }
 
     /// The nearest other support on `side` (+1 right, -1 left) that the forelimbs could reach.

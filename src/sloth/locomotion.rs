@@ -115,7 +115,10 @@ pub struct Sloth {
     pub sequence: Sequence,
     /// The support the sloth is changing to, if it is.
     pub change_to: Option<usize>,
-    /// The direction in which no foothold was found; the sloth waits until asked otherwise.
+    /// Whether each foot's last foothold search failed.
+    pub stuck: [bool; 4],
+    /// The direction in which neither leading foot found a foothold; the sloth waits until
+    /// asked otherwise.
     pub blocked: Option<f32>,
     /// Every touch-down so far, in order.
     pub footfalls: Vec<Footfall>,
@@ -171,6 +174,7 @@ impl Sloth {
             phase: 1.0 - 1e-4,
             sequence: Sequence::Diagonal,
             change_to: None,
+            stuck: [false; 4],
             blocked: None,
             footfalls: Vec::new(),
             time: 0.0,
@@ -213,11 +217,13 @@ impl Sloth {
             self.change_to = self.neighbour(side, supports);
             if self.change_to.is_some() {
                 self.blocked = None;
+                self.stuck = [false; 4];
             }
         }
         let direction = drive.direction.signum();
         if self.blocked.is_some_and(|b| b != direction) {
             self.blocked = None;
+            self.stuck = [false; 4];
         }
         if direction != 0.0 && self.blocked.is_none() {
             self.moving_time += dt;
@@ -247,20 +253,23 @@ impl Sloth {
             if !crossed || !self.feet[limb.index()].planted() {
                 continue;
             }
-            match self.find_next_step(limb, direction, supports) {
-                Some(step) => self.lift(limb, step, timing.swing, supports),
-                None => {
-                    let leading = limb.is_fore() == (direction > 0.0);
-                    if leading {
-                        self.blocked = Some(direction);
-                    }
-                }
+            let step = self.find_next_step(limb, direction, supports);
+            self.stuck[limb.index()] = step.is_none();
+            if let Some(step) = step {
+                self.lift(limb, step, timing.swing, supports);
+            }
+            let leading = Limb::ALL.into_iter().filter(|l| l.is_fore() == (direction > 0.0));
+            if leading.into_iter().all(|l| self.stuck[l.index()]) {
+                self.blocked = Some(direction);
             }
         }
     }
 
-    /// Starts `limb`'s swing to `step`.
+    /// Starts `limb`'s swing to `step`; a step onto another support makes the others follow.
     fn lift(&mut self, limb: Limb, step: Step, duration: f32, supports: &Supports) {
+        if step.support != self.feet[limb.index()].support && self.change_to.is_none() {
+            self.change_to = Some(step.support);
+        }
         let foot = &mut self.feet[limb.index()];
         let path = &supports.paths[foot.support];
         let axis = path.at(foot.s).point;

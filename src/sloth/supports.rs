@@ -12,6 +12,8 @@ pub struct SupportPath {
     pub label: String,
     /// Trunk or branch.
     pub kind: SupportKind,
+    /// Whether it forks from another support (its start then lies inside its parent).
+    pub forked: bool,
     points: Vec<Vec3>,
     radii: Vec<f32>,
     /// Arc length at each point, metres; the first is 0.
@@ -33,7 +35,7 @@ pub struct AxisPoint {
 }
 
 impl SupportPath {
-    fn new(label: String, kind: SupportKind, points: Vec<Vec3>, radii: Vec<f32>) -> Self {
+    fn new(label: String, kind: SupportKind, forked: bool, points: Vec<Vec3>, radii: Vec<f32>) -> Self {
         let mut arc = Vec::with_capacity(points.len());
         let mut total = 0.0;
         for (i, point) in points.iter().enumerate() {
@@ -42,7 +44,13 @@ impl SupportPath {
             }
             arc.push(total);
         }
-        Self { label, kind, points, radii, arc }
+        Self { label, kind, forked, points, radii, arc }
+    }
+
+    /// The arc lengths a grip may take: away from free tips by `margin`, but right up to the
+    /// start of a fork, where the support grows out of its parent.
+    pub fn grip_range(&self, margin: f32) -> (f32, f32) {
+        (if self.forked { 0.0 } else { margin }, self.length() - margin)
     }
 
     /// Axis length, metres.
@@ -132,7 +140,7 @@ impl Supports {
         for (name, tree) in trees {
             for support in &tree.supports {
                 let label = format!("{name}/{}", support.name);
-                paths.push(SupportPath::new(label, support.kind, support.points.clone(), support.radii.clone()));
+                paths.push(SupportPath::new(label, support.kind, support.parent.is_some(), support.points.clone(), support.radii.clone()));
             }
         }
         let mut segments = Vec::new();
