@@ -6,6 +6,7 @@ use crate::raster::{RasterPlugin, RenderSettingsPlugin};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::schedule::SchedulePlugin;
 use crate::shape::ShapePlugin;
+use crate::sloth::SlothPlugin;
 use crate::tree::TreePlugin;
 use crate::ui::{UiPlugin, WindowCapture};
 use crate::view::ViewPlugin;
@@ -55,6 +56,7 @@ impl PluginGroup for CanopyPlugins {
             .add(ShapePlugin)
             .add(MusclePlugin)
             .add(TreePlugin)
+            .add(SlothPlugin)
             .add(RasterPlugin { size, every_frame });
         match self.display {
             Display::Window => group.add(UiPlugin),

@@ -18,6 +18,7 @@ use crate::muscle::spawn_muscle;
 use crate::raster::RenderParams;
 use crate::schedule::{ControlSystems, SimClock, SimControl};
 use crate::shape::{PrimitiveMeshes, spawn_shape};
+use crate::sloth::spawn_sloth;
 use crate::tree::{TreeSource, spawn_tree};
 use crate::view::{Background, CameraParams, LightParams};
 use crate::yaml::FileError;
@@ -270,6 +271,7 @@ pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMe
             EntityKind::Shape(shape) => spawn_shape(&mut entity, shape, meshes),
             EntityKind::Muscle(muscle) => spawn_muscle(&mut entity, muscle, meshes),
             EntityKind::Tree(tree) => spawn_tree(&mut entity, tree),
+            EntityKind::Sloth(sloth) => spawn_sloth(&mut entity, sloth),
         }
     }
 }

@@ -9,6 +9,7 @@ use crate::muscle::{ConfigFile, MuscleDef};
 use crate::raster::Texture;
 use crate::raster::settings::RenderDef;
 use crate::shape::{ShapeDef, TextureDef};
+use crate::sloth::{SlothDef, Supports};
 use crate::tree::TreeDef;
 use crate::yaml::{FileError, deserialize_str_with, parse_yaml};
 use bevy::color::Srgba;
@@ -20,7 +21,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// The keys of an entity mapping: its name, then every kind.
-const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle", "tree"];
+const ENTITY_FIELDS: &[&str] = &["name", "shape", "muscle", "tree", "sloth"];
 
 /// Names that refer to the scene's camera, light and render settings in parameter names and
 /// dumps.
@@ -116,6 +117,8 @@ pub enum EntityKind {
     Muscle(MuscleDef),
     /// Trunks and branches (`tree:`).
     Tree(TreeDef),
+    /// A two-toed sloth on a support (`sloth:`).
+    Sloth(SlothDef),
 }
 
 impl EntityKind {
@@ -131,6 +134,7 @@ impl EntityKind {
             EntityKind::Shape(_) => "shape",
             EntityKind::Muscle(_) => "muscle",
             EntityKind::Tree(_) => "tree",
+            EntityKind::Sloth(_) => "sloth",
         }
     }
 }
@@ -141,7 +145,7 @@ impl EntityKind {
         match self {
             EntityKind::Shape(shape) => shape.texture.as_ref(),
             EntityKind::Tree(tree) => tree.texture.as_ref(),
-            EntityKind::Muscle(_) => None,
+            EntityKind::Muscle(_) | EntityKind::Sloth(_) => None,
         }
     }
 
@@ -150,7 +154,7 @@ impl EntityKind {
         match self {
             EntityKind::Shape(shape) => shape.texture.as_mut(),
             EntityKind::Tree(tree) => tree.texture.as_mut(),
-            EntityKind::Muscle(_) => None,
+            EntityKind::Muscle(_) | EntityKind::Sloth(_) => None,
         }
     }
 }
@@ -192,6 +196,7 @@ impl Serialize for EntityDef {
             EntityKind::Shape(shape) => map.serialize_entry("shape", shape)?,
             EntityKind::Muscle(muscle) => map.serialize_entry("muscle", muscle)?,
             EntityKind::Tree(tree) => map.serialize_entry("tree", tree)?,
+            EntityKind::Sloth(sloth) => map.serialize_entry("sloth", sloth)?,
         }
         map.end()
     }
@@ -223,6 +228,7 @@ impl<'de> Deserialize<'de> for EntityDef {
                         "shape" => EntityKind::Shape(map.next_value()?),
                         "muscle" => EntityKind::Muscle(map.next_value()?),
                         "tree" => EntityKind::Tree(map.next_value()?),
+                        "sloth" => EntityKind::Sloth(map.next_value()?),
                         other => return Err(de::Error::unknown_field(other, ENTITY_FIELDS)),
                     };
                     if let Some(first) = &kind {
@@ -274,6 +280,7 @@ impl SceneDef {
             .filter_map(|entity| match &entity.kind {
                 EntityKind::Muscle(muscle) => muscle.file.as_ref().map(|f| f.0.clone()),
                 EntityKind::Shape(_) | EntityKind::Tree(_) => entity.kind.texture().map(|t| t.file.0.clone()),
+                EntityKind::Sloth(_) => None,
             })
             .collect();
         // Each file is read once, however many entities refer to it.
@@ -396,6 +403,7 @@ impl SceneDef {
             return Err(at_key("direction", 0, "light.direction: expected a non-zero vector".into()));
         }
         self.check_trees(path, text)?;
+        self.check_sloths(path, text)?;
         let muscles = self.entities.iter().enumerate().filter_map(|(index, entity)| match &entity.kind {
             EntityKind::Muscle(muscle) => Some((index, muscle)),
             _ => None,
@@ -475,6 +483,40 @@ impl SceneDef {
                 nth += self.entities[..=index].iter().filter(|e| e.name.is_some()).count();
             }
             return Err(locate(path, text, error.field, nth, message));
+        }
+        Ok(())
+    }
+}
+
+impl SceneDef {
+    /// Places every sloth on the scene's (already checked) trees; an error is located at the
+    /// sloth's `support` key.
+    fn check_sloths(&self, path: &Path, text: &str) -> Result<(), FileError> {
+        let sloths: Vec<(usize, &SlothDef)> = self
+            .entities
+            .iter()
+            .enumerate()
+            .filter_map(|(index, entity)| match &entity.kind {
+                EntityKind::Sloth(sloth) => Some((index, sloth)),
+                _ => None,
+            })
+            .collect();
+        if sloths.is_empty() {
+            return Ok(());
+        }
+        let trees: Vec<(&str, crate::tree::Tree)> = self
+            .entities
+            .iter()
+            .filter_map(|entity| match &entity.kind {
+                EntityKind::Tree(tree) => tree.build().ok().map(|built| (entity.display_name(), built)),
+                _ => None,
+            })
+            .collect();
+        let supports = Supports::new(trees.iter().map(|(name, tree)| (*name, tree)));
+        for (nth, (index, sloth)) in sloths.into_iter().enumerate() {
+            if let Err(error) = sloth.place(&supports, sloth.speed.0) {
+                return Err(locate(path, text, "support", nth, format!("entities[{index}].sloth.support: {error}")));
+            }
         }
         Ok(())
     }

@@ -32,7 +32,7 @@ pub fn tree_mesh(tree: &Tree, sides: usize) -> MeshData {
 }
 
 /// Appends the tube around `points` with `radii`.
-fn add_tube(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usize) {
+pub(crate) fn add_tube(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usize) {
     let n = points.len();
     // Tangents: the mean direction of the two segments at inner points.
     let direction = |i: usize| (points[i + 1] - points[i]).normalize_or_zero();

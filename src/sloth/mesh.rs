@@ -1,0 +1,104 @@
+//! The sloth's render mesh, rebuilt from its pose each frame: tapered capsules for the torso,
+//! neck, head and every bone, a pale face with dark eye patches, and curved claws (two on each
+//! hand, three on each foot, as in *Choloepus*). Colours are per vertex, in the rasterizer's
+//! colour space (the scene's sRGB values, as for every other mesh).
+
+use super::locomotion::Sloth;
+use super::rig::{BodyFrame, JOINTS, Limb};
+use crate::raster::MeshData;
+use crate::tree::mesh::add_tube;
+use bevy::math::Vec3;
+
+/// Vertices around each capsule.
+const SIDES: usize = 10;
+
+/// Colours of the parts that are not fur.
+const FACE: Vec3 = Vec3::new(0.88, 0.82, 0.66);
+const EYE_PATCH: Vec3 = Vec3::new(0.08, 0.06, 0.05);
+const CLAW: Vec3 = Vec3::new(0.12, 0.1, 0.08);
+
+/// Limb thickness at the girdle, shoulder or hip, elbow or knee, wrist or ankle, and palm,
+/// metres, for an animal of default proportions (scaled with the torso).
+const LIMB_RADII: [f32; JOINTS] = [0.045, 0.04, 0.032, 0.022, 0.016];
+
+/// Appends a capsule chain along `points` with `radii` in `color`.
+fn part(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], color: Vec3) {
+    add_tube(mesh, points, radii, SIDES);
+    mesh.colors.resize(mesh.positions.len(), color);
+}
+
+/// The mesh of `sloth` in its current pose, `fur` its coat colour.
+pub fn sloth_mesh(sloth: &Sloth, fur: Vec3) -> MeshData {
+    let mut mesh = MeshData::default();
+    let p = &sloth.proportions;
+    let frame = &sloth.frame;
+    let (hips, shoulders, head) = (frame.hips(p), frame.shoulders(p), frame.head(p));
+    let r = p.torso_radius;
+    part(&mut mesh, &[hips, frame.centre, shoulders], &[r * 0.92, r, r * 0.85], fur);
+    part(&mut mesh, &[shoulders, head], &[p.head_radius * 0.7, p.head_radius * 0.6], fur);
+    face(&mut mesh, frame, head, p.head_radius, fur);
+    let scale = r / 0.085;
+    for limb in Limb::ALL {
+        let rig = &sloth.rigs[limb.index()];
+        let angles = &sloth.feet[limb.index()].angles;
+        let points = rig.points(frame, angles);
+        let grip = points[JOINTS - 1];
+        let hand = (grip - points[JOINTS - 2]).normalize_or_zero();
+        let palm = grip - hand * p.claw;
+        let mut chain = points;
+        chain[JOINTS - 1] = palm;
+        part(&mut mesh, &chain, &LIMB_RADII.map(|radius| radius * scale), fur);
+        claws(&mut mesh, frame, limb, palm, grip, scale);
+    }
+    mesh
+}
+
+/// Head, snout and eye patches.
+fn face(mesh: &mut MeshData, frame: &BodyFrame, head: Vec3, radius: f32, fur: Vec3) {
+    let (forward, down, right) = (frame.forward, -frame.up, frame.right());
+    part(mesh, &[head - forward * radius * 0.3, head + forward * radius * 0.3], &[radius, radius * 0.9], fur);
+    let snout = head + forward * radius * 0.75 + down * radius * 0.15;
+    part(mesh, &[snout - forward * radius * 0.3, snout + forward * radius * 0.15], &[radius * 0.62, radius * 0.45], FACE);
+    for side in [-1.0, 1.0] {
+        let eye = head + forward * radius * 0.62 + down * radius * 0.45 + right * (side * radius * 0.38);
+        part(mesh, &[eye - forward * radius * 0.08, eye + forward * radius * 0.08], &[radius * 0.2, radius * 0.18], EYE_PATCH);
+    }
+}
+
+/// Two claws on a hand, three on a foot, spread across the grip and tapering to points.
+fn claws(mesh: &mut MeshData, frame: &BodyFrame, limb: Limb, palm: Vec3, grip: Vec3, scale: f32) {
+    let count = if limb.is_fore() { 2 } else { 3 };
+    let across = (grip - palm).cross(frame.forward).normalize_or(frame.right());
+    let bend = -frame.up * ((grip - palm).length() * 0.25);
+    for k in 0..count {
+        let offset = across * ((k as f32 - (count - 1) as f32 * 0.5) * 0.012 * scale);
+        let middle = palm.lerp(grip, 0.55) + offset + bend;
+        part(mesh, &[palm + offset, middle, grip + offset * 0.5], &[0.006 * scale, 0.004 * scale, 0.0015 * scale], CLAW);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sloth::rig::Proportions;
+    use crate::sloth::supports::Supports;
+    use crate::tree::{Shape, SupportSpec, Tree};
+
+    #[test]
+    fn the_mesh_covers_the_body_and_reaches_every_grip() {
+        let shape = Shape::Polyline { points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)], radii: vec![0.04, 0.04] };
+        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let sloth = Sloth::place(&supports, 0, 0.5, 1.0, Proportions::default(), 0.11).unwrap();
+        let mesh = sloth_mesh(&sloth, Vec3::new(0.4, 0.3, 0.2));
+        assert_eq!(mesh.colors.len(), mesh.positions.len());
+        assert_eq!(mesh.normals.len(), mesh.positions.len());
+        assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < mesh.positions.len()));
+        for foot in &sloth.feet {
+            let nearest = mesh.positions.iter().map(|p| p.distance(foot.position)).fold(f32::INFINITY, f32::min);
+            assert!(nearest < 0.01, "a claw tip reaches each grip: {nearest}");
+        }
+        let centre = mesh.positions.iter().copied().sum::<Vec3>() / mesh.positions.len() as f32;
+        assert!(centre.distance(sloth.frame.centre) < 0.3);
+    }
+}
