@@ -11,7 +11,7 @@ fn root() -> PathBuf {
 #[test]
 fn shipped_scenes_are_valid() {
     let mut count = 0;
-    for folder in ["scenes", "tests/scenes"] {
+    for folder in ["scenes", "scenes/sloth", "tests/scenes"] {
         for entry in std::fs::read_dir(root().join(folder)).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "yaml") {
@@ -37,6 +37,10 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("tree_absurd_length.yaml", Some(8), &["supports[1].length", "at most 1000", "found 50000"]),
     ("tree_radii_mismatch.yaml", Some(6), &["supports[0].radii", "one radius per point (3), found 2"]),
     ("tree_generate_and_supports.yaml", Some(4), &["entities[0].tree.generate", "either supports or generate"]),
+    ("sloth_unknown_support.yaml", Some(8), &["entities[1].sloth.support", "no support named `branch`", "oak/bough"]),
+    ("sloth_ambiguous_support.yaml", Some(10), &["entities[2].sloth.support", "in 2 trees", "tree/support"]),
+    ("sloth_speed.yaml", Some(7), &["speed", "from 0.05 to 0.35", "found 2.5"]),
+    ("sloth_too_thick.yaml", Some(6), &["entities[1].sloth.support", "cannot hang", "feet do not reach"]),
     ("binary.yaml", Some(3), &["not UTF-8"]),
     ("syntax.yaml", Some(3), &["did not find expected key, while parsing a block mapping at line 2"]),
     ("unknown_section.yaml", Some(4), &["unknown field `camra`", "expected one of"]),
@@ -199,7 +203,8 @@ fn textures_are_decoded_with_the_scene_and_bad_ones_name_their_file() {
 #[test]
 fn every_shipped_scene_survives_being_written_and_read_back() {
     let mut checked = 0;
-    for entry in std::fs::read_dir(root().join("scenes")).unwrap() {
+    let folders = ["scenes", "scenes/sloth"].map(|folder| std::fs::read_dir(root().join(folder)).unwrap());
+    for entry in folders.into_iter().flatten() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "yaml") {
             continue;
@@ -211,5 +216,5 @@ fn every_shipped_scene_survives_being_written_and_read_back() {
         assert_eq!(again, scene, "{}", path.display());
         checked += 1;
     }
-    assert!(checked >= 8, "{checked} scenes");
+    assert!(checked >= 12, "{checked} scenes");
 }

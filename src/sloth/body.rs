@@ -87,7 +87,10 @@ mod tests {
     use crate::tree::{Shape, SupportSpec, Tree};
 
     fn branch_at(height: f32) -> Tree {
-        let shape = Shape::Polyline { points: vec![Vec3::new(-2.0, height, 0.0), Vec3::new(2.0, height, 0.0)], radii: vec![0.04, 0.04] };
+        let shape = Shape::Polyline {
+            points: vec![Vec3::new(-2.0, height, 0.0), Vec3::new(2.0, height, 0.0)],
+            radii: vec![0.04, 0.04],
+        };
         Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap()
     }
 

@@ -47,7 +47,13 @@ impl CcdResult {
 }
 
 /// Moves `angles` (kept within the rig's limits) so the grip point approaches `target`.
-pub fn solve(rig: &LimbRig, frame: &BodyFrame, angles: &mut [f32; JOINTS], target: Vec3, settings: &CcdSettings) -> CcdResult {
+pub fn solve(
+    rig: &LimbRig,
+    frame: &BodyFrame,
+    angles: &mut [f32; JOINTS],
+    target: Vec3,
+    settings: &CcdSettings,
+) -> CcdResult {
     *angles = clamp(rig, *angles);
     let first = attempt(rig, frame, angles, target, settings);
     if first.reached(settings) {
@@ -74,7 +80,13 @@ pub fn solve(rig: &LimbRig, frame: &BodyFrame, angles: &mut [f32; JOINTS], targe
 const RESTART_FOLDS: [f32; 3] = [1.0, 1.5, 0.5];
 
 /// CCD sweeps from `angles`, finished by damped least squares if they stall short.
-fn attempt(rig: &LimbRig, frame: &BodyFrame, angles: &mut [f32; JOINTS], target: Vec3, settings: &CcdSettings) -> CcdResult {
+fn attempt(
+    rig: &LimbRig,
+    frame: &BodyFrame,
+    angles: &mut [f32; JOINTS],
+    target: Vec3,
+    settings: &CcdSettings,
+) -> CcdResult {
     let result = sweeps(rig, frame, angles, target, settings);
     if result.reached(settings) {
         return result;
@@ -129,7 +141,13 @@ fn clamp(rig: &LimbRig, angles: [f32; JOINTS]) -> [f32; JOINTS] {
     std::array::from_fn(|j| if angles[j].is_finite() { angles[j].clamp(rig.min[j], rig.max[j]) } else { rig.rest[j] })
 }
 
-fn sweeps(rig: &LimbRig, frame: &BodyFrame, angles: &mut [f32; JOINTS], target: Vec3, settings: &CcdSettings) -> CcdResult {
+fn sweeps(
+    rig: &LimbRig,
+    frame: &BodyFrame,
+    angles: &mut [f32; JOINTS],
+    target: Vec3,
+    settings: &CcdSettings,
+) -> CcdResult {
     let mut points = rig.points(frame, angles);
     let mut error = points[JOINTS - 1].distance(target);
     let mut taken = 0;

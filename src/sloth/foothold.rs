@@ -1,7 +1,7 @@
 //! Where a lifted foot lands: the source's FindNextStep against the tree queries.
 //!
 //! The first candidate lies a full stride ahead along the foot's support; each retry tries
-//! [`RETRY_STEP`] closer, never closer than the paired limb's foot. A leading foot also never
+//! [`RETRY_STEP`] closer, a leading foot never closer than its pair's foot. A leading foot also never
 //! lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such that
 //! the pair can always overtake it again. A candidate is valid when
 //! - it lies on the support, away from its ends, on the limb's side (right limbs grip the right
@@ -38,7 +38,8 @@ impl Sloth {
         let motion = self.frame.forward * direction;
         if let Some(target) = self.change_to
             && foot.support != target
-            && (limb.is_fore() || Limb::ALL.iter().filter(|l| l.is_fore()).all(|l| self.feet[l.index()].support == target))
+            && (limb.is_fore()
+                || Limb::ALL.iter().filter(|l| l.is_fore()).all(|l| self.feet[l.index()].support == target))
             && let Some(step) = self.step_onto(limb, target, motion, supports)
         {
             return Some(step);
@@ -56,7 +57,7 @@ impl Sloth {
                 let grip = path.surface_towards(s, self.side_on(path, s, limb));
                 let candidate = Step { support: foot.support, s, grip };
                 let lead = ahead(&candidate, pair, along, motion);
-                if lead < 0.0 {
+                if leading && lead < 0.0 {
                     break;
                 }
                 if (!leading || lead <= MAX_LEAD * stride) && self.valid(limb, &candidate, along, motion, false) {

@@ -4,7 +4,7 @@
 
 use super::body::{self, HEADING_EASE};
 use super::ccd::{self, CcdSettings};
-use super::gait::{GaitTiming, Sequence, SwingArc};
+use super::gait::{GaitTiming, SWING_FRACTION, Sequence, SwingArc};
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
 use bevy::math::Vec3;
@@ -169,7 +169,8 @@ impl Sloth {
             proportions,
             rigs,
             speed,
-            feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point }; 4],
+            feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point };
+                4],
             frame,
             phase: 1.0 - 1e-4,
             sequence: Sequence::Diagonal,
@@ -189,8 +190,8 @@ impl Sloth {
         let stagger = [-0.5, -0.125, 0.25, 0.5];
         for limb in Limb::ALL {
             let rig = &sloth.rigs[limb.index()];
-            let neutral = rig.effector(&BodyFrame { centre: Vec3::ZERO, ..frame }, &rig.rest).dot(forward);
-            let s = (s0 + facing.signum() * (neutral + stagger[limb.index()] * stride)).clamp(0.0, path.length());
+            let s = (s0 + facing.signum() * (rig.neutral_reach() + stagger[limb.index()] * stride))
+                .clamp(0.0, path.length());
             let foot = &mut sloth.feet[limb.index()];
             foot.s = s;
             foot.grip = path.surface_towards(s, frame.right() * limb.side());
@@ -220,8 +221,15 @@ impl Sloth {
                 self.stuck = [false; 4];
             }
         }
-        let direction = drive.direction.signum();
-        if self.blocked.is_some_and(|b| b != direction) {
+        // (`f32::signum` would make 0 forward.)
+        let direction = if drive.direction > 0.0 {
+            1.0
+        } else if drive.direction < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        if direction != 0.0 && self.blocked.is_some_and(|b| b != direction) {
             self.blocked = None;
             self.stuck = [false; 4];
         }
@@ -231,7 +239,7 @@ impl Sloth {
         }
         self.advance_swings(dt);
         if let Some(target) = self.change_to
-            && self.feet.iter().all(|f| f.support == target && f.planted())
+            && self.feet.iter().all(|f| f.support == target)
         {
             self.change_to = None;
         }
@@ -239,17 +247,21 @@ impl Sloth {
     }
 
     /// Moves the gait clock and lifts each foot whose turn it is, if it has somewhere to go.
+    ///
+    /// Walking back runs the clock backwards: each foot swings back over the part of the cycle
+    /// it swings in going forward (lifting where it would land), so the footfall sequence is the
+    /// forward one reversed, and the stagger of the feet survives any change of direction.
     fn advance_clock(&mut self, dt: f32, direction: f32, supports: &Supports) {
         let timing = self.timing();
         let before = self.phase;
-        self.phase = (self.phase + dt / timing.cycle).fract();
+        let after = (self.phase + direction * dt / timing.cycle).rem_euclid(1.0);
+        self.phase = after;
         for limb in Limb::ALL {
             let offset = self.sequence.offset(limb);
-            let crossed = if self.phase >= before {
-                offset > before && offset <= self.phase
-            } else {
-                offset > before || offset <= self.phase
-            };
+            let lift = if direction > 0.0 { offset } else { (offset + SWING_FRACTION).fract() };
+            // Whether the clock passed `lift` going from `before` to `after` in `direction`.
+            let (from, to) = if direction > 0.0 { (before, after) } else { (after, before) };
+            let crossed = if from <= to { lift > from && lift <= to } else { lift > from || lift <= to };
             if !crossed || !self.feet[limb.index()].planted() {
                 continue;
             }

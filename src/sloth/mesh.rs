@@ -58,10 +58,20 @@ fn face(mesh: &mut MeshData, frame: &BodyFrame, head: Vec3, radius: f32, fur: Ve
     let (forward, down, right) = (frame.forward, -frame.up, frame.right());
     part(mesh, &[head - forward * radius * 0.3, head + forward * radius * 0.3], &[radius, radius * 0.9], fur);
     let snout = head + forward * radius * 0.75 + down * radius * 0.15;
-    part(mesh, &[snout - forward * radius * 0.3, snout + forward * radius * 0.15], &[radius * 0.62, radius * 0.45], FACE);
+    part(
+        mesh,
+        &[snout - forward * radius * 0.3, snout + forward * radius * 0.15],
+        &[radius * 0.62, radius * 0.45],
+        FACE,
+    );
     for side in [-1.0, 1.0] {
         let eye = head + forward * radius * 0.62 + down * radius * 0.45 + right * (side * radius * 0.38);
-        part(mesh, &[eye - forward * radius * 0.08, eye + forward * radius * 0.08], &[radius * 0.2, radius * 0.18], EYE_PATCH);
+        part(
+            mesh,
+            &[eye - forward * radius * 0.08, eye + forward * radius * 0.08],
+            &[radius * 0.2, radius * 0.18],
+            EYE_PATCH,
+        );
     }
 }
 
@@ -73,7 +83,12 @@ fn claws(mesh: &mut MeshData, frame: &BodyFrame, limb: Limb, palm: Vec3, grip: V
     for k in 0..count {
         let offset = across * ((k as f32 - (count - 1) as f32 * 0.5) * 0.012 * scale);
         let middle = palm.lerp(grip, 0.55) + offset + bend;
-        part(mesh, &[palm + offset, middle, grip + offset * 0.5], &[0.006 * scale, 0.004 * scale, 0.0015 * scale], CLAW);
+        part(
+            mesh,
+            &[palm + offset, middle, grip + offset * 0.5],
+            &[0.006 * scale, 0.004 * scale, 0.0015 * scale],
+            CLAW,
+        );
     }
 }
 
@@ -86,7 +101,10 @@ mod tests {
 
     #[test]
     fn the_mesh_covers_the_body_and_reaches_every_grip() {
-        let shape = Shape::Polyline { points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)], radii: vec![0.04, 0.04] };
+        let shape = Shape::Polyline {
+            points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)],
+            radii: vec![0.04, 0.04],
+        };
         let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
         let supports = Supports::new([("t", &tree)]);
         let sloth = Sloth::place(&supports, 0, 0.5, 1.0, Proportions::default(), 0.11).unwrap();

@@ -284,6 +284,12 @@ impl LimbRig {
         (0..JOINTS).all(|j| angles[j] >= self.min[j] - slack && angles[j] <= self.max[j] + slack)
     }
 
+    /// How far ahead of the body's centre the grip point rests, along the body, metres.
+    pub fn neutral_reach(&self) -> f32 {
+        let frame = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
+        self.effector(&frame, &self.rest).x
+    }
+
     /// Total length from the root to the grip point.
     pub fn length(&self) -> f32 {
         self.bones.iter().sum()

@@ -53,13 +53,23 @@ impl SupportPath {
         (if self.forked { 0.0 } else { margin }, self.length() - margin)
     }
 
+    /// Whether the axis is one straight segment.
+    pub fn is_straight(&self) -> bool {
+        self.points.len() == 2
+    }
+
     /// Axis length, metres.
     pub fn length(&self) -> f32 {
         self.arc.last().copied().unwrap_or(0.0)
     }
 
     fn segment(&self, i: usize) -> TaperedSegment {
-        TaperedSegment { a: self.points[i], b: self.points[i + 1], radius_a: self.radii[i], radius_b: self.radii[i + 1] }
+        TaperedSegment {
+            a: self.points[i],
+            b: self.points[i + 1],
+            radius_a: self.radii[i],
+            radius_b: self.radii[i + 1],
+        }
     }
 
     fn segments(&self) -> impl Iterator<Item = TaperedSegment> + '_ {
@@ -87,10 +97,15 @@ impl SupportPath {
         let axis = self.at(s);
         let across = towards - axis.tangent * towards.dot(axis.tangent);
         let fallback = Vec3::NEG_Y - axis.tangent * -axis.tangent.y;
-        let normal = across.try_normalize().or(fallback.try_normalize()).unwrap_or(axis.tangent.any_orthonormal_vector());
+        let normal =
+            across.try_normalize().or(fallback.try_normalize()).unwrap_or(axis.tangent.any_orthonormal_vector());
         let reach = axis.radius + TRACE_START;
         let origin = axis.point + normal * reach;
-        let hit = self.segments().filter_map(|segment| segment.ray_hit(origin, -normal, reach)).map(|h| h.distance).reduce(f32::min);
+        let hit = self
+            .segments()
+            .filter_map(|segment| segment.ray_hit(origin, -normal, reach))
+            .map(|h| h.distance)
+            .reduce(f32::min);
         hit.map_or(axis.point + normal * axis.radius, |distance| origin - normal * distance)
     }
 
@@ -140,7 +155,13 @@ impl Supports {
         for (name, tree) in trees {
             for support in &tree.supports {
                 let label = format!("{name}/{}", support.name);
-                paths.push(SupportPath::new(label, support.kind, support.parent.is_some(), support.points.clone(), support.radii.clone()));
+                paths.push(SupportPath::new(
+                    label,
+                    support.kind,
+                    support.parent.is_some(),
+                    support.points.clone(),
+                    support.radii.clone(),
+                ));
             }
         }
         let mut segments = Vec::new();

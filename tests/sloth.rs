@@ -1,0 +1,226 @@
+//! The sloth's scenario scenes, run headless through the real plugins with a timeline, checked
+//! at every fixed step: planted feet on their support's surface, joints within limits, the body
+//! never inside a support, no NaN; and at the end: progress, speed, gait order.
+
+use bevy::math::{UVec2, Vec3};
+use canopy::controls::timeline::Timeline;
+use canopy::scene::{ActiveScene, SceneStatus};
+use canopy::sloth::SlothBody;
+use canopy::sloth::rig::Limb;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+const SIZE: UVec2 = UVec2::new(64, 48);
+
+/// Farthest a planted foot's grip point may be from its support's surface, metres.
+const GRIP_LIMIT: f32 = 0.01;
+
+/// The free speed and the tolerance the studies give, metres per second.
+const FREE_SPEED: (f32, f32) = (0.11, 0.04);
+
+fn scene_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sloth").join(name)
+}
+
+/// `text` with the number on the line marked `swept` replaced by `value`.
+fn sweep(text: &str, value: f32) -> String {
+    let lines: Vec<String> = text
+        .lines()
+        .map(|line| {
+            if !line.contains("# swept") {
+                return line.to_string();
+            }
+            let (key, _) = line.split_once(':').expect("a swept line is `key: value  # swept`");
+            let (_, comment) = line.split_once('#').unwrap();
+            format!("{key}: {value}   #{comment}")
+        })
+        .collect();
+    assert!(lines.iter().filter(|l| l.contains("# swept")).count() == 1, "one swept line");
+    lines.join("\n")
+}
+
+/// What a run recorded, step by step.
+#[derive(Debug, Default)]
+struct Record {
+    /// Every violation of the per-step criteria, with its time.
+    violations: Vec<String>,
+    /// Footfalls in stretches of steady walking: every foot on one straight support, no
+    /// foothold search failing, no change of branch under way.
+    steady_footfalls: Vec<Vec<Limb>>,
+    /// The supports of the four feet at the end.
+    final_supports: Vec<String>,
+    /// Mean speed while moving, m/s.
+    mean_speed: f32,
+    /// Body path length, metres.
+    distance: f32,
+    /// Whether the sloth stopped for want of a foothold.
+    blocked: bool,
+    /// Whether autorun was still on at the end.
+    autorun: bool,
+    /// The sloth at the end.
+    body: Option<SlothBody>,
+}
+
+/// Runs `text` (a scene in `scenes/sloth`) for `seconds` with a timeline given as YAML.
+fn run(text: &str, timeline: &str, seconds: f32) -> Record {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("scene.yaml");
+    std::fs::write(&scene, text).unwrap();
+    let timeline_file = folder.path().join("timeline.yaml");
+    std::fs::write(&timeline_file, timeline).unwrap();
+    let mut app = canopy::app::headless_app(&scene, SIZE, false).unwrap();
+    let started = Instant::now();
+    while app.world().resource::<ActiveScene>().status != SceneStatus::Live {
+        let scene = app.world().resource::<ActiveScene>();
+        assert!(scene.status != SceneStatus::Failed, "{:?}", scene.error);
+        assert!(started.elapsed() < Duration::from_secs(30), "timed out loading");
+        app.update();
+    }
+    app.update();
+    let timeline = Timeline::load(&timeline_file).unwrap();
+    timeline.check(app.world_mut()).unwrap();
+    app.insert_resource(timeline);
+
+    let mut record = Record::default();
+    let mut seen_footfalls = 0;
+    let steps = (seconds * 60.0).round() as usize;
+    for _ in 0..steps {
+        app.update();
+        let world = app.world_mut();
+        let (body, params) = world.query::<(&SlothBody, &canopy::sloth::SlothParams)>().single(world).unwrap();
+        let sloth = &body.sloth;
+        let time = sloth.time;
+
+        let mut fail = |what: String| record.violations.push(format!("t={time:.2}s: {what}"));
+        for limb in Limb::ALL {
+            let foot = &sloth.feet[limb.index()];
+            let rig = &sloth.rigs[limb.index()];
+            if !foot.position.is_finite() || foot.angles.iter().any(|a| !a.is_finite()) {
+                fail(format!("{} is NaN", limb.key()));
+            }
+            if !rig.within_limits(&foot.angles, 1e-5) {
+                fail(format!("{} joints {:?} outside limits", limb.key(), foot.angles));
+            }
+            let distance = body.supports.paths[foot.support].distance(foot.position);
+            if foot.planted() && distance.abs() > GRIP_LIMIT {
+                fail(format!("planted {} is {distance:.4} m from its support's surface", limb.key()));
+            }
+        }
+        if !sloth.frame.centre.is_finite() || !sloth.frame.forward.is_finite() {
+            fail("body is NaN".into());
+        }
+        if sloth.clearance < 0.0 {
+            fail(format!("body {:.4} m inside a support", -sloth.clearance));
+        }
+        let one_support = sloth.feet.iter().all(|f| f.support == sloth.feet[0].support);
+        let straight = one_support && body.supports.paths[sloth.feet[0].support].is_straight();
+        let steady = straight && sloth.change_to.is_none() && !sloth.stuck.iter().any(|&s| s);
+        if !steady && record.steady_footfalls.last().is_none_or(|stretch| !stretch.is_empty()) {
+            record.steady_footfalls.push(Vec::new());
+        }
+        if steady {
+            if record.steady_footfalls.is_empty() {
+                record.steady_footfalls.push(Vec::new());
+            }
+            let stretch = record.steady_footfalls.last_mut().unwrap();
+            stretch.extend(sloth.footfalls[seen_footfalls..].iter().map(|f| f.limb));
+        }
+        seen_footfalls = sloth.footfalls.len();
+        record.blocked = sloth.blocked.is_some();
+        record.autorun = params.autorun;
+        record.mean_speed = sloth.mean_speed();
+        record.distance = sloth.distance;
+        record.final_supports = sloth.feet.iter().map(|f| body.supports.paths[f.support].label.clone()).collect();
+        record.body = Some(body.clone());
+    }
+    record
+}
+
+impl Record {
+    /// Whether the footfalls on straight supports keep the diagonal sequence RH, LF, LH, RF.
+    fn gait_kept(&self) -> bool {
+        let in_order =
+            |stretch: &Vec<Limb>| stretch.windows(2).all(|pair| (pair[0].index() + 1) % 4 == pair[1].index());
+        self.steady_footfalls.iter().map(Vec::len).sum::<usize>() >= 8 && self.steady_footfalls.iter().all(in_order)
+    }
+
+    /// Every failed criterion, per step and overall, for a run that should end with all four
+    /// feet on `support`.
+    fn failures(&self, support: &str) -> Vec<String> {
+        let mut failures: Vec<String> = self.violations.iter().take(3).cloned().collect();
+        if self.final_supports.iter().any(|s| s != support) {
+            failures.push(format!("ended on {:?}, not all on {support}", self.final_supports));
+        }
+        if !self.gait_kept() {
+            failures.push(format!("gait order broken: {:?}", self.steady_footfalls));
+        }
+        if (self.mean_speed - FREE_SPEED.0).abs() > FREE_SPEED.1 {
+            failures.push(format!("mean speed {:.3} m/s", self.mean_speed));
+        }
+        failures
+    }
+}
+
+/// Runs the scene `name` with the swept value for each angle, and returns the angles that
+/// failed with why.
+fn sweep_scene(
+    name: &str,
+    angles: impl Iterator<Item = i32>,
+    value: impl Fn(i32) -> f32,
+    support: &str,
+) -> Vec<String> {
+    let text = std::fs::read_to_string(scene_path(name)).unwrap();
+    let mut failed = Vec::new();
+    for angle in angles {
+        let record = run(&sweep(&text, value(angle)), "[]", 40.0);
+        let mut failures = record.failures(support);
+        let body = record.body.as_ref().unwrap();
+        let sloth = &body.sloth;
+        let end = body.supports.paths[sloth.support()].length();
+        let reach = end - sloth.feet[Limb::RightFore.index()].s.max(sloth.feet[Limb::LeftFore.index()].s);
+        if !record.blocked || record.autorun || reach > sloth.timing().stride + 0.1 {
+            failures.push(format!("did not stop at the end of the branch ({reach:.2} m short)"));
+        }
+        if !failures.is_empty() {
+            failed.push(format!("{angle} deg: {}", failures.join("; ")));
+        }
+    }
+    failed
+}
+
+#[test]
+fn turns_onto_a_branch_at_85_to_185_degrees() {
+    let failed = sweep_scene("turn.yaml", (85..=185).step_by(5), |angle| 90.0 - (180.0 - angle as f32), "tree/turn");
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn follows_a_branch_rising_or_falling_at_125_to_205_degrees_and_stops_at_its_end() {
+    let failed = sweep_scene("height.yaml", (125..=205).step_by(5), |angle| 180.0 - angle as f32, "tree/next");
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn changes_to_a_parallel_branch_on_the_right() {
+    let text = std::fs::read_to_string(scene_path("parallel.yaml")).unwrap();
+    let timeline = "- { at: 0, press: [KeyW] }\n- { at: 4, press: [KeyD] }\n- { at: 4.2, release: [KeyD] }\n";
+    let record = run(&text, timeline, 30.0);
+    let failures = record.failures("tree/far");
+    assert!(failures.is_empty(), "{failures:#?}");
+    assert!(record.distance > 2.0, "walked {} m", record.distance);
+}
+
+#[test]
+fn holding_back_walks_tail_first_and_releasing_stops() {
+    let text = std::fs::read_to_string(scene_path("parallel.yaml")).unwrap();
+    let text = text.replace("at: 0.2", "at: 0.6");
+    let timeline = "- { at: 0, press: [KeyS] }\n- { at: 12, release: [KeyS] }\n";
+    let record = run(&text, timeline, 16.0);
+    assert!(record.violations.is_empty(), "{:#?}", record.violations);
+    let body = record.body.unwrap();
+    let start = -2.0 + 4.0 * 0.6;
+    let moved = body.sloth.frame.centre.x - start;
+    assert!(moved < -0.8, "moved {moved} m along x: backwards is -x");
+    assert!(body.sloth.frame.forward.dot(Vec3::X) > 0.95, "still faces +x");
+    assert!(body.sloth.feet.iter().all(|f| f.planted()), "stands still after release");
+}
