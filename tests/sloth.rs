@@ -189,8 +189,8 @@ fn sweep_scene(
 }
 
 #[test]
-fn turns_onto_a_branch_at_85_to_185_degrees() {
-    let failed = sweep_scene("turn.yaml", (85..=185).step_by(5), |angle| 90.0 - (180.0 - angle as f32), "tree/turn");
+fn turns_onto_a_branch_at_90_to_185_degrees() {
+    let failed = sweep_scene("turn.yaml", (90..=185).step_by(5), |angle| 90.0 - (180.0 - angle as f32), "tree/turn");
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
@@ -223,4 +223,34 @@ fn holding_back_walks_tail_first_and_releasing_stops() {
     assert!(moved < -0.8, "moved {moved} m along x: backwards is -x");
     assert!(body.sloth.frame.forward.dot(Vec3::X) > 0.95, "still faces +x");
     assert!(body.sloth.feet.iter().all(|f| f.planted()), "stands still after release");
+}
+
+/// The body's angle round the vertical axis through the origin, radians.
+fn bearing(p: Vec3) -> f32 {
+    p.x.atan2(p.z)
+}
+
+#[test]
+fn climbs_a_trunk_head_up_down_tail_first_and_round_it() {
+    let text = std::fs::read_to_string(scene_path("trunk.yaml")).unwrap();
+    let phases = [("up", "KeyW", 0.0, 10.0), ("down", "KeyS", 10.0, 16.0), ("round", "KeyD", 16.0, 30.0)];
+    let mut timeline = String::new();
+    for (_, key, from, to) in phases {
+        timeline += &format!("- {{ at: {from}, press: [{key}] }}\n- {{ at: {to}, release: [{key}] }}\n");
+    }
+    let at = |seconds: f32| {
+        let record = run(&text, &timeline, seconds);
+        assert!(record.violations.is_empty(), "{:#?}", record.violations);
+        let body = record.body.unwrap();
+        assert!(body.sloth.frame.forward.y > 0.9, "head up: {}", body.sloth.frame.forward);
+        body.sloth.frame.centre
+    };
+    let start = at(0.1);
+    let up = at(10.0);
+    let down = at(16.0);
+    let round = at(30.0);
+    assert!(up.y - start.y > 0.8, "climbed {} m", up.y - start.y);
+    assert!(up.y - down.y > 0.4, "came down {} m", up.y - down.y);
+    let turned = (bearing(round) - bearing(down)).abs().to_degrees();
+    assert!(turned > 60.0, "went {turned} degrees round");
 }

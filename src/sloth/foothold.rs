@@ -4,7 +4,8 @@
 //! [`RETRY_STEP`] closer, a leading foot never closer than its pair's foot. A leading foot also never
 //! lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such that
 //! the pair can always overtake it again. A candidate is valid when
-//! - it lies on the support, away from its ends, on the limb's side (right limbs grip the right
+//! - it lies on the support, away from its free ends and outside every other support, on the
+//!   limb's side (right limbs grip the right
 //!   side of the branch, left limbs the left), half the branch's thickness from its axis;
 //! - it moves the foot at least [`MIN_STEP`] the way the sloth is going;
 //! - the leg order holds: a leading foot never lands behind its pair, a trailing foot never
@@ -15,11 +16,13 @@
 //! While changing branch, a foot first looks for a grip on the new support beside its stride,
 //! forelimbs first; hind limbs follow once both forelimbs hold the new support.
 
+use super::body;
 use super::ccd;
 use super::locomotion::{END_MARGIN, Foot, GRIP_TOLERANCE, MIN_STEP, RETRY_STEP, Sloth, Step};
 use super::rig::{BodyFrame, Limb};
 use super::supports::{SupportPath, Supports};
-use bevy::math::Vec3;
+use crate::tree::SupportKind;
+use bevy::math::{Quat, Vec3};
 
 /// How far behind the leading foot on its side a trailing foot stays, metres.
 const ORDER_GAP: f32 = 0.05;
@@ -27,6 +30,15 @@ const ORDER_GAP: f32 = 0.05;
 /// How far, in strides, a leading foot may land ahead of its pair: enough for the usual
 /// half-stride stagger, little enough that the pair can always overtake it again.
 const MAX_LEAD: f32 = 0.75;
+
+/// Below this cosine between a branch and the body, the branch runs across the body.
+const ACROSS: f32 = 0.3;
+
+/// How far round a trunk from the side facing the body the grips lie, degrees.
+pub const TRUNK_GRIP_DEG: f32 = 65.0;
+
+/// Arc a foot moves round a trunk in one side step, metres.
+const SIDE_STEP: f32 = 0.04;
 
 /// How far from the shoulders, sideways, a neighbouring branch is looked for, metres.
 const NEIGHBOUR_REACH: f32 = 0.45;
@@ -45,7 +57,7 @@ impl Sloth {
             return Some(step);
         }
         let path = &supports.paths[foot.support];
-        let along = if path.at(foot.s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
+        let along = self.along(path, foot.s, direction);
         let pair = &self.feet[limb.pair().index()];
         let range = path.grip_range(END_MARGIN);
         let leading = limb.is_fore() == (direction > 0.0);
@@ -54,13 +66,18 @@ impl Sloth {
         while step >= MIN_STEP {
             let s = foot.s + along * step;
             if (range.0..=range.1).contains(&s) {
-                let grip = path.surface_towards(s, self.side_on(path, s, limb));
+                // Up and down a trunk a foot keeps its bearing round it: only side steps turn.
+                let towards = match path.kind {
+                    SupportKind::Trunk => foot.grip - path.at(foot.s).point,
+                    SupportKind::Branch => self.side_on(path, s, limb),
+                };
+                let grip = path.surface_towards(s, towards);
                 let candidate = Step { support: foot.support, s, grip };
                 let lead = ahead(&candidate, pair, along, motion);
                 if leading && lead < 0.0 {
                     break;
                 }
-                if (!leading || lead <= MAX_LEAD * stride) && self.valid(limb, &candidate, along, motion, false) {
+                if (!leading || lead <= MAX_LEAD * stride) && self.valid(limb, &candidate, along, motion, false, supports) {
                     return Some(candidate);
                 }
             }
@@ -100,18 +117,22 @@ impl Sloth {
             if !(range.0..=range.1).contains(&s) {
                 return None;
             }
-            let along = if path.at(s).tangent.dot(motion) >= 0.0 { 1.0 } else { -1.0 };
+            let along = self.along(path, s, if motion.dot(self.frame.forward) >= 0.0 { 1.0 } else { -1.0 });
             let grip = path.surface_towards(s, self.side_on(path, s, limb));
             let candidate = Step { support: target, s, grip };
-            self.valid(limb, &candidate, along, motion, true).then_some(candidate)
+            self.valid(limb, &candidate, along, motion, true, supports).then_some(candidate)
         })
     }
 
     /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
     /// may step sideways without moving ahead, and a leading foot may land beside its pair. `along` is the way arc length grows in the
     /// direction of motion on the step's support.
-    fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool) -> bool {
+    fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool, supports: &Supports) -> bool {
         let foot = &self.feet[limb.index()];
+        // Where a branch grows out of another, its grips must not sink into the other's wood.
+        if supports.clearance(step.grip, GRIP_TOLERANCE) < -GRIP_TOLERANCE {
+            return false;
+        }
         if ahead(step, foot, along, motion) < if changing { 0.0 } else { MIN_STEP } {
             return false;
         }
@@ -133,12 +154,73 @@ impl Sloth {
         })
     }
 
-    /// The limb's side of `path` at `s`: its right for right limbs, relative to the way the
-    /// body faces along the support there, so a foot keeps its side round a turn.
+    /// The limb's side of `path` at `s`: its right for right limbs. Along a branch that is
+    /// the right of the way the body faces along it, so a foot keeps its side round a turn;
+    /// across a branch it is the body's own right, the two blending by how much the branch runs
+    /// along the body. On a trunk the grip lies [`TRUNK_GRIP_DEG`] round from the side facing
+    /// the body, so the grips hold the body's bearing round the trunk.
     pub fn side_on(&self, path: &SupportPath, s: f32, limb: Limb) -> Vec3 {
+        let axis = path.at(s);
+        let tangent = axis.tangent;
+        let across = self.frame.right() - tangent * self.frame.right().dot(tangent);
+        if path.kind == SupportKind::Trunk {
+            let towards_body = body::perpendicular_towards(self.frame.centre - axis.point, tangent);
+            let (sin, cos) = TRUNK_GRIP_DEG.to_radians().sin_cos();
+            return towards_body * cos + across.normalize_or(towards_body.cross(tangent)) * (sin * limb.side());
+        }
+        let lengthwise = tangent.dot(self.frame.forward);
+        let facing = if lengthwise >= 0.0 { tangent } else { -tangent };
+        let walked = self.frame.up.cross(facing);
+        (walked * lengthwise.abs() + across * (1.0 - lengthwise.abs())).normalize_or(walked) * limb.side()
+    }
+
+    /// Which way arc length grows on `path` at `s` as the sloth moves in `direction`: on a
+    /// trunk, up is forward (it climbs head up); on a branch, the way the motion points along
+    /// it, or out towards the tip where the branch runs across the body (just reached from the
+    /// trunk it grows from).
+    pub fn along(&self, path: &SupportPath, s: f32, direction: f32) -> f32 {
+        let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
         let tangent = path.at(s).tangent;
-        let facing = if tangent.dot(self.frame.forward) >= 0.0 { tangent } else { -tangent };
-        self.frame.up.cross(facing) * limb.side()
+        match path.kind {
+            SupportKind::Trunk => sign(tangent.y) * direction,
+            SupportKind::Branch => {
+                let lengthwise = tangent.dot(self.frame.forward * direction);
+                if lengthwise.abs() < ACROSS && path.parent.is_some() { direction } else { sign(lengthwise) }
+            }
+        }
+    }
+
+    /// A side step of `limb` around its trunk, towards the body's right if `around` is positive:
+    /// the grip turns about the trunk's axis by up to [`SIDE_STEP`] of arc, less if the limb
+    /// cannot reach that far.
+    pub fn find_side_step(&self, limb: Limb, around: f32, supports: &Supports) -> Option<Step> {
+        let foot = &self.feet[limb.index()];
+        let path = &supports.paths[foot.support];
+        if path.kind != SupportKind::Trunk {
+            return None;
+        }
+        let axis = path.at(foot.s);
+        let radial = body::perpendicular_towards(foot.grip - axis.point, axis.tangent);
+        let towards = if axis.tangent.cross(radial).dot(self.frame.right() * around) >= 0.0 { 1.0 } else { -1.0 };
+        let full = SIDE_STEP / axis.radius.max(0.05);
+        [1.0, 0.75, 0.5, 0.25].into_iter().find_map(|fraction| {
+            let turn = Quat::from_axis_angle(axis.tangent, towards * full * fraction);
+            let grip = path.surface_towards(foot.s, turn * radial);
+            let candidate = Step { support: foot.support, s: foot.s, grip };
+            let rig = &self.rigs[limb.index()];
+            // The body follows the feet round, about half this turn by touch-down.
+            let half = Quat::from_axis_angle(axis.tangent, towards * full * fraction * 0.5);
+            let turned = BodyFrame {
+                centre: axis.point + half * (self.frame.centre - axis.point),
+                forward: self.frame.forward,
+                up: half * self.frame.up,
+            };
+            [self.frame, turned].iter().all(|frame| {
+                let mut angles = foot.angles;
+                ccd::solve(rig, frame, &mut angles, grip, &self.ccd).error <= GRIP_TOLERANCE
+            })
+            .then_some(candidate)
+        })
     }
 
     /// The nearest other support on `side` (+1 right, -1 left) that the forelimbs could reach.

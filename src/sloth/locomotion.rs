@@ -7,6 +7,7 @@ use super::ccd::{self, CcdSettings};
 use super::gait::{GaitTiming, SWING_FRACTION, Sequence, SwingArc};
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
+use crate::tree::SupportKind;
 use bevy::math::Vec3;
 
 /// How a foot stands.
@@ -65,6 +66,21 @@ pub struct Drive {
     pub direction: f32,
     /// Change to the neighbouring branch on this side (+1 right, -1 left), asked this step.
     pub change: Option<f32>,
+    /// On a trunk, with no `direction`: side-step round it, +1 to the right, -1 to the left.
+    pub around: f32,
+}
+
+/// Where a sloth is placed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Index of the support in [`Supports::paths`].
+    pub support: usize,
+    /// Where along it, 0 to 1 of its length.
+    pub fraction: f32,
+    /// On a branch: +1 to face the way arc length grows, -1 the other way.
+    pub facing: f32,
+    /// On a trunk: where around it the body hangs, radians about +y from +z.
+    pub around: f32,
 }
 
 /// Why a sloth could not be placed.
@@ -147,23 +163,25 @@ impl Sloth {
         GaitTiming::at(self.speed, self.max_stride())
     }
 
-    /// A sloth hanging at `fraction` along `support`, facing the direction of increasing arc
-    /// length if `facing` is positive, with its feet staggered as in the middle of a
-    /// diagonal-sequence walk.
-    pub fn place(
-        supports: &Supports,
-        support: usize,
-        fraction: f32,
-        facing: f32,
-        proportions: Proportions,
-        speed: f32,
-    ) -> Result<Self, PlaceError> {
+    /// A sloth placed as `placement` says, with its feet staggered as in the middle of a
+    /// diagonal-sequence walk. On a trunk it always faces up.
+    pub fn place(supports: &Supports, placement: Placement, proportions: Proportions, speed: f32) -> Result<Self, PlaceError> {
+        let Placement { support, fraction, facing, around } = placement;
         let path = supports.paths.get(support).ok_or_else(|| PlaceError::UnknownSupport(format!("#{support}")))?;
         let rigs = limb_rigs(&proportions);
         let s0 = fraction.clamp(0.0, 1.0) * path.length();
         let axis = path.at(s0);
-        let forward = axis.tangent * facing.signum();
-        let up = body::perpendicular_towards(Vec3::Y, forward);
+        let (forward, up) = match path.kind {
+            SupportKind::Trunk => {
+                let forward = if axis.tangent.y >= 0.0 { axis.tangent } else { -axis.tangent };
+                let outward = Vec3::new(around.sin(), 0.0, around.cos());
+                (forward, body::perpendicular_towards(-outward, forward))
+            }
+            SupportKind::Branch => {
+                let forward = axis.tangent * if facing < 0.0 { -1.0 } else { 1.0 };
+                (forward, body::perpendicular_towards(Vec3::Y, forward))
+            }
+        };
         let frame = BodyFrame { centre: axis.point - up * proportions.hang, forward, up };
         let mut sloth = Self {
             proportions,
@@ -192,9 +210,10 @@ impl Sloth {
             let rig = &sloth.rigs[limb.index()];
             let s = (s0 + facing.signum() * (rig.neutral_reach() + stagger[limb.index()] * stride))
                 .clamp(0.0, path.length());
+            let towards = sloth.side_on(path, s, limb);
             let foot = &mut sloth.feet[limb.index()];
             foot.s = s;
-            foot.grip = path.surface_towards(s, frame.right() * limb.side());
+            foot.grip = path.surface_towards(s, towards);
             foot.angles = rig.rest;
         }
         sloth.settle(supports, 0.0);
@@ -233,9 +252,12 @@ impl Sloth {
             self.blocked = None;
             self.stuck = [false; 4];
         }
+        let on_trunk = supports.paths[self.support()].kind == SupportKind::Trunk;
         if direction != 0.0 && self.blocked.is_none() {
             self.moving_time += dt;
-            self.advance_clock(dt, direction, supports);
+            self.advance_clock(dt, direction, supports, None);
+        } else if drive.around != 0.0 && on_trunk && self.change_to.is_none() {
+            self.advance_clock(dt, 1.0, supports, Some(drive.around));
         }
         self.advance_swings(dt);
         if let Some(target) = self.change_to
@@ -251,7 +273,9 @@ impl Sloth {
     /// Walking back runs the clock backwards: each foot swings back over the part of the cycle
     /// it swings in going forward (lifting where it would land), so the footfall sequence is the
     /// forward one reversed, and the stagger of the feet survives any change of direction.
-    fn advance_clock(&mut self, dt: f32, direction: f32, supports: &Supports) {
+    ///
+    /// With `around`, each foot whose turn it is side-steps round its trunk instead.
+    fn advance_clock(&mut self, dt: f32, direction: f32, supports: &Supports, around: Option<f32>) {
         let timing = self.timing();
         let before = self.phase;
         let after = (self.phase + direction * dt / timing.cycle).rem_euclid(1.0);
@@ -265,13 +289,16 @@ impl Sloth {
             if !crossed || !self.feet[limb.index()].planted() {
                 continue;
             }
-            let step = self.find_next_step(limb, direction, supports);
+            let step = match around {
+                Some(around) => self.find_side_step(limb, around, supports),
+                None => self.find_next_step(limb, direction, supports),
+            };
             self.stuck[limb.index()] = step.is_none();
             if let Some(step) = step {
                 self.lift(limb, step, timing.swing, supports);
             }
             let leading = Limb::ALL.into_iter().filter(|l| l.is_fore() == (direction > 0.0));
-            if leading.into_iter().all(|l| self.stuck[l.index()]) {
+            if around.is_none() && leading.into_iter().all(|l| self.stuck[l.index()]) {
                 self.blocked = Some(direction);
             }
         }
@@ -312,9 +339,35 @@ impl Sloth {
     fn settle(&mut self, supports: &Supports, dt: f32) {
         let targets = self.feet.map(|f| f.target());
         let [rh, lf, lh, rf] = targets;
-        let wanted = body::heading_of(rh, rf, lh, lf).unwrap_or(self.frame.forward);
+        // On one trunk the body stays upright along it, turning only about its axis; elsewhere it
+        // heads along the feet.
+        let trunk = self.feet[0].support;
+        let on_trunk = supports.paths[trunk].kind == SupportKind::Trunk && self.feet.iter().all(|f| f.support == trunk);
+        let wanted = if on_trunk {
+            let mean_s = self.feet.iter().map(|f| f.s).sum::<f32>() / 4.0;
+            let tangent = supports.paths[trunk].at(mean_s).tangent;
+            if tangent.y >= 0.0 { tangent } else { -tangent }
+        } else {
+            body::heading_of(rh, rf, lh, lf).unwrap_or(self.frame.forward)
+        };
         let forward = if dt > 0.0 { body::ease_towards(self.frame.forward, wanted, dt, HEADING_EASE) } else { wanted };
-        let up = body::perpendicular_towards(Vec3::Y, forward);
+        // Each foot pulls the body's belly towards its support: up for a branch, from its grip
+        // towards the axis for a trunk (the grips, round the side facing the body, then agree).
+        let pull: Vec3 = self
+            .feet
+            .iter()
+            .map(|foot| {
+                let path = &supports.paths[foot.support];
+                match path.kind {
+                    SupportKind::Branch => Vec3::Y,
+                    SupportKind::Trunk => {
+                        let axis = path.at(foot.s);
+                        body::perpendicular_towards(axis.point - foot.grip, axis.tangent)
+                    }
+                }
+            })
+            .sum();
+        let up = body::perpendicular_towards(pull, forward);
         let mean = targets.iter().copied().sum::<Vec3>() / 4.0;
         let mut frame = BodyFrame { centre: mean - up * self.proportions.hang, forward, up };
         body::push_clear(&mut frame, &self.proportions, supports);

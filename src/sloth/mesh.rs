@@ -107,7 +107,8 @@ mod tests {
         };
         let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
         let supports = Supports::new([("t", &tree)]);
-        let sloth = Sloth::place(&supports, 0, 0.5, 1.0, Proportions::default(), 0.11).unwrap();
+        let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
+        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
         let mesh = sloth_mesh(&sloth, Vec3::new(0.4, 0.3, 0.2));
         assert_eq!(mesh.colors.len(), mesh.positions.len());
         assert_eq!(mesh.normals.len(), mesh.positions.len());

@@ -25,7 +25,7 @@ pub mod mesh;
 pub mod rig;
 pub mod supports;
 
-pub use locomotion::{Drive, PlaceError, Sloth};
+pub use locomotion::{Drive, PlaceError, Placement, Sloth};
 pub use supports::Supports;
 
 use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
@@ -33,7 +33,7 @@ use crate::dump::{DumpState, RegisterDump};
 use crate::params::RegisterParams;
 use crate::raster::{Material, RasterMesh, RenderSystems};
 use crate::scene::SceneEntity;
-use crate::scene::values::{Color, UnitInterval, checked_number};
+use crate::scene::values::{Color, Degrees, UnitInterval, checked_number};
 use crate::schedule::{ControlSystems, SimSystems};
 use crate::tree::TreeBody;
 use bevy::color::Srgba;
@@ -106,9 +106,14 @@ pub struct SlothDef {
     /// Where along the support, 0 to 1 of its length; 0.5 by default.
     #[serde(default = "middle")]
     pub at: UnitInterval,
-    /// Which way it faces: `forward` (towards the support's end, the default) or `backward`.
+    /// On a branch, which way it faces: `forward` (towards the support's end, the default) or
+    /// `backward`. On a trunk it always faces up.
     #[serde(default)]
     pub facing: Facing,
+    /// On a trunk, where around it the body hangs: degrees about +y from +z (0, the default,
+    /// puts the sloth on the trunk's +z side).
+    #[serde(default = "no_turn")]
+    pub around_deg: Degrees,
     /// Mean walking speed, metres per second; 0.11 by default.
     #[serde(default = "free_speed")]
     pub speed: Speed,
@@ -131,6 +136,10 @@ pub struct SlothDef {
 
 fn middle() -> UnitInterval {
     UnitInterval(0.5)
+}
+
+fn no_turn() -> Degrees {
+    Degrees(0.0)
 }
 
 fn free_speed() -> Speed {
@@ -179,9 +188,13 @@ impl SlothDef {
 
     /// Places the sloth among `supports`.
     pub fn place(&self, supports: &Supports, speed: f32) -> Result<Sloth, String> {
-        let index = self.resolve(supports)?;
-        let facing = if self.facing == Facing::Forward { 1.0 } else { -1.0 };
-        Sloth::place(supports, index, self.at.0, facing, self.proportions(), speed).map_err(|e| e.to_string())
+        let placement = Placement {
+            support: self.resolve(supports)?,
+            fraction: self.at.0,
+            facing: if self.facing == Facing::Forward { 1.0 } else { -1.0 },
+            around: self.around_deg.0.to_radians(),
+        };
+        Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())
     }
 }
 
@@ -204,6 +217,8 @@ pub struct SlothInput {
     pub hold: f32,
     /// A change of branch asked for: +1 right, -1 left.
     pub change: Option<f32>,
+    /// +1 while right is held, -1 while left is held (side steps round a trunk).
+    pub around: f32,
 }
 
 /// The scene's description of a sloth.
@@ -249,8 +264,8 @@ impl Plugin for SlothPlugin {
                 KeyHelp { key: FORWARD_KEY, action: "walk forward, or climb up a trunk (hold)", scope },
                 KeyHelp { key: BACK_KEY, action: "walk back, or climb down a trunk (hold)", scope },
                 KeyHelp { key: AUTORUN_KEY, action: "autorun on or off (stops where no foothold is found)", scope },
-                KeyHelp { key: LEFT_KEY, action: "change to the branch on the left", scope },
-                KeyHelp { key: RIGHT_KEY, action: "change to the branch on the right", scope },
+                KeyHelp { key: LEFT_KEY, action: "change to the branch on the left; on a trunk, hold to step round it", scope },
+                KeyHelp { key: RIGHT_KEY, action: "change to the branch on the right; on a trunk, hold to step round it", scope },
             ])
             .add_systems(Update, sloth_keys.in_set(ControlSystems::Input))
             .add_systems(Update, place_sloths.in_set(ControlSystems::Apply))
@@ -261,6 +276,7 @@ impl Plugin for SlothPlugin {
 
 fn sloth_keys(keys: Res<ButtonInput<KeyCode>>, mut sloths: Query<(&mut SlothInput, &mut SlothParams)>) {
     let hold = f32::from(keys.pressed(FORWARD_KEY)) - f32::from(keys.pressed(BACK_KEY));
+    let around = f32::from(keys.pressed(RIGHT_KEY)) - f32::from(keys.pressed(LEFT_KEY));
     let change = if keys.just_pressed(LEFT_KEY) {
         Some(-1.0)
     } else if keys.just_pressed(RIGHT_KEY) {
@@ -270,6 +286,7 @@ fn sloth_keys(keys: Res<ButtonInput<KeyCode>>, mut sloths: Query<(&mut SlothInpu
     };
     for (mut input, mut params) in &mut sloths {
         input.hold = hold;
+        input.around = around;
         if change.is_some() {
             input.change = change;
         }
@@ -319,7 +336,7 @@ fn walk_sloths(time: Res<Time>, mut sloths: Query<(&mut SlothBody, &mut SlothPar
         } else {
             0.0
         };
-        let drive = Drive { direction, change: input.change.take() };
+        let drive = Drive { direction, change: input.change.take(), around: input.around };
         let SlothBody { sloth, supports } = &mut *body;
         sloth.speed = params.speed;
         sloth.step(dt, drive, supports);
@@ -384,5 +401,38 @@ impl DumpState for SlothBody {
         out.insert("mean_speed".into(), json!(sloth.mean_speed()));
         out.insert("body_clearance".into(), json!(sloth.clearance));
         out.insert("min_body_clearance".into(), json!(sloth.min_clearance));
+    }
+}
+
+#[cfg(test)]
+mod probe {
+    use super::locomotion::{Drive, Sloth};
+    use super::rig::Proportions;
+    use super::supports::Supports;
+    use crate::tree::{Shape, SupportSpec, Tree};
+    use bevy::math::Vec3;
+
+    #[test]
+    fn trunk() {
+        let shape = Shape::Polyline { points: vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.05, 4.0, 0.0)], radii: vec![0.16, 0.13, 0.09] };
+        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let mut sloth = Sloth::place(&supports, super::Placement { support: 0, fraction: 0.3, facing: 1.0, around: 0.0 }, Proportions::default(), 0.11).unwrap();
+        let mut worst = 0.0f32;
+        for i in 0..(60 * 30) {
+            let t = i as f32 / 60.0;
+            let drive = if t < 10.0 { Drive { direction: 1.0, ..Default::default() } } else if t < 16.0 { Drive { direction: -1.0, ..Default::default() } } else { Drive { around: 1.0, ..Default::default() } };
+            sloth.step(1.0 / 60.0, drive, &supports);
+            for (k, f) in sloth.feet.iter().enumerate() {
+                let d = supports.paths[0].distance(f.position);
+                if f.planted() && d.abs() > 0.008 && d.abs() > worst {
+                    worst = d.abs();
+                    let rig = &sloth.rigs[k];
+                    let at: Vec<String> = (0..5).map(|j| format!("{:.0}[{:.0},{:.0}]", f.angles[j].to_degrees(), rig.min[j].to_degrees(), rig.max[j].to_degrees())).collect();
+                    println!("t {:.2} limb {k} d {d:.4} {:?} rel {:.3} up {:.2} fwd {:.2}", sloth.time, at, f.grip - rig.root_in(&sloth.frame), sloth.frame.up, sloth.frame.forward);
+                }
+            }
+            if i % 120 == 0 { println!("t {t:.1} centre {:.2} s {:?} stuck {:?}", sloth.frame.centre, sloth.feet.map(|f| (f.s * 100.0).round() / 100.0), sloth.stuck); }
+        }
     }
 }

@@ -12,8 +12,10 @@ pub struct SupportPath {
     pub label: String,
     /// Trunk or branch.
     pub kind: SupportKind,
-    /// Whether it forks from another support (its start then lies inside its parent).
-    pub forked: bool,
+    /// The support it forks from, if any (its start then lies inside that parent): index into
+    /// [`Supports::paths`].
+    pub parent: Option<usize>,
+
     points: Vec<Vec3>,
     radii: Vec<f32>,
     /// Arc length at each point, metres; the first is 0.
@@ -35,7 +37,7 @@ pub struct AxisPoint {
 }
 
 impl SupportPath {
-    fn new(label: String, kind: SupportKind, forked: bool, points: Vec<Vec3>, radii: Vec<f32>) -> Self {
+    fn new(label: String, kind: SupportKind, parent: Option<usize>, points: Vec<Vec3>, radii: Vec<f32>) -> Self {
         let mut arc = Vec::with_capacity(points.len());
         let mut total = 0.0;
         for (i, point) in points.iter().enumerate() {
@@ -44,13 +46,13 @@ impl SupportPath {
             }
             arc.push(total);
         }
-        Self { label, kind, forked, points, radii, arc }
+        Self { label, kind, parent, points, radii, arc }
     }
 
     /// The arc lengths a grip may take: away from free tips by `margin`, but right up to the
     /// start of a fork, where the support grows out of its parent.
     pub fn grip_range(&self, margin: f32) -> (f32, f32) {
-        (if self.forked { 0.0 } else { margin }, self.length() - margin)
+        (if self.parent.is_some() { 0.0 } else { margin }, self.length() - margin)
     }
 
     /// Whether the axis is one straight segment.
@@ -151,17 +153,13 @@ pub struct SupportHit {
 impl Supports {
     /// Collects the supports of named trees.
     pub fn new<'a>(trees: impl IntoIterator<Item = (&'a str, &'a Tree)>) -> Self {
-        let mut paths = Vec::new();
+        let mut paths: Vec<SupportPath> = Vec::new();
         for (name, tree) in trees {
+            let first = paths.len();
             for support in &tree.supports {
                 let label = format!("{name}/{}", support.name);
-                paths.push(SupportPath::new(
-                    label,
-                    support.kind,
-                    support.parent.is_some(),
-                    support.points.clone(),
-                    support.radii.clone(),
-                ));
+                let parent = support.parent.map(|p| first + p);
+                paths.push(SupportPath::new(label, support.kind, parent, support.points.clone(), support.radii.clone()));
             }
         }
         let mut segments = Vec::new();
