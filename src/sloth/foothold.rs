@@ -10,8 +10,9 @@
 //! - it moves the foot at least [`MIN_STEP`] the way the sloth is going;
 //! - the leg order holds: a leading foot never lands behind its pair, a trailing foot never
 //!   passes the leading foot on its side (hind feet stay behind fore feet walking forward);
-//! - the limb reaches it, within its joint limits, from where the body will be at touch-down
-//!   and at the end of the contact that follows (checked by solving the IK).
+//! - with the body where the feet will put it at touch-down, every limb still reaches its grip
+//!   within its joint limits, and the stepping limb also at the end of the contact that
+//!   follows (checked by solving the IK).
 //!
 //! While changing branch, a foot first looks for a grip on the new support beside its stride,
 //! forelimbs first; hind limbs follow once both forelimbs hold the new support.
@@ -77,7 +78,9 @@ impl Sloth {
                 if leading && lead < 0.0 {
                     break;
                 }
-                if (!leading || lead <= MAX_LEAD * stride) && self.valid(limb, &candidate, along, motion, false, supports) {
+                if (!leading || lead <= MAX_LEAD * stride)
+                    && self.valid(limb, &candidate, along, motion, false, supports)
+                {
                     return Some(candidate);
                 }
             }
@@ -110,18 +113,18 @@ impl Sloth {
         let foot = &self.feet[limb.index()];
         let path = &supports.paths[target];
         let stride = self.timing().stride;
-        (0..=8).rev().find_map(|k| {
-            let probe = foot.grip + motion * (stride * k as f32 / 8.0);
-            let (_, s) = path.nearest(probe);
-            let range = path.grip_range(END_MARGIN);
+        let range = path.grip_range(END_MARGIN);
+        let direction = if motion.dot(self.frame.forward) >= 0.0 { 1.0 } else { -1.0 };
+        let try_at = |s: f32| {
             if !(range.0..=range.1).contains(&s) {
                 return None;
             }
-            let along = self.along(path, s, if motion.dot(self.frame.forward) >= 0.0 { 1.0 } else { -1.0 });
+            let along = self.along(path, s, direction);
             let grip = path.surface_towards(s, self.side_on(path, s, limb));
             let candidate = Step { support: target, s, grip };
             self.valid(limb, &candidate, along, motion, true, supports).then_some(candidate)
-        })
+        };
+        (0..=8).rev().find_map(|k| try_at(path.nearest(foot.grip + motion * (stride * k as f32 / 8.0)).1))
     }
 
     /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
@@ -145,13 +148,20 @@ impl Sloth {
         if !ordered {
             return false;
         }
+        // With the body where the feet will put it at touch-down, every foot must still reach
+        // its grip; and the stepping foot also at the end of the contact that follows.
+        let mut feet = self.feet;
+        feet[limb.index()] = Foot { support: step.support, s: step.s, grip: step.grip, swing: None, ..*foot };
+        let grips = feet.map(|f| f.grip);
+        let mut touchdown = self.pose(&feet, &grips, supports, 0.0);
+        body::push_clear(&mut touchdown, &self.proportions, supports);
         let timing = self.timing();
-        let rig = &self.rigs[limb.index()];
-        [timing.swing, timing.cycle].iter().all(|&seconds| {
-            let frame = BodyFrame { centre: self.frame.centre + motion * (self.speed * seconds), ..self.frame };
-            let mut angles = foot.angles;
-            ccd::solve(rig, &frame, &mut angles, step.grip, &self.ccd).error <= GRIP_TOLERANCE
-        })
+        let later = BodyFrame { centre: touchdown.centre + motion * (self.speed * timing.contact()), ..touchdown };
+        let reaches = |l: Limb, frame: &BodyFrame| {
+            let mut angles = feet[l.index()].angles;
+            ccd::solve(&self.rigs[l.index()], frame, &mut angles, grips[l.index()], &self.ccd).error <= GRIP_TOLERANCE
+        };
+        Limb::ALL.iter().all(|&l| reaches(l, &touchdown)) && reaches(limb, &later)
     }
 
     /// The limb's side of `path` at `s`: its right for right limbs. Along a branch that is
@@ -215,11 +225,13 @@ impl Sloth {
                 forward: self.frame.forward,
                 up: half * self.frame.up,
             };
-            [self.frame, turned].iter().all(|frame| {
-                let mut angles = foot.angles;
-                ccd::solve(rig, frame, &mut angles, grip, &self.ccd).error <= GRIP_TOLERANCE
-            })
-            .then_some(candidate)
+            [self.frame, turned]
+                .iter()
+                .all(|frame| {
+                    let mut angles = foot.angles;
+                    ccd::solve(rig, frame, &mut angles, grip, &self.ccd).error <= GRIP_TOLERANCE
+                })
+                .then_some(candidate)
         })
     }
 

@@ -165,7 +165,12 @@ impl Sloth {
 
     /// A sloth placed as `placement` says, with its feet staggered as in the middle of a
     /// diagonal-sequence walk. On a trunk it always faces up.
-    pub fn place(supports: &Supports, placement: Placement, proportions: Proportions, speed: f32) -> Result<Self, PlaceError> {
+    pub fn place(
+        supports: &Supports,
+        placement: Placement,
+        proportions: Proportions,
+        speed: f32,
+    ) -> Result<Self, PlaceError> {
         let Placement { support, fraction, facing, around } = placement;
         let path = supports.paths.get(support).ok_or_else(|| PlaceError::UnknownSupport(format!("#{support}")))?;
         let rigs = limb_rigs(&proportions);
@@ -338,13 +343,32 @@ impl Sloth {
     /// Places the body under the feet and solves every limb's IK.
     fn settle(&mut self, supports: &Supports, dt: f32) {
         let targets = self.feet.map(|f| f.target());
-        let [rh, lf, lh, rf] = targets;
+        let mut frame = self.pose(&self.feet, &targets, supports, dt);
+        body::push_clear(&mut frame, &self.proportions, supports);
+        if dt > 0.0 {
+            self.distance += frame.centre.distance(self.frame.centre);
+        }
+        self.frame = frame;
+        for limb in Limb::ALL {
+            let rig = &self.rigs[limb.index()];
+            let foot = &mut self.feet[limb.index()];
+            ccd::solve(rig, &self.frame, &mut foot.angles, targets[limb.index()], &self.ccd);
+            foot.position = rig.effector(&self.frame, &foot.angles);
+        }
+        self.clearance = body::clearance(&self.frame, &self.proportions, supports);
+        self.min_clearance = self.min_clearance.min(self.clearance);
+    }
+
+    /// Where the body hangs from feet aiming at `targets`, its heading eased over `dt` seconds
+    /// from the current one (taken as is when `dt` is 0), before any clearance push.
+    pub fn pose(&self, feet: &[Foot; 4], targets: &[Vec3; 4], supports: &Supports, dt: f32) -> BodyFrame {
+        let [rh, lf, lh, rf] = *targets;
         // On one trunk the body stays upright along it, turning only about its axis; elsewhere it
         // heads along the feet.
-        let trunk = self.feet[0].support;
-        let on_trunk = supports.paths[trunk].kind == SupportKind::Trunk && self.feet.iter().all(|f| f.support == trunk);
+        let trunk = feet[0].support;
+        let on_trunk = supports.paths[trunk].kind == SupportKind::Trunk && feet.iter().all(|f| f.support == trunk);
         let wanted = if on_trunk {
-            let mean_s = self.feet.iter().map(|f| f.s).sum::<f32>() / 4.0;
+            let mean_s = feet.iter().map(|f| f.s).sum::<f32>() / 4.0;
             let tangent = supports.paths[trunk].at(mean_s).tangent;
             if tangent.y >= 0.0 { tangent } else { -tangent }
         } else {
@@ -353,8 +377,7 @@ impl Sloth {
         let forward = if dt > 0.0 { body::ease_towards(self.frame.forward, wanted, dt, HEADING_EASE) } else { wanted };
         // Each foot pulls the body's belly towards its support: up for a branch, from its grip
         // towards the axis for a trunk (the grips, round the side facing the body, then agree).
-        let pull: Vec3 = self
-            .feet
+        let pull: Vec3 = feet
             .iter()
             .map(|foot| {
                 let path = &supports.paths[foot.support];
@@ -369,20 +392,7 @@ impl Sloth {
             .sum();
         let up = body::perpendicular_towards(pull, forward);
         let mean = targets.iter().copied().sum::<Vec3>() / 4.0;
-        let mut frame = BodyFrame { centre: mean - up * self.proportions.hang, forward, up };
-        body::push_clear(&mut frame, &self.proportions, supports);
-        if dt > 0.0 {
-            self.distance += frame.centre.distance(self.frame.centre);
-        }
-        self.frame = frame;
-        for limb in Limb::ALL {
-            let rig = &self.rigs[limb.index()];
-            let foot = &mut self.feet[limb.index()];
-            ccd::solve(rig, &self.frame, &mut foot.angles, targets[limb.index()], &self.ccd);
-            foot.position = rig.effector(&self.frame, &foot.angles);
-        }
-        self.clearance = body::clearance(&self.frame, &self.proportions, supports);
-        self.min_clearance = self.min_clearance.min(self.clearance);
+        BodyFrame { centre: mean - up * self.proportions.hang, forward, up }
     }
 
     /// Mean speed while moving, metres per second.

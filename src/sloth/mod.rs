@@ -264,8 +264,16 @@ impl Plugin for SlothPlugin {
                 KeyHelp { key: FORWARD_KEY, action: "walk forward, or climb up a trunk (hold)", scope },
                 KeyHelp { key: BACK_KEY, action: "walk back, or climb down a trunk (hold)", scope },
                 KeyHelp { key: AUTORUN_KEY, action: "autorun on or off (stops where no foothold is found)", scope },
-                KeyHelp { key: LEFT_KEY, action: "change to the branch on the left; on a trunk, hold to step round it", scope },
-                KeyHelp { key: RIGHT_KEY, action: "change to the branch on the right; on a trunk, hold to step round it", scope },
+                KeyHelp {
+                    key: LEFT_KEY,
+                    action: "change to the branch on the left; on a trunk, hold to step round it",
+                    scope,
+                },
+                KeyHelp {
+                    key: RIGHT_KEY,
+                    action: "change to the branch on the right; on a trunk, hold to step round it",
+                    scope,
+                },
             ])
             .add_systems(Update, sloth_keys.in_set(ControlSystems::Input))
             .add_systems(Update, place_sloths.in_set(ControlSystems::Apply))
@@ -401,38 +409,5 @@ impl DumpState for SlothBody {
         out.insert("mean_speed".into(), json!(sloth.mean_speed()));
         out.insert("body_clearance".into(), json!(sloth.clearance));
         out.insert("min_body_clearance".into(), json!(sloth.min_clearance));
-    }
-}
-
-#[cfg(test)]
-mod probe {
-    use super::locomotion::{Drive, Sloth};
-    use super::rig::Proportions;
-    use super::supports::Supports;
-    use crate::tree::{Shape, SupportSpec, Tree};
-    use bevy::math::Vec3;
-
-    #[test]
-    fn trunk() {
-        let shape = Shape::Polyline { points: vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.05, 4.0, 0.0)], radii: vec![0.16, 0.13, 0.09] };
-        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
-        let supports = Supports::new([("t", &tree)]);
-        let mut sloth = Sloth::place(&supports, super::Placement { support: 0, fraction: 0.3, facing: 1.0, around: 0.0 }, Proportions::default(), 0.11).unwrap();
-        let mut worst = 0.0f32;
-        for i in 0..(60 * 30) {
-            let t = i as f32 / 60.0;
-            let drive = if t < 10.0 { Drive { direction: 1.0, ..Default::default() } } else if t < 16.0 { Drive { direction: -1.0, ..Default::default() } } else { Drive { around: 1.0, ..Default::default() } };
-            sloth.step(1.0 / 60.0, drive, &supports);
-            for (k, f) in sloth.feet.iter().enumerate() {
-                let d = supports.paths[0].distance(f.position);
-                if f.planted() && d.abs() > 0.008 && d.abs() > worst {
-                    worst = d.abs();
-                    let rig = &sloth.rigs[k];
-                    let at: Vec<String> = (0..5).map(|j| format!("{:.0}[{:.0},{:.0}]", f.angles[j].to_degrees(), rig.min[j].to_degrees(), rig.max[j].to_degrees())).collect();
-                    println!("t {:.2} limb {k} d {d:.4} {:?} rel {:.3} up {:.2} fwd {:.2}", sloth.time, at, f.grip - rig.root_in(&sloth.frame), sloth.frame.up, sloth.frame.forward);
-                }
-            }
-            if i % 120 == 0 { println!("t {t:.1} centre {:.2} s {:?} stuck {:?}", sloth.frame.centre, sloth.feet.map(|f| (f.s * 100.0).round() / 100.0), sloth.stuck); }
-        }
     }
 }

@@ -159,7 +159,13 @@ impl Supports {
             for support in &tree.supports {
                 let label = format!("{name}/{}", support.name);
                 let parent = support.parent.map(|p| first + p);
-                paths.push(SupportPath::new(label, support.kind, parent, support.points.clone(), support.radii.clone()));
+                paths.push(SupportPath::new(
+                    label,
+                    support.kind,
+                    parent,
+                    support.points.clone(),
+                    support.radii.clone(),
+                ));
             }
         }
         let mut segments = Vec::new();
