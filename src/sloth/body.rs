@@ -9,6 +9,7 @@
 
 use super::rig::{BodyFrame, Proportions};
 use super::supports::Supports;
+use crate::tree::TaperedSegment;
 use bevy::math::Vec3;
 
 /// Time constant of the heading's easing, seconds.
@@ -17,52 +18,137 @@ pub const HEADING_EASE: f32 = 0.3;
 /// The smallest distance, metres, the body keeps from any support surface.
 pub const BODY_MARGIN: f32 = 0.01;
 
-/// Spacing of the spheres that stand for the body in clearance checks, metres.
-const SAMPLE_SPACING: f32 = 0.02;
+/// Spacing of the spheres that stand for the body in clearance checks, as a fraction of their
+/// radius: between two spheres the body's surface lies at most 3% of the radius inside theirs.
+const SAMPLE_SPACING: f32 = 0.5;
 
-/// How far around the body clearance queries look, metres: farther supports do not matter.
-const QUERY_RANGE: f32 = 1.0;
+/// Most spheres along one part of the body; a longer part gets a little more overlap between
+/// the spheres' gaps (they stay within [`SAMPLE_SPACING`] for the default proportions).
+const MAX_SPHERES: f32 = 10.0;
 
-/// The spheres the body is made of: along the torso, along the neck, and the head.
-pub fn body_spheres(frame: &BodyFrame, proportions: &Proportions) -> impl Iterator<Item = (Vec3, f32)> {
+/// How far around the body clearance queries look, metres: farther supports do not matter,
+/// and a clearance this large or larger is reported as this.
+pub const QUERY_RANGE: f32 = 0.1;
+
+/// The body's parts as capsules: rear torso, front torso, neck, head (a capsule of no length):
+/// each axis start, end and radius.
+fn parts(frame: &BodyFrame, proportions: &Proportions) -> [(Vec3, Vec3, f32); PARTS] {
     let (hips, shoulders, head) = (frame.hips(proportions), frame.shoulders(proportions), frame.head(proportions));
-    let torso = chain(hips, shoulders, proportions.torso_radius);
-    let neck = chain(shoulders, head, proportions.head_radius * 0.6);
-    torso.chain(neck).chain(std::iter::once((head, proportions.head_radius)))
+    [
+        (hips, frame.centre, proportions.torso_radius),
+        (frame.centre, shoulders, proportions.torso_radius),
+        (shoulders, head, proportions.head_radius * 0.6),
+        (head, head, proportions.head_radius),
+    ]
 }
 
-fn chain(a: Vec3, b: Vec3, radius: f32) -> impl Iterator<Item = (Vec3, f32)> {
-    let count = (a.distance(b) / SAMPLE_SPACING).ceil().max(1.0) as usize;
-    (0..=count).map(move |i| (a.lerp(b, i as f32 / count as f32), radius))
+/// Parts of [`parts`].
+const PARTS: usize = 4;
+
+/// The spheres the body is made of, each with the index of its part.
+pub fn body_spheres(frame: &BodyFrame, proportions: &Proportions) -> impl Iterator<Item = (Vec3, f32, usize)> {
+    parts(frame, proportions).into_iter().enumerate().flat_map(|(part, (a, b, radius))| {
+        let count = (a.distance(b) / (radius * SAMPLE_SPACING)).ceil().clamp(1.0, MAX_SPHERES) as usize;
+        (0..=count).map(move |i| (a.lerp(b, i as f32 / count as f32), radius, part))
+    })
 }
 
-/// The smallest distance from the body's surface to any support, metres (negative if inside);
-/// [`QUERY_RANGE`] when nothing is near.
-pub fn clearance(frame: &BodyFrame, proportions: &Proportions, supports: &Supports) -> f32 {
-    body_spheres(frame, proportions)
-        .map(|(centre, radius)| supports.clearance(centre, QUERY_RANGE) - radius)
-        .fold(QUERY_RANGE, f32::min)
+/// The support segments near each part of the body, gathered with some slack so that most
+/// steps reuse them: they are gathered again once the hips or the head have moved half the
+/// slack.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct NearSupports {
+    /// Where the hips and the head were when the segments were gathered.
+    gathered_at: Option<(Vec3, Vec3)>,
+    /// The segments near each part.
+    parts: [Vec<TaperedSegment>; PARTS],
+}
+
+/// How much farther than [`QUERY_RANGE`] the gathered segments reach, metres.
+const GATHER_SLACK: f32 = 0.05;
+
+impl NearSupports {
+    /// The segments within [`QUERY_RANGE`] of the body at `frame`, all of them.
+    pub fn around(frame: &BodyFrame, proportions: &Proportions, supports: &Supports) -> Self {
+        let mut near = Self::default();
+        near.refresh(frame, proportions, supports);
+        near
+    }
+
+    /// Gathers the segments again if the body has moved too far since the last time, each
+    /// part's with a query ball round that part.
+    pub fn refresh(&mut self, frame: &BodyFrame, proportions: &Proportions, supports: &Supports) {
+        let (hips, head) = (frame.hips(proportions), frame.head(proportions));
+        let fresh = self
+            .gathered_at
+            .is_some_and(|(h, d)| h.distance(hips) < GATHER_SLACK * 0.5 && d.distance(head) < GATHER_SLACK * 0.5);
+        if fresh {
+            return;
+        }
+        let mut found = Vec::new();
+        for (part, (a, b, radius)) in parts(frame, proportions).into_iter().enumerate() {
+            supports.segments_near(
+                (a + b) * 0.5,
+                a.distance(b) * 0.5 + radius + QUERY_RANGE + GATHER_SLACK,
+                &mut found,
+            );
+            self.parts[part].clear();
+            self.parts[part].extend(found.iter().map(|&i| supports.segment(i)));
+        }
+        self.gathered_at = Some((hips, head));
+    }
+}
+
+/// The nearest surface among `segments` to a sphere: its signed distance from the sphere's
+/// surface and the outward normal there.
+fn nearest(segments: &[TaperedSegment], centre: Vec3, radius: f32) -> Option<(f32, Vec3)> {
+    let mut best: Option<(f32, Vec3)> = None;
+    for segment in segments {
+        // A segment whose bounding sphere lies beyond the best so far, or beyond the range
+        // that matters, cannot be nearer.
+        let (middle, bound) = segment.bounding_sphere();
+        let least = centre.distance(middle) - bound;
+        if least - radius > QUERY_RANGE || best.is_some_and(|(distance, _)| least > distance) {
+            continue;
+        }
+        let surface = segment.closest(centre);
+        if best.is_none_or(|(distance, _)| surface.distance < distance) {
+            best = Some((surface.distance, surface.normal));
+        }
+    }
+    best.map(|(distance, normal)| (distance - radius, normal))
 }
 
 /// Moves the body out of any support it comes within [`BODY_MARGIN`] of, a few pushes along
-/// the deepest offender's normal.
-pub fn push_clear(frame: &mut BodyFrame, proportions: &Proportions, supports: &Supports) {
-    for _ in 0..4 {
-        let mut worst: Option<(f32, Vec3)> = None;
-        for (centre, radius) in body_spheres(frame, proportions) {
-            if let Some(hit) = supports.nearest(centre, radius + BODY_MARGIN) {
-                let deficit = radius + BODY_MARGIN - hit.surface.distance;
-                if worst.is_none_or(|(d, _)| deficit > d) {
-                    worst = Some((deficit, hit.surface.normal));
-                }
-            }
-        }
+/// the deepest offender's normal, and returns its clearance then: the smallest distance from
+/// the body's surface to any support, metres (negative if still inside), or [`QUERY_RANGE`]
+/// when nothing is nearer.
+pub fn push_clear(frame: &mut BodyFrame, proportions: &Proportions, near: &NearSupports) -> f32 {
+    let start = frame.centre;
+    let mut pushes = 0;
+    loop {
+        let worst = body_spheres(frame, proportions)
+            .filter_map(|(centre, radius, part)| nearest(&near.parts[part], centre, radius))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
         match worst {
-            Some((deficit, normal)) if deficit > 1e-5 => frame.centre += normal * (deficit + 1e-4),
-            _ => return,
+            Some((distance, normal))
+                if distance < BODY_MARGIN - 1e-5 && pushes < MAX_PUSHES && frame.centre.distance(start) < MAX_PUSH =>
+            {
+                frame.centre += normal * (BODY_MARGIN - distance + 1e-4);
+                pushes += 1;
+            }
+            Some((distance, _)) => return distance.min(QUERY_RANGE),
+            None => return QUERY_RANGE,
         }
     }
 }
+
+/// Most pushes per pose: a body wedged between supports stops there.
+const MAX_PUSHES: u32 = 4;
+
+/// Farthest the body is pushed out of the supports in one pose, metres (within the gathered
+/// range, the supports it could be pushed into are known).
+const MAX_PUSH: f32 = 0.1;
 
 /// The heading the grips ask for: the mean of the hind-to-fore directions on each side, or
 /// `None` if they cancel.
@@ -100,20 +186,26 @@ mod tests {
         let supports = Supports::new([("t", &tree)]);
         let proportions = Proportions::default();
         let mut frame = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
-        assert!(clearance(&frame, &proportions, &supports) < 0.0);
-        push_clear(&mut frame, &proportions, &supports);
-        let after = clearance(&frame, &proportions, &supports);
+        let before = frame;
+        let after = push_clear(&mut frame, &proportions, &NearSupports::around(&before, &proportions, &supports));
         assert!((0.0..0.02).contains(&after), "clearance {after}");
+        assert!(frame.centre != before.centre);
         assert!(frame.centre.y < 0.0);
     }
 
     #[test]
     fn a_clear_body_stays_where_it_is() {
-        let tree = branch_at(0.5);
+        let tree = branch_at(0.2);
         let supports = Supports::new([("t", &tree)]);
         let mut frame = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
-        push_clear(&mut frame, &Proportions::default(), &supports);
+        let near = NearSupports::around(&frame, &Proportions::default(), &supports);
+        let clearance = push_clear(&mut frame, &Proportions::default(), &near);
         assert_eq!(frame.centre, Vec3::ZERO);
+        // The head, a little towards the grips, comes nearest: 0.2 - 0.04 - (0.3 * 0.085 + 0.06).
+        assert!((clearance - 0.0745).abs() < 0.002, "{clearance}");
+        let far = Supports::new([("t", &branch_at(0.5))]);
+        let near = NearSupports::around(&frame, &Proportions::default(), &far);
+        assert_eq!(push_clear(&mut frame, &Proportions::default(), &near), QUERY_RANGE);
     }
 
     #[test]

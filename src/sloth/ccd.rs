@@ -13,7 +13,7 @@
 //! the solver tries again from the rest pose and keeps the better result.
 
 use super::rig::{BodyFrame, JOINTS, LimbRig};
-use bevy::math::{Mat3, Vec3};
+use bevy::math::{Mat3, Quat, Vec3};
 
 /// When the solver stops.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,7 +26,7 @@ pub struct CcdSettings {
 
 impl Default for CcdSettings {
     fn default() -> Self {
-        Self { tolerance: 1e-3, max_sweeps: 16 }
+        Self { tolerance: 3e-3, max_sweeps: 16 }
     }
 }
 
@@ -154,17 +154,24 @@ fn sweeps(
     while taken < settings.max_sweeps && error > settings.tolerance {
         taken += 1;
         let before = error;
+        // Abduction turns last, so the flexion axis holds for the whole sweep.
+        let (abduct, flex) = rig.axes(frame, angles[0]);
         for joint in (0..JOINTS).rev() {
-            let (abduct, flex) = rig.axes(frame, angles[0]);
             let axis = if joint == 0 { abduct } else { flex };
             let pivot = LimbRig::pivot(&points, joint);
             let turn = turn_towards(axis, points[JOINTS - 1] - pivot, target - pivot);
             let turned = (angles[joint] + turn).clamp(rig.min[joint], rig.max[joint]);
             if turned != angles[joint] {
+                // Everything beyond the joint turns rigidly about it.
+                let rotation = Quat::from_axis_angle(axis, turned - angles[joint]);
+                for point in &mut points[joint.max(1)..] {
+                    *point = pivot + rotation * (*point - pivot);
+                }
                 angles[joint] = turned;
-                points = rig.points(frame, angles);
             }
         }
+        // Forward kinematics once per sweep keeps the points exact.
+        points = rig.points(frame, angles);
         error = points[JOINTS - 1].distance(target);
         // Sweeps that gain less than a tenth of the tolerance have stalled.
         if before - error < settings.tolerance * 0.1 {

@@ -17,7 +17,7 @@
 //! While changing branch, a foot first looks for a grip on the new support beside its stride,
 //! forelimbs first; hind limbs follow once both forelimbs hold the new support.
 
-use super::body;
+use super::body::{self, NearSupports};
 use super::ccd;
 use super::locomotion::{END_MARGIN, Foot, GRIP_TOLERANCE, MIN_STEP, RETRY_STEP, Sloth, Step};
 use super::rig::{BodyFrame, Limb};
@@ -154,14 +154,18 @@ impl Sloth {
         feet[limb.index()] = Foot { support: step.support, s: step.s, grip: step.grip, swing: None, ..*foot };
         let grips = feet.map(|f| f.grip);
         let mut touchdown = self.pose(&feet, &grips, supports, 0.0);
-        body::push_clear(&mut touchdown, &self.proportions, supports);
+        let near = NearSupports::around(&touchdown, &self.proportions, supports);
+        body::push_clear(&mut touchdown, &self.proportions, &near);
         let timing = self.timing();
         let later = BodyFrame { centre: touchdown.centre + motion * (self.speed * timing.contact()), ..touchdown };
         let reaches = |l: Limb, frame: &BodyFrame| {
             let mut angles = feet[l.index()].angles;
             ccd::solve(&self.rigs[l.index()], frame, &mut angles, grips[l.index()], &self.ccd).error <= GRIP_TOLERANCE
         };
-        Limb::ALL.iter().all(|&l| reaches(l, &touchdown)) && reaches(limb, &later)
+        // The stepping limb first: it is the one most often out of reach.
+        reaches(limb, &touchdown)
+            && reaches(limb, &later)
+            && Limb::ALL.iter().filter(|&&l| l != limb).all(|&l| reaches(l, &touchdown))
     }
 
     /// The limb's side of `path` at `s`: its right for right limbs. Along a branch that is

@@ -2,7 +2,7 @@
 //! foothold search picks where it lands, the swing carries it there, the body follows the
 //! grips, and every limb's IK reaches for its foot's target.
 
-use super::body::{self, HEADING_EASE};
+use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
 use super::gait::{GaitTiming, SWING_FRACTION, Sequence, SwingArc};
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
@@ -150,6 +150,8 @@ pub struct Sloth {
     pub min_clearance: f32,
     /// IK settings for all limbs.
     pub ccd: CcdSettings,
+    /// The support segments near the body, for its clearance.
+    near: NearSupports,
 }
 
 impl Sloth {
@@ -207,6 +209,7 @@ impl Sloth {
             clearance: f32::INFINITY,
             min_clearance: f32::INFINITY,
             ccd: CcdSettings::default(),
+            near: NearSupports::default(),
         };
         let stride = sloth.timing().stride;
         // Feet where a steady walk would have them when the right hind is about to lift.
@@ -344,7 +347,8 @@ impl Sloth {
     fn settle(&mut self, supports: &Supports, dt: f32) {
         let targets = self.feet.map(|f| f.target());
         let mut frame = self.pose(&self.feet, &targets, supports, dt);
-        body::push_clear(&mut frame, &self.proportions, supports);
+        self.near.refresh(&frame, &self.proportions, supports);
+        self.clearance = body::push_clear(&mut frame, &self.proportions, &self.near);
         if dt > 0.0 {
             self.distance += frame.centre.distance(self.frame.centre);
         }
@@ -355,7 +359,6 @@ impl Sloth {
             ccd::solve(rig, &self.frame, &mut foot.angles, targets[limb.index()], &self.ccd);
             foot.position = rig.effector(&self.frame, &foot.angles);
         }
-        self.clearance = body::clearance(&self.frame, &self.proportions, supports);
         self.min_clearance = self.min_clearance.min(self.clearance);
     }
 

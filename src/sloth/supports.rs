@@ -103,11 +103,11 @@ impl SupportPath {
             across.try_normalize().or(fallback.try_normalize()).unwrap_or(axis.tangent.any_orthonormal_vector());
         let reach = axis.radius + TRACE_START;
         let origin = axis.point + normal * reach;
-        let hit = self
-            .segments()
-            .filter_map(|segment| segment.ray_hit(origin, -normal, reach))
-            .map(|h| h.distance)
-            .reduce(f32::min);
+        // The segment at `s` and its neighbours are the only ones a short trace can meet first.
+        let at = self.arc.partition_point(|&a| a <= s).clamp(1, self.points.len() - 1) - 1;
+        let nearby = at.saturating_sub(1)..(at + 2).min(self.points.len() - 1);
+        let hit =
+            nearby.filter_map(|i| self.segment(i).ray_hit(origin, -normal, reach)).map(|h| h.distance).reduce(f32::min);
         hit.map_or(axis.point + normal * axis.radius, |distance| origin - normal * distance)
     }
 
@@ -196,6 +196,17 @@ impl Supports {
     /// comes that close.
     pub fn clearance(&self, p: Vec3, max_distance: f32) -> f32 {
         self.nearest(p, max_distance).map_or(max_distance, |hit| hit.surface.distance)
+    }
+
+    /// The segments (of every support) whose surface comes within `radius` of `p`, into
+    /// `found` (cleared first), as indices for [`Supports::segment`].
+    pub fn segments_near(&self, p: Vec3, radius: f32, found: &mut Vec<usize>) {
+        self.bvh.within(p, radius, found);
+    }
+
+    /// Segment `index` of [`Supports::segments_near`].
+    pub fn segment(&self, index: usize) -> TaperedSegment {
+        self.bvh.segments()[index]
     }
 
     /// The supports whose surface comes within `radius` of `p`, into `found` (cleared first),
