@@ -19,12 +19,14 @@ pub const HEADING_EASE: f32 = 0.3;
 pub const BODY_MARGIN: f32 = 0.01;
 
 /// Spacing of the spheres that stand for the body in clearance checks, as a fraction of their
-/// radius: between two spheres the body's surface lies at most 3% of the radius inside theirs.
+/// radius: between two spheres the body's surface bulges out of them by at most 3% of the
+/// radius.
 const SAMPLE_SPACING: f32 = 0.5;
 
-/// Most spheres along one part of the body; a longer part gets a little more overlap between
-/// the spheres' gaps (they stay within [`SAMPLE_SPACING`] for the default proportions).
-const MAX_SPHERES: f32 = 10.0;
+/// Most sphere gaps along one part of the body. The thin neck reaches it: its gaps are wider
+/// than [`SAMPLE_SPACING`], and its surface bulges out of its spheres by up to 4.3 mm at the
+/// default proportions, less than [`BODY_MARGIN`].
+const MAX_SPHERES: f32 = 6.0;
 
 /// How far around the body clearance queries look, metres: farther supports do not matter,
 /// and a clearance this large or larger is reported as this.
