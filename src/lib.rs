@@ -9,12 +9,13 @@
 //! | [`ViewPlugin`](view::ViewPlugin) | [`view`] | camera and light entities and their keys |
 //! | [`ShapePlugin`](shape::ShapePlugin) | [`shape`] | the `shape` entity kind |
 //! | [`MusclePlugin`](muscle::MusclePlugin) | [`muscle`] | the `muscle` entity kind |
+//! | [`TreePlugin`](tree::TreePlugin) | [`tree`] | the `tree` entity kind: supports, queries, editing |
+//! | [`SlothPlugin`](sloth::SlothPlugin) | [`sloth`] | the `sloth` entity kind: rig, IK, gait, footholds |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
 //! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: framebuffer, egui panel, key help |
 //!
-//! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps. [`tree`] holds
-//! the pure geometry of trees (tapered segments and the queries over them).
+//! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps.
 #![forbid(unsafe_code)]
 
 pub mod app;

@@ -1,5 +1,5 @@
 //! Gait timing: stride, cycle, contact and swing from the walking speed, the footfall
-//! sequences, and the arc a foot swings along.
+//! sequence, and the arc a foot swings along.
 //!
 //! The source's data: free speed 0.11 +- 0.04 m/s; strides of 0.21-0.83 m (mean about 0.6 m);
 //! contact about twice as long as swing; at 0.2-0.3 m/s the forelimbs' contact lasts 1.50 s and
@@ -47,24 +47,10 @@ impl GaitTiming {
     }
 }
 
-/// Which footfall sequence the limbs follow.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Sequence {
-    /// Diagonal sequence: right hind, left fore, left hind, right fore (free walking).
-    Diagonal,
-    /// Lateral sequence: right hind, right fore, left hind, left fore (transitions).
-    Lateral,
-}
-
-impl Sequence {
-    /// When in the cycle (0 to 1) `limb` lifts off.
-    pub fn offset(self, limb: Limb) -> f32 {
-        let order = match self {
-            Sequence::Diagonal => [Limb::RightHind, Limb::LeftFore, Limb::LeftHind, Limb::RightFore],
-            Sequence::Lateral => [Limb::RightHind, Limb::RightFore, Limb::LeftHind, Limb::LeftFore],
-        };
-        order.iter().position(|&l| l == limb).unwrap_or(0) as f32 * 0.25
-    }
+/// When in the cycle (0 to 1) `limb` lifts off in the diagonal sequence: right hind, left
+/// fore, left hind, right fore, a quarter cycle apart.
+pub fn lift_phase(limb: Limb) -> f32 {
+    limb.index() as f32 * 0.25
 }
 
 /// A foot on its way from one grip to the next.
@@ -116,9 +102,9 @@ mod tests {
     #[test]
     fn the_diagonal_sequence_is_rh_lf_lh_rf() {
         let mut limbs = Limb::ALL;
-        limbs.sort_by(|a, b| Sequence::Diagonal.offset(*a).total_cmp(&Sequence::Diagonal.offset(*b)));
+        limbs.sort_by(|a, b| lift_phase(*a).total_cmp(&lift_phase(*b)));
         assert_eq!(limbs, [Limb::RightHind, Limb::LeftFore, Limb::LeftHind, Limb::RightFore]);
-        assert_eq!(Sequence::Lateral.offset(Limb::RightFore), 0.25);
+        assert_eq!(lift_phase(Limb::RightFore), 0.75);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
-use super::gait::{GaitTiming, SWING_FRACTION, Sequence, SwingArc};
+use super::gait::{self, GaitTiming, SWING_FRACTION, SwingArc};
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
 use crate::tree::SupportKind;
@@ -127,8 +127,6 @@ pub struct Sloth {
     pub frame: BodyFrame,
     /// Where in the gait cycle the clock is, 0 to 1.
     pub phase: f32,
-    /// The footfall sequence in use.
-    pub sequence: Sequence,
     /// The support the sloth is changing to, if it is.
     pub change_to: Option<usize>,
     /// Whether each foot's last foothold search failed.
@@ -198,7 +196,6 @@ impl Sloth {
                 4],
             frame,
             phase: 1.0 - 1e-4,
-            sequence: Sequence::Diagonal,
             change_to: None,
             stuck: [false; 4],
             blocked: None,
@@ -289,7 +286,7 @@ impl Sloth {
         let after = (self.phase + direction * dt / timing.cycle).rem_euclid(1.0);
         self.phase = after;
         for limb in Limb::ALL {
-            let offset = self.sequence.offset(limb);
+            let offset = gait::lift_phase(limb);
             let lift = if direction > 0.0 { offset } else { (offset + SWING_FRACTION).fract() };
             // Whether the clock passed `lift` going from `before` to `after` in `direction`.
             let (from, to) = if direction > 0.0 { (before, after) } else { (after, before) };

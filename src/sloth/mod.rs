@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
-//! | [`gait`] | stride and timing from speed, footfall sequences, swing arcs |
+//! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
 //! | [`supports`] | every support of the scene as a path, with nearest-surface queries |
 //! | [`foothold`] | the foothold search (the source's FindNextStep) |
 //! | [`body`] | the body hanging from its grips, its heading and clearance |

@@ -289,11 +289,6 @@ impl LimbRig {
         let frame = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
         self.effector(&frame, &self.rest).x
     }
-
-    /// Total length from the root to the grip point.
-    pub fn length(&self) -> f32 {
-        self.bones.iter().sum()
-    }
 }
 
 /// The four limb rigs of an animal, indexed like [`Limb::ALL`].
@@ -307,6 +302,16 @@ mod tests {
 
     fn frame() -> BodyFrame {
         BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y }
+    }
+
+    #[test]
+    fn the_default_animal_measures_like_a_two_toed_sloth() {
+        let proportions = Proportions::default();
+        // Body length 0.78-0.87 m; limbs reaching about 0.4 m, as the source's.
+        assert!((0.75..=0.87).contains(&proportions.body_length()), "{}", proportions.body_length());
+        let fore: f32 = proportions.fore_bones.iter().sum();
+        assert!((0.38..=0.5).contains(&fore), "{fore}");
+        assert!((proportions.scaled(1.1).body_length() - 1.1 * proportions.body_length()).abs() < 1e-5);
     }
 
     #[test]
