@@ -254,3 +254,13 @@ fn climbs_a_trunk_head_up_down_tail_first_and_round_it() {
     let turned = (bearing(round) - bearing(down)).abs().to_degrees();
     assert!(turned > 60.0, "went {turned} degrees round");
 }
+
+#[test]
+fn in_the_forest_the_sloth_walks_along_a_bough_and_changes_to_the_branch_beside_it() {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest.yaml")).unwrap();
+    let timeline = "- { at: 0, press: [KeyW] }\n- { at: 2, press: [KeyD] }\n- { at: 2.2, release: [KeyD] }\n";
+    let record = run(&text, timeline, 20.0);
+    assert!(record.violations.is_empty(), "{:#?}", record.violations);
+    assert!(record.final_supports.iter().all(|s| s == "oak/west_twin"), "{:?}", record.final_supports);
+    assert!(record.distance > 1.0, "walked {} m", record.distance);
+}
