@@ -264,3 +264,19 @@ fn in_the_forest_the_sloth_walks_along_a_bough_and_changes_to_the_branch_beside_
     assert!(record.final_supports.iter().all(|s| s == "oak/west_twin"), "{:?}", record.final_supports);
     assert!(record.distance > 1.0, "walked {} m", record.distance);
 }
+
+#[test]
+fn walks_across_the_biological_range_of_speeds_at_the_speed_asked() {
+    let text = std::fs::read_to_string(scene_path("parallel.yaml")).unwrap();
+    for speed in [0.07f32, 0.15, 0.25, 0.3] {
+        let fast = text.replace(
+            "sloth: { support: near, at: 0.2 }",
+            &format!("sloth: {{ support: near, at: 0.2, speed: {speed} }}"),
+        );
+        let record = run(&fast, "- { at: 0, press: [KeyW] }\n", 12.0);
+        assert!(record.violations.is_empty(), "{speed} m/s: {:#?}", record.violations);
+        assert!(record.gait_kept(), "{speed} m/s: {:?}", record.steady_footfalls);
+        let error = (record.mean_speed - speed).abs() / speed;
+        assert!(error < 0.2, "asked {speed} m/s, walked {} m/s", record.mean_speed);
+    }
+}
