@@ -1,12 +1,12 @@
 //! Where a lifted foot lands: the source's FindNextStep against the tree queries.
 //!
 //! The first candidate lies a full stride ahead along the foot's support; each retry tries
-//! [`RETRY_STEP`] closer, a leading foot never closer than its pair's foot. A leading foot also never
-//! lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such that
-//! the pair can always overtake it again. A candidate is valid when
+//! [`RETRY_STEP`] closer, a leading foot never closer than its pair's foot. A leading foot also
+//! never lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such
+//! that the pair can always overtake it again. A candidate is valid when
 //! - it lies on the support, away from its free ends and outside every other support, on the
-//!   limb's side (right limbs grip the right
-//!   side of the branch, left limbs the left), half the branch's thickness from its axis;
+//!   limb's side (right limbs grip the right side of the branch, left limbs the left), half
+//!   the branch's thickness from its axis;
 //! - it moves the foot at least [`MIN_STEP`] the way the sloth is going;
 //! - the leg order holds: a leading foot never lands behind its pair, a trailing foot never
 //!   passes the leading foot on its side (hind feet stay behind fore feet walking forward);
@@ -96,13 +96,12 @@ impl Sloth {
     /// stride (a branch it turns onto, or the one it grows from) and steps onto it.
     fn continuation(&self, limb: Limb, motion: Vec3, supports: &Supports) -> Option<Step> {
         let foot = &self.feet[limb.index()];
-        let probe = foot.grip + motion * (self.timing().stride * 0.5);
-        let (mut segments, mut found) = (Vec::new(), Vec::new());
-        supports.near(probe, self.timing().stride * 0.5, &mut segments, &mut found);
-        let mut candidates: Vec<(usize, f32)> = found
-            .iter()
-            .filter(|&&index| index != foot.support)
-            .map(|&index| (index, supports.paths[index].distance(probe)))
+        let half_stride = self.timing().stride * 0.5;
+        let probe = foot.grip + motion * half_stride;
+        let mut candidates: Vec<(usize, f32)> = supports
+            .others_near(probe, half_stride, foot.support)
+            .into_iter()
+            .map(|index| (index, supports.paths[index].distance(probe)))
             .collect();
         candidates.sort_by(|a, b| a.1.total_cmp(&b.1));
         candidates.iter().find_map(|&(index, _)| self.step_onto(limb, index, motion, supports))
@@ -115,7 +114,8 @@ impl Sloth {
         let stride = self.timing().stride;
         let range = path.grip_range(END_MARGIN);
         let direction = if motion.dot(self.frame.forward) >= 0.0 { 1.0 } else { -1.0 };
-        let try_at = |s: f32| {
+        (0..=8).rev().find_map(|k| {
+            let (_, s) = path.nearest(foot.grip + motion * (stride * k as f32 / 8.0));
             if !(range.0..=range.1).contains(&s) {
                 return None;
             }
@@ -123,13 +123,12 @@ impl Sloth {
             let grip = path.surface_towards(s, self.side_on(path, s, limb));
             let candidate = Step { support: target, s, grip };
             self.valid(limb, &candidate, along, motion, true, supports).then_some(candidate)
-        };
-        (0..=8).rev().find_map(|k| try_at(path.nearest(foot.grip + motion * (stride * k as f32 / 8.0)).1))
+        })
     }
 
     /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
-    /// may step sideways without moving ahead, and a leading foot may land beside its pair. `along` is the way arc length grows in the
-    /// direction of motion on the step's support.
+    /// may step sideways without moving ahead, and a leading foot may land beside its pair.
+    /// `along` is the way arc length grows in the direction of motion on the step's support.
     fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool, supports: &Supports) -> bool {
         let foot = &self.feet[limb.index()];
         // Where a branch grows out of another, its grips must not sink into the other's wood.
@@ -244,13 +243,10 @@ impl Sloth {
         let shoulders = self.frame.shoulders(&self.proportions);
         let sideways = self.frame.right() * side;
         let grips = shoulders + self.frame.up * self.proportions.hang;
-        let current = self.support();
-        let (mut segments, mut found) = (Vec::new(), Vec::new());
-        supports.near(grips, NEIGHBOUR_REACH, &mut segments, &mut found);
-        found
-            .iter()
-            .filter(|&&index| index != current)
-            .filter_map(|&index| {
+        supports
+            .others_near(grips, NEIGHBOUR_REACH, self.support())
+            .into_iter()
+            .filter_map(|index| {
                 let (surface, _) = supports.paths[index].nearest(grips + sideways * 0.1);
                 let beside = (surface.point - grips).dot(sideways);
                 (beside > 0.05).then_some((index, surface.point.distance(grips)))

@@ -209,14 +209,15 @@ impl Supports {
         self.bvh.segments()[index]
     }
 
-    /// The supports whose surface comes within `radius` of `p`, into `found` (cleared first),
-    /// in index order without repeats.
-    pub fn near(&self, p: Vec3, radius: f32, segments: &mut Vec<usize>, found: &mut Vec<usize>) {
-        self.bvh.within(p, radius, segments);
-        found.clear();
-        found.extend(segments.iter().map(|&s| self.owners[s].0));
+    /// The supports other than `except` whose surface comes within `radius` of `p`, in index
+    /// order without repeats.
+    pub fn others_near(&self, p: Vec3, radius: f32, except: usize) -> Vec<usize> {
+        let mut segments = Vec::new();
+        self.bvh.within(p, radius, &mut segments);
+        let mut found: Vec<usize> = segments.iter().map(|&s| self.owners[s].0).filter(|&i| i != except).collect();
         found.sort_unstable();
         found.dedup();
+        found
     }
 }
 
