@@ -147,7 +147,7 @@ impl ScreenVertex {
 /// The largest whole number not above `x`, for `x` well within `i32` (the baseline x86-64
 /// target has no rounding instruction, and the library call is slow).
 #[inline(always)]
-pub(crate) fn floor_i32(x: f32) -> i32 {
+fn floor_i32(x: f32) -> i32 {
     let truncated = x as i32;
     if (truncated as f32) > x { truncated - 1 } else { truncated }
 }
@@ -375,11 +375,11 @@ impl Renderer {
     /// Clears the shadow map and draws the binned light-view triangles into it, depth only.
     fn draw_shadow_map(&mut self, pool: &TaskPool, frame: &Frame) {
         let size = self.shadow.size();
-        let rows = (size * TILE_HEIGHT) as usize;
+        let (stride, first) = self.shadow.row_layout();
         let (chunks, vertices, spans) = (&self.shadow_chunks, &self.light_vertices, &self.spans);
         pool.scope(|scope| {
-            for (row, depth) in self.shadow.depth_mut().chunks_mut(rows).enumerate() {
-                let band = DepthBand { y0: row as u32 * TILE_HEIGHT, width: size, depth };
+            for (row, depth) in self.shadow.rows_mut().chunks_mut(stride * TILE_HEIGHT as usize).enumerate() {
+                let band = DepthBand { y0: row as u32 * TILE_HEIGHT, width: size, stride, first, depth };
                 scope.spawn(async move { tile::draw_depth_band(frame, chunks, vertices, spans, row as u32, band) });
             }
         });

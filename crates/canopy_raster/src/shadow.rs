@@ -8,7 +8,6 @@
 //! (bilinear percentage-closer filtering).
 
 use crate::camera::{Camera, Light};
-use crate::pipeline::floor_i32;
 use bevy_math::{Mat4, Vec3, Vec4};
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
@@ -20,6 +19,10 @@ pub const CONSTANT_BIAS: f32 = 5e-4;
 pub const SLOPE_BIAS: f32 = 1.5;
 
 /// The light's depth image and the projection it was drawn with.
+///
+/// Texels are stored row by row inside a border (one texel before each row and column, two
+/// after) that always holds an infinite depth: a lookup clamped into the border reads "lit",
+/// so filtered and unfiltered lookups need no bounds test per texel.
 #[derive(Debug, Clone, Default)]
 pub struct ShadowMap {
     size: u32,
@@ -28,10 +31,21 @@ pub struct ShadowMap {
     active: bool,
 }
 
+/// Border texels before each row and above the first row.
+const BORDER_BEFORE: usize = 1;
+
+/// Border texels before plus after each row (and above plus below the map).
+const BORDER: usize = 3;
+
 impl ShadowMap {
     /// Edge length of the square map in texels.
     pub fn size(&self) -> u32 {
         self.size
+    }
+
+    /// Distance in the stored depths between vertically neighbouring texels.
+    fn stride(&self) -> usize {
+        self.size as usize + BORDER
     }
 
     /// The depth of texel (`x`, `y`), counted from the top-left corner.
@@ -40,7 +54,7 @@ impl ShadowMap {
     /// If the texel is outside the map.
     pub fn depth_at(&self, x: u32, y: u32) -> f32 {
         assert!(x < self.size && y < self.size, "texel ({x}, {y}) outside the shadow map");
-        self.depth[texel_index(x as usize, y as usize, self.size as usize)]
+        self.depth[(y as usize + BORDER_BEFORE) * self.stride() + x as usize + BORDER_BEFORE]
     }
 
     /// Whether the last frame drew a map (shadows on and something in view to shadow).
@@ -53,26 +67,30 @@ impl ShadowMap {
         self.clip_from_world
     }
 
-    /// Prepares an empty map of `size` x `size` texels drawn through `clip_from_world`, or
-    /// marks it inactive. Keeps the allocation.
-    ///
-    /// # Panics
-    /// If `size` is not a positive multiple of [`BLOCK`].
+    /// Prepares a map of `size` x `size` texels drawn through `clip_from_world`, or marks it
+    /// inactive. Keeps the allocation and the border; the texels are cleared as they are drawn.
     pub(crate) fn reset(&mut self, size: u32, clip_from_world: Option<Mat4>) {
-        assert!(size > 0 && size.is_multiple_of(BLOCK as u32), "shadow maps are a multiple of {BLOCK} texels a side");
         self.active = clip_from_world.is_some();
         self.clip_from_world = clip_from_world.unwrap_or(Mat4::IDENTITY);
-        self.size = size;
-        let texels = size as usize * size as usize;
-        if self.depth.len() != texels {
+        if self.size != size || self.depth.is_empty() {
+            self.size = size;
+            let stride = self.stride();
             self.depth.clear();
-            self.depth.resize(texels, 1.0);
+            self.depth.resize(stride * stride, f32::INFINITY);
         }
     }
 
-    /// Mutable depths for drawing the map in bands of whole block rows (see [`texel_index`]).
-    pub(crate) fn depth_mut(&mut self) -> &mut [f32] {
-        &mut self.depth
+    /// The map's rows for drawing, each [`ShadowMap::row_stride`] long with its texels at
+    /// `BORDER_BEFORE..BORDER_BEFORE + size`.
+    pub(crate) fn rows_mut(&mut self) -> &mut [f32] {
+        let (stride, size) = (self.stride(), self.size as usize);
+        &mut self.depth[BORDER_BEFORE * stride..(BORDER_BEFORE + size) * stride]
+    }
+
+    /// Distance between the rows [`ShadowMap::rows_mut`] returns, and where a row's first
+    /// texel is.
+    pub(crate) fn row_layout(&self) -> (usize, usize) {
+        (self.stride(), BORDER_BEFORE)
     }
 
     /// Where a world point falls in the map: texel x, texel y (from the top-left corner) and
@@ -87,39 +105,35 @@ impl ShadowMap {
     /// shadow. Filtered, the four texels around the point are compared and their results
     /// weighted bilinearly, so shadow edges fade over a texel instead of stepping. Points
     /// outside the map are lit.
-    #[inline(always)]
     pub fn visibility(&self, at: Vec3, filtered: bool) -> f32 {
-        if !filtered {
-            return self.lit(floor_i32(at.x), floor_i32(at.y), at.z);
-        }
-        let (x, y) = (at.x - 0.5, at.y - 0.5);
-        let (x0, y0) = (floor_i32(x), floor_i32(y));
-        let (tx, ty) = (x - x0 as f32, y - y0 as f32);
-        let top = self.lit(x0, y0, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0, at.z) * tx;
-        let bottom = self.lit(x0, y0 + 1, at.z) * (1.0 - tx) + self.lit(x0 + 1, y0 + 1, at.z) * tx;
-        top * (1.0 - ty) + bottom * ty
+        self.visibility_lanes(Vec4::splat(at.x), Vec4::splat(at.y), Vec4::splat(at.z), filtered).x
     }
 
+    /// [`ShadowMap::visibility`] of four points at once, given as texel x, texel y and light
+    /// depth per lane. Any input, even NaN, reads inside the stored depths.
     #[inline(always)]
-    fn lit(&self, x: i32, y: i32, depth: f32) -> f32 {
-        let size = self.size as i32;
-        if x < 0 || y < 0 || x >= size || y >= size {
-            return 1.0;
+    pub fn visibility_lanes(&self, x: Vec4, y: Vec4, depth: Vec4, filtered: bool) -> Vec4 {
+        let (x, y) = if filtered { (x - 0.5, y - 0.5) } else { (x, y) };
+        // Clamped into the border: a point off the map reads only border texels (with a zero
+        // weight on the second texel of a pair when it sits on the far border).
+        let (low, high) = (Vec4::splat(-1.0), Vec4::splat(self.size as f32));
+        let (x, y) = (x.max(low).min(high), y.max(low).min(high));
+        let (column, row) = (x.floor(), y.floor());
+        let stride = self.stride();
+        let (columns, rows) = ((column + 1.0).to_array(), (row + 1.0).to_array());
+        let first: [usize; 4] = std::array::from_fn(|lane| rows[lane] as usize * stride + columns[lane] as usize);
+        let lit = |offset: usize| {
+            let texels = Vec4::from_array(std::array::from_fn(|lane| self.depth[first[lane] + offset]));
+            Vec4::select(depth.cmple(texels), Vec4::ONE, Vec4::ZERO)
+        };
+        if !filtered {
+            return lit(0);
         }
-        if depth <= self.depth[texel_index(x as usize, y as usize, size as usize)] { 1.0 } else { 0.0 }
+        let (tx, ty) = (x - column, y - row);
+        let top = lit(0) * (Vec4::ONE - tx) + lit(1) * tx;
+        let bottom = lit(stride) * (Vec4::ONE - tx) + lit(stride + 1) * tx;
+        top * (Vec4::ONE - ty) + bottom * ty
     }
-}
-
-/// Side of the square blocks the map is stored in.
-pub(crate) const BLOCK: usize = 8;
-
-/// Where texel (`x`, `y`) of a map `size` texels wide is stored: the map is kept in
-/// [`BLOCK`] x [`BLOCK`] blocks, block rows top to bottom, so that the texels a pixel's
-/// neighbourhood reads share cache lines whichever way the light looks. A band of whole block
-/// rows is one contiguous slice.
-#[inline(always)]
-pub(crate) fn texel_index(x: usize, y: usize, size: usize) -> usize {
-    ((y / BLOCK) * (size / BLOCK) + x / BLOCK) * BLOCK * BLOCK + (y % BLOCK) * BLOCK + x % BLOCK
 }
 
 /// The light's world-to-clip matrix for a frame: an orthographic view along the light's
@@ -220,29 +234,14 @@ mod tests {
     }
 
     #[test]
-    fn blocks_store_every_texel_once() {
-        let size = 24;
-        let mut seen = vec![false; size * size];
-        for y in 0..size {
-            for x in 0..size {
-                let index = texel_index(x, y, size);
-                assert!(!seen[index], "({x}, {y})");
-                seen[index] = true;
-            }
-        }
-        // A band of eight rows is one contiguous slice.
-        assert!((0..size).flat_map(|x| (8..16).map(move |y| texel_index(x, y, size))).all(|i| (192..384).contains(&i)));
-    }
-
-    #[test]
     fn visibility_compares_depths_and_filters() {
         let mut map = ShadowMap::default();
         map.reset(8, Some(Mat4::IDENTITY));
         // Columns 0 and 1 hold an occluder at depth 0.3.
-        for y in 0..8 {
-            for x in 0..2 {
-                map.depth_mut()[texel_index(x, y, 8)] = 0.3;
-            }
+        let (stride, first) = map.row_layout();
+        for row in map.rows_mut().chunks_mut(stride) {
+            row[first..first + 2].fill(0.3);
+            row[first + 2..first + 8].fill(1.0);
         }
         assert_eq!(map.depth_at(1, 5), 0.3);
         assert_eq!(map.depth_at(2, 5), 1.0);
@@ -259,5 +258,17 @@ mod tests {
         assert_eq!(at(2.5), 1.0);
         // Negative coordinates round down: the texel left of 0 is outside, so lit.
         assert_eq!(map.visibility(Vec3::new(-0.5, 1.5, 0.6), false), 1.0);
+        // Far off the map, or not a number at all, reads the border: lit, never out of bounds.
+        for at in [Vec3::new(1e30, -1e30, 0.6), Vec3::new(f32::NAN, 1.5, 0.6), Vec3::new(7.9, 7.9, 0.6)] {
+            for filtered in [false, true] {
+                assert_eq!(map.visibility(at, filtered), 1.0, "{at} {filtered}");
+            }
+        }
+        // Four points at once agree with one at a time.
+        let (xs, ys) = (Vec4::new(0.5, 1.75, 2.25, 9.0), Vec4::splat(1.5));
+        let lanes = map.visibility_lanes(xs, ys, Vec4::splat(0.6), true).to_array();
+        for (lane, x) in xs.to_array().into_iter().enumerate() {
+            assert_eq!(lanes[lane], at(x));
+        }
     }
 }
