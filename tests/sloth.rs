@@ -49,6 +49,8 @@ struct Record {
     steady_footfalls: Vec<Vec<Limb>>,
     /// The supports of the four feet at the end.
     final_supports: Vec<String>,
+    /// Each support all four feet held at once, in the order they came to hold it.
+    visited: Vec<String>,
     /// Mean speed while moving, m/s.
     mean_speed: f32,
     /// Body path length, metres.
@@ -83,6 +85,7 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
 
     let mut record = Record::default();
     let mut seen_footfalls = 0;
+    let mut was_steady = false;
     let steps = (seconds * 60.0).round() as usize;
     for _ in 0..steps {
         app.update();
@@ -114,7 +117,12 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
         }
         let one_support = sloth.feet.iter().all(|f| f.support == sloth.feet[0].support);
         let straight = one_support && body.supports.paths[sloth.feet[0].support].is_straight();
-        let steady = straight && sloth.change_to.is_none() && !sloth.stuck.iter().any(|&s| s);
+        // A footfall counts when the sloth walked steadily both before and after the step it
+        // fell in (the hind feet landing together at the end of a transfer do not).
+        let steady_now =
+            straight && sloth.change_to.is_none() && sloth.transfer.is_none() && !sloth.stuck.iter().any(|&s| s);
+        let steady = steady_now && was_steady;
+        was_steady = steady_now;
         if !steady && record.steady_footfalls.last().is_none_or(|stretch| !stretch.is_empty()) {
             record.steady_footfalls.push(Vec::new());
         }
@@ -131,6 +139,9 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
         record.mean_speed = sloth.mean_speed();
         record.distance = sloth.distance;
         record.final_supports = sloth.feet.iter().map(|f| body.supports.paths[f.support].label.clone()).collect();
+        if one_support && record.visited.last() != Some(&record.final_supports[0]) {
+            record.visited.push(record.final_supports[0].clone());
+        }
         record.body = Some(body.clone());
     }
     record
@@ -162,18 +173,24 @@ impl Record {
 }
 
 /// Runs the scene `name` with the swept value for each angle, and returns the angles that
-/// failed with why.
+/// failed with why. Each run must end stopped at the end of `support`, all four feet having
+/// held each support of `via` on the way, in order.
 fn sweep_scene(
     name: &str,
     angles: impl Iterator<Item = i32>,
     value: impl Fn(i32) -> f32,
+    via: &[&str],
     support: &str,
 ) -> Vec<String> {
     let text = std::fs::read_to_string(scene_path(name)).unwrap();
     let mut failed = Vec::new();
     for angle in angles {
-        let record = run(&sweep(&text, value(angle)), "[]", 40.0);
+        let record = run(&sweep(&text, value(angle)), "[]", 60.0);
         let mut failures = record.failures(support);
+        let mut visits = record.visited.iter();
+        if !via.iter().all(|wanted| visits.any(|v| v == wanted)) {
+            failures.push(format!("went by {:?}, not by {via:?}", record.visited));
+        }
         let body = record.body.as_ref().unwrap();
         let sloth = &body.sloth;
         let end = body.supports.paths[sloth.support()].length();
@@ -190,13 +207,42 @@ fn sweep_scene(
 
 #[test]
 fn turns_onto_a_branch_at_90_to_185_degrees() {
-    let failed = sweep_scene("turn.yaml", (90..=185).step_by(5), |angle| 90.0 - (180.0 - angle as f32), "tree/turn");
+    let failed =
+        sweep_scene("turn.yaml", (90..=185).step_by(5), |angle| 90.0 - (180.0 - angle as f32), &[], "tree/turn");
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
 #[test]
 fn follows_a_branch_rising_or_falling_at_125_to_205_degrees_and_stops_at_its_end() {
-    let failed = sweep_scene("height.yaml", (125..=205).step_by(5), |angle| 180.0 - angle as f32, "tree/next");
+    let failed = sweep_scene("height.yaml", (125..=205).step_by(5), |angle| 180.0 - angle as f32, &[], "tree/next");
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn walks_from_a_branch_onto_its_trunk_and_back_at_85_to_150_degrees() {
+    let route = ["tree/limb", "tree/trunk", "tree/limb"];
+    let failed = sweep_scene("transfer.yaml", (85..=150).step_by(5), |angle| angle as f32 - 90.0, &route, "tree/limb");
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn climbs_from_a_trunk_onto_the_branch_above_at_85_to_150_degrees() {
+    let text = std::fs::read_to_string(scene_path("transfer.yaml")).unwrap();
+    let text = text.replace(
+        "sloth: { support: limb, at: 0.6, facing: backward, autorun: true }",
+        "sloth: { support: trunk, at: 0.3, around_deg: 90 }",
+    );
+    let mut failed = Vec::new();
+    for angle in (85..=150).step_by(5) {
+        let record = run(&sweep(&text, angle as f32 - 90.0), "- { at: 0, press: [KeyW] }\n", 20.0);
+        let mut failures: Vec<String> = record.violations.iter().take(3).cloned().collect();
+        if record.visited != ["tree/trunk", "tree/limb"] {
+            failures.push(format!("went by {:?}", record.visited));
+        }
+        if !failures.is_empty() {
+            failed.push(format!("{angle} deg: {}", failures.join("; ")));
+        }
+    }
     assert!(failed.is_empty(), "{failed:#?}");
 }
 

@@ -129,10 +129,7 @@ pub fn push_clear(frame: &mut BodyFrame, proportions: &Proportions, near: &NearS
     let start = frame.centre;
     let mut pushes = 0;
     loop {
-        let worst = body_spheres(frame, proportions)
-            .filter_map(|(centre, radius, part)| nearest(&near.parts[part], centre, radius))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        match worst {
+        match deepest(frame, proportions, near) {
             Some((distance, normal))
                 if distance < BODY_MARGIN - 1e-5 && pushes < MAX_PUSHES && frame.centre.distance(start) < MAX_PUSH =>
             {
@@ -143,6 +140,21 @@ pub fn push_clear(frame: &mut BodyFrame, proportions: &Proportions, near: &NearS
             None => return QUERY_RANGE,
         }
     }
+}
+
+/// The clearance of the body at `frame` without moving it: the smallest distance from its
+/// surface to any support, metres (negative if inside), or [`QUERY_RANGE`] when nothing is
+/// nearer.
+pub fn clearance(frame: &BodyFrame, proportions: &Proportions, near: &NearSupports) -> f32 {
+    deepest(frame, proportions, near).map_or(QUERY_RANGE, |(distance, _)| distance.min(QUERY_RANGE))
+}
+
+/// The body's sphere nearest to a support: its distance from the surface and the surface's
+/// outward normal there.
+fn deepest(frame: &BodyFrame, proportions: &Proportions, near: &NearSupports) -> Option<(f32, Vec3)> {
+    body_spheres(frame, proportions)
+        .filter_map(|(centre, radius, part)| nearest(&near.parts[part], centre, radius))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
 }
 
 /// Most pushes per pose: a body wedged between supports stops there.

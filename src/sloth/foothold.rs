@@ -41,6 +41,9 @@ pub const TRUNK_GRIP_DEG: f32 = 65.0;
 /// Arc a foot moves round a trunk in one side step, metres.
 const SIDE_STEP: f32 = 0.04;
 
+/// Farthest the body may be pushed out of the supports where a step would put it, metres.
+const MAX_PUSH_AT_STEP: f32 = 0.03;
+
 /// How far from the shoulders, sideways, a neighbouring branch is looked for, metres.
 const NEIGHBOUR_REACH: f32 = 0.45;
 
@@ -92,15 +95,18 @@ impl Sloth {
         None
     }
 
-    /// At the end of its support, a leading foot looks for another support ahead within half a
-    /// stride (a branch it turns onto, or the one it grows from) and steps onto it.
+    /// At the end of its support, a leading foot looks for another support of the same kind
+    /// ahead within half a stride (a branch it turns onto, or the one it grows from) and steps
+    /// onto it. Between a branch and a trunk the sloth transfers instead.
     fn continuation(&self, limb: Limb, motion: Vec3, supports: &Supports) -> Option<Step> {
         let foot = &self.feet[limb.index()];
         let half_stride = self.timing().stride * 0.5;
         let probe = foot.grip + motion * half_stride;
+        let kind = supports.paths[foot.support].kind;
         let mut candidates: Vec<(usize, f32)> = supports
             .others_near(probe, half_stride, foot.support)
             .into_iter()
+            .filter(|&index| supports.paths[index].kind == kind)
             .map(|index| (index, supports.paths[index].distance(probe)))
             .collect();
         candidates.sort_by(|a, b| a.1.total_cmp(&b.1));
@@ -154,7 +160,13 @@ impl Sloth {
         let grips = feet.map(|f| f.grip);
         let mut touchdown = self.pose(&feet, &grips, supports, 0.0);
         let near = NearSupports::around(&touchdown, &self.proportions, supports);
+        let hanging = touchdown.centre;
         body::push_clear(&mut touchdown, &self.proportions, &near);
+        // A step that would press the body into a support (its head into the trunk ahead, say)
+        // is not taken: the sloth stops there.
+        if touchdown.centre.distance(hanging) > MAX_PUSH_AT_STEP {
+            return false;
+        }
         let timing = self.timing();
         let later = BodyFrame { centre: touchdown.centre + motion * (self.speed * timing.contact()), ..touchdown };
         let reaches = |l: Limb, frame: &BodyFrame| {

@@ -7,6 +7,7 @@ use super::ccd::{self, CcdSettings};
 use super::gait::{self, GaitTiming, SWING_FRACTION, SwingArc};
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
+use super::transfer::Transfer;
 use crate::tree::SupportKind;
 use bevy::math::Vec3;
 
@@ -112,6 +113,10 @@ pub const RETRY_STEP: f32 = 0.01;
 /// How far the feet keep from a support's ends, metres.
 pub const END_MARGIN: f32 = 0.06;
 
+/// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
+/// is about to lift.
+const PLACED_PHASE: f32 = 1.0 - 1e-4;
+
 /// A sloth and everything its locomotion remembers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sloth {
@@ -148,6 +153,11 @@ pub struct Sloth {
     pub min_clearance: f32,
     /// IK settings for all limbs.
     pub ccd: CcdSettings,
+    /// The transfer between a branch and a trunk under way, if one is.
+    pub transfer: Option<Transfer>,
+    /// Stopped going forward next to a support it may transfer onto, the sloth waits for its
+    /// swinging feet to land before planning the transfer.
+    pub transfer_pending: bool,
     /// The support segments near the body, for its clearance.
     near: NearSupports,
 }
@@ -195,7 +205,7 @@ impl Sloth {
             feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point };
                 4],
             frame,
-            phase: 1.0 - 1e-4,
+            phase: PLACED_PHASE,
             change_to: None,
             stuck: [false; 4],
             blocked: None,
@@ -206,6 +216,8 @@ impl Sloth {
             clearance: f32::INFINITY,
             min_clearance: f32::INFINITY,
             ccd: CcdSettings::default(),
+            transfer: None,
+            transfer_pending: false,
             near: NearSupports::default(),
         };
         let stride = sloth.timing().stride;
@@ -257,14 +269,30 @@ impl Sloth {
             self.blocked = None;
             self.stuck = [false; 4];
         }
+        if self.transfer.is_some() {
+            self.step_transfer(dt, direction != 0.0, supports);
+            return;
+        }
         let on_trunk = supports.paths[self.support()].kind == SupportKind::Trunk;
-        if direction != 0.0 && self.blocked.is_none() {
+        if direction != 0.0 && self.blocked.is_none() && !self.transfer_pending {
             self.moving_time += dt;
             self.advance_clock(dt, direction, supports, None);
+            // Stopped going forward at the trunk a branch grows from, or below a branch: over
+            // onto it if it can be done.
         } else if drive.around != 0.0 && on_trunk && self.change_to.is_none() {
             self.advance_clock(dt, 1.0, supports, Some(drive.around));
         }
         self.advance_swings(dt);
+        if self.transfer_pending && direction < 0.0 {
+            self.transfer_pending = false;
+        }
+        if self.transfer_pending && self.feet.iter().all(Foot::planted) {
+            self.transfer_pending = false;
+            self.transfer = self.plan_transfer(supports);
+            if self.transfer.is_none() {
+                self.blocked = Some(1.0);
+            }
+        }
         if let Some(target) = self.change_to
             && self.feet.iter().all(|f| f.support == target)
         {
@@ -304,7 +332,13 @@ impl Sloth {
             }
             let leading = Limb::ALL.into_iter().filter(|l| l.is_fore() == (direction > 0.0));
             if around.is_none() && leading.into_iter().all(|l| self.stuck[l.index()]) {
-                self.blocked = Some(direction);
+                // Stopped going forward at the trunk its branch grows from, or below a branch
+                // growing from its trunk: over onto it, if that can be done.
+                if direction > 0.0 && self.transfer_in_reach(supports) {
+                    self.transfer_pending = true;
+                } else {
+                    self.blocked = Some(direction);
+                }
             }
         }
     }
@@ -340,12 +374,43 @@ impl Sloth {
         }
     }
 
+    /// One step of the transfer under way; `moving` while the controls ask to move.
+    fn step_transfer(&mut self, dt: f32, moving: bool, supports: &Supports) {
+        let Some(transfer) = &mut self.transfer else { return };
+        let step = transfer.advance(dt, self.proportions.torso_length * 0.5);
+        for (limb, to, duration) in step.lifts {
+            self.lift(limb, to, duration, supports);
+        }
+        if moving {
+            self.moving_time += dt;
+        }
+        self.advance_swings(dt);
+        self.hang(step.frame, false, supports, dt);
+        if step.done {
+            self.transfer = None;
+            self.change_to = None;
+            self.phase = PLACED_PHASE;
+            self.stuck = [false; 4];
+        }
+    }
+
     /// Places the body under the feet and solves every limb's IK.
     fn settle(&mut self, supports: &Supports, dt: f32) {
         let targets = self.feet.map(|f| f.target());
-        let mut frame = self.pose(&self.feet, &targets, supports, dt);
+        let frame = self.pose(&self.feet, &targets, supports, dt);
+        self.hang(frame, true, supports, dt);
+    }
+
+    /// Puts the body at `frame` (pushed clear of the supports if `push`, else as planned) and
+    /// solves every limb's IK for its foot's target.
+    fn hang(&mut self, mut frame: BodyFrame, push: bool, supports: &Supports, dt: f32) {
+        let targets = self.feet.map(|f| f.target());
         self.near.refresh(&frame, &self.proportions, supports);
-        self.clearance = body::push_clear(&mut frame, &self.proportions, &self.near);
+        self.clearance = if push {
+            body::push_clear(&mut frame, &self.proportions, &self.near)
+        } else {
+            body::clearance(&frame, &self.proportions, &self.near)
+        };
         if dt > 0.0 {
             self.distance += frame.centre.distance(self.frame.centre);
         }

@@ -24,6 +24,7 @@ pub mod locomotion;
 pub mod mesh;
 pub mod rig;
 pub mod supports;
+pub mod transfer;
 
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
 pub use supports::Supports;

@@ -1,0 +1,562 @@
+//! Transfers between a branch and the trunk it grows from.
+//!
+//! Walking along a branch towards its trunk, the sloth stops when its head comes near the
+//! trunk; climbing a trunk, when its head comes near a branch growing out above it on its
+//! side. From there it moves onto the other support in three moves, the source's transfer:
+//! 1. and 2. the forelimbs, one after the other, reach for their grips on the new support
+//!    while the body holds still (fore limbs first; the hind limbs stay where they are while a
+//!    fore limb is still on the old support);
+//! 3. both hind limbs let go together and swing over while the body turns about its shoulders
+//!    into its pose on the new support, its hips bowed out from the trunk by up to
+//!    [`HIP_BOW`] (the hindquarters' offset), so that they swing round the trunk, not into it.
+//!
+//! On a trunk the sloth ends up head up below the branch, its head kept clear of the branch
+//! all the way; on a branch, facing out along it. The end pose is the one the sloth would be
+//! placed in there, so the walk resumes from it as from a placement.
+//!
+//! A transfer is planned whole before it starts and checked at closely spaced moments of every
+//! move: each planted foot reaches its grip within its joint limits, and the body keeps
+//! [`BODY_MARGIN`](body::BODY_MARGIN) from every support. Of the end poses tried (nearest the junction first),
+//! the first that passes is taken; if none does, the sloth stays where it stopped.
+
+use super::body::{self, NearSupports};
+use super::ccd;
+use super::foothold::TRUNK_GRIP_DEG;
+use super::locomotion::{Foot, GRIP_TOLERANCE, Placement, Sloth, Step};
+use super::rig::{BodyFrame, Limb};
+use super::supports::Supports;
+use crate::tree::SupportKind;
+use bevy::math::{Mat3, Quat, Vec3};
+use std::f32::consts::PI;
+
+/// Greatest sideways bow of the hips away from the trunk in the body's move, metres.
+pub const HIP_BOW: f32 = 0.15;
+
+/// How far below the junction the body's centre may end on the trunk, metres: tried from the
+/// nearest up, in [`TRY_STEP`] steps.
+const TRUNK_DROP: (f32, f32) = (0.45, 1.0);
+
+/// Where round the trunk the body may end, from the side the branch grows out of, degrees,
+/// in the order tried: off to one side, the head turns aside from the branch.
+const TRUNK_BEARING_DEG: [f32; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
+
+/// How far out along the branch from the trunk's surface the body's centre may end, metres.
+const BRANCH_OUT: (f32, f32) = (0.25, 0.9);
+
+/// Spacing of the end poses tried, metres.
+const TRY_STEP: f32 = 0.05;
+
+/// How the body may turn about its hips while the forelimbs reach for the new support,
+/// degrees (positive: head towards the grips), in the order tried.
+const REACH_PITCH_DEG: [f32; 9] = [0.0, -10.0, 10.0, -20.0, 20.0, -30.0, 30.0, -40.0, 40.0];
+
+/// How far the body may draw back along itself while the forelimbs reach, metres, in the
+/// order tried.
+const REACH_BACK: [f32; 3] = [0.0, 0.05, 0.1];
+
+/// The least clearance a plan keeps between the body and the supports, metres. The body
+/// follows the plan exactly (it is not pushed out to [`BODY_MARGIN`](body::BODY_MARGIN) on the way), so this is
+/// what it keeps.
+const PLAN_CLEARANCE: f32 = 0.002;
+
+/// How closely a plan's planted feet must reach their grips, metres.
+const PLAN_REACH: f32 = 1.5 * GRIP_TOLERANCE;
+
+/// How far along its support a forelimb's grip may move from where a placement puts it,
+/// metres, in the order tried.
+const GRIP_SHIFTS: [f32; 10] = [0.0, -0.05, 0.05, -0.1, 0.1, -0.15, 0.15, -0.2, -0.25, -0.3];
+
+/// How far round a trunk from the side facing the body a forelimb may grip, degrees, in the
+/// order tried (walking, they grip at [`TRUNK_GRIP_DEG`]).
+const TRUNK_GRIP_ROUND_DEG: [f32; 4] = [TRUNK_GRIP_DEG, 50.0, 35.0, 20.0];
+
+/// How far the shoulders may bow out from the trunk (negative: in towards it) and to the
+/// body's right (negative: left) in the body's turn, metres, in the order tried: the head
+/// moves aside from the support above it.
+const SHOULDER_BOW: [(f32, f32); 9] = [
+    (0.0, 0.0),
+    (0.05, 0.0),
+    (-0.05, 0.0),
+    (0.0, 0.05),
+    (0.0, -0.05),
+    (0.05, 0.05),
+    (0.05, -0.05),
+    (0.0, 0.1),
+    (0.0, -0.1),
+];
+
+/// Part of a move the shoulders wait before moving, while the body starts turning.
+const SHOULDER_DELAY: f32 = 0.3;
+
+/// How much farther than its grip a forelimb must reach from the reaching body, metres: a
+/// grip at the edge of its reach is lost as soon as the body turns.
+const REACH_SPARE: f32 = 0.03;
+
+/// Grips tried per forelimb, of those it reaches.
+const GRIPS_TRIED: usize = 3;
+
+/// Moments checked per move of a plan.
+const CHECKS_PER_MOVE: usize = 24;
+
+/// How far above the shoulders the junction of a branch may be for the sloth on the trunk to
+/// transfer onto it, metres (below them when a rising branch leaves room), and how far round
+/// from the side the body hangs on, as a cosine.
+const BRANCH_ABOVE: (f32, f32) = (-0.3, 0.8);
+const BRANCH_BEARING_COS: f32 = 0.5;
+
+/// One move of a transfer: the body goes from one pose to another while some feet swing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Move {
+    from: BodyFrame,
+    to: BodyFrame,
+    /// Where each foot swinging in this move lands, indexed like [`Limb::ALL`].
+    swings: [Option<Step>; 4],
+    /// Which way and how far the hips bow out at mid-move.
+    bow: Vec3,
+    /// Which way and how far the shoulders bow out at mid-move.
+    front_bow: Vec3,
+    /// Seconds.
+    duration: f32,
+}
+
+impl Move {
+    /// The body at `t` (0 start to 1 end): the shoulders on the straight line between their
+    /// two places, the hips following on theirs (bowed out), both eased in and out.
+    fn frame_at(&self, t: f32, half_torso: f32) -> BodyFrame {
+        let t = t.clamp(0.0, 1.0);
+        let eased = t * t * (3.0 - 2.0 * t);
+        let shoulders = |f: &BodyFrame| f.centre + f.forward * half_torso;
+        let hips = |f: &BodyFrame| f.centre - f.forward * half_torso;
+        // The shoulders set off later than the hips: turning first swings the head away from
+        // what is ahead before the shoulders close in on it.
+        let late = ((t - SHOULDER_DELAY) / (1.0 - SHOULDER_DELAY)).clamp(0.0, 1.0);
+        let late = late * late * (3.0 - 2.0 * late);
+        let front = shoulders(&self.from).lerp(shoulders(&self.to), late) + self.front_bow * (PI * eased).sin();
+        let back = hips(&self.from).lerp(hips(&self.to), eased) + self.bow * (PI * eased).sin();
+        // The body's turn, less whatever turns its long axis from the eased turn's onto the
+        // line from hips to shoulders.
+        let turn = orientation(&self.from).slerp(orientation(&self.to), eased);
+        let forward = (front - back).try_normalize().unwrap_or(self.to.forward);
+        let aligned = Quat::from_rotation_arc(turn * Vec3::Z, forward) * turn;
+        BodyFrame {
+            centre: front - forward * half_torso,
+            forward,
+            up: body::perpendicular_towards(aligned * Vec3::Y, forward),
+        }
+    }
+}
+
+/// The rotation taking +z to the body's forward and +y to its up.
+fn orientation(frame: &BodyFrame) -> Quat {
+    Quat::from_mat3(&Mat3::from_cols(frame.up.cross(frame.forward), frame.up, frame.forward))
+}
+
+/// A transfer under way.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transfer {
+    /// The support the sloth moves onto.
+    pub target: usize,
+    moves: [Move; 3],
+    /// The move under way.
+    current: usize,
+    /// Seconds into it; `None` before its feet have lifted.
+    elapsed: Option<f32>,
+}
+
+/// What the sloth does in one step of a transfer.
+pub(super) struct TransferStep {
+    /// Feet lifting now, with where they land and how long they swing.
+    pub lifts: Vec<(Limb, Step, f32)>,
+    /// The body's pose.
+    pub frame: BodyFrame,
+    /// Whether the transfer is over.
+    pub done: bool,
+}
+
+impl Transfer {
+    /// Advances `dt` seconds.
+    pub(super) fn advance(&mut self, dt: f32, half_torso: f32) -> TransferStep {
+        let mut lifts = Vec::new();
+        let elapsed = match self.elapsed {
+            Some(elapsed) => elapsed + dt,
+            None => {
+                let current = &self.moves[self.current];
+                for limb in Limb::ALL {
+                    if let Some(step) = current.swings[limb.index()] {
+                        lifts.push((limb, step, current.duration));
+                    }
+                }
+                dt
+            }
+        };
+        let current = self.moves[self.current];
+        let frame = current.frame_at(elapsed / current.duration, half_torso);
+        let mut done = false;
+        if elapsed >= current.duration {
+            self.elapsed = None;
+            self.current += 1;
+            done = self.current == self.moves.len();
+        } else {
+            self.elapsed = Some(elapsed);
+        }
+        TransferStep { lifts, frame, done }
+    }
+}
+
+impl Sloth {
+    /// A transfer from where the sloth stopped, moving forward, onto the trunk its branch grows
+    /// from or onto a branch growing from its trunk above it; `None` if there is no such
+    /// support nearby or no transfer onto it passes the checks.
+    pub fn plan_transfer(&self, supports: &Supports) -> Option<Transfer> {
+        let support = self.support();
+        if self.feet.iter().any(|f| f.support != support || !f.planted()) {
+            return None;
+        }
+        let (target, ends, out) = match supports.paths[support].kind {
+            SupportKind::Branch => self.trunk_ends(support, supports)?,
+            SupportKind::Trunk => self.branch_ends(support, supports)?,
+        };
+        let reaching = self.reaching_poses(supports);
+        ends.into_iter().find_map(|placement| self.plan_onto(target, placement, &reaching, out, supports))
+    }
+
+    /// Whether there is a support nearby to transfer onto (whether a transfer onto it passes
+    /// the checks is another matter).
+    pub fn transfer_in_reach(&self, supports: &Supports) -> bool {
+        let support = self.support();
+        match supports.paths[support].kind {
+            SupportKind::Branch => self.trunk_ends(support, supports).is_some(),
+            SupportKind::Trunk => self.branch_ends(support, supports).is_some(),
+        }
+    }
+
+    /// The trunk the branch `branch` grows from, if the sloth is heading in to it near the
+    /// junction, with the placements to end in there (head up below the branch) and the way
+    /// out from the trunk.
+    fn trunk_ends(&self, branch: usize, supports: &Supports) -> Option<(usize, Vec<Placement>, Vec3)> {
+        let path = &supports.paths[branch];
+        let trunk = path.parent.filter(|&p| supports.paths[p].kind == SupportKind::Trunk)?;
+        let start = path.at(0.0);
+        let fore_s = self.feet[Limb::RightFore.index()].s.min(self.feet[Limb::LeftFore.index()].s);
+        if self.frame.forward.dot(start.tangent) > 0.0 || fore_s > self.max_stride() + 0.3 {
+            return None;
+        }
+        let trunk_path = &supports.paths[trunk];
+        let (_, junction) = trunk_path.nearest(start.point);
+        // The body hangs on the side of the trunk the branch grows out of, or off to a side.
+        let out = Vec3::new(start.tangent.x, 0.0, start.tangent.z).try_normalize()?;
+        let around = out.x.atan2(out.z);
+        let drops = ((TRUNK_DROP.1 - TRUNK_DROP.0) / TRY_STEP).round() as usize;
+        let ends = TRUNK_BEARING_DEG
+            .into_iter()
+            .flat_map(|bearing| {
+                (0..=drops).map(move |k| Placement {
+                    support: trunk,
+                    fraction: (junction - TRUNK_DROP.0 - k as f32 * TRY_STEP) / trunk_path.length(),
+                    facing: 1.0,
+                    around: around + bearing.to_radians(),
+                })
+            })
+            .collect();
+        Some((trunk, ends, out))
+    }
+
+    /// The nearest branch growing from the trunk `trunk` above the shoulders on the body's
+    /// side, with the placements to end in on it (facing out along it) and the way out from
+    /// the trunk.
+    fn branch_ends(&self, trunk: usize, supports: &Supports) -> Option<(usize, Vec<Placement>, Vec3)> {
+        let trunk_path = &supports.paths[trunk];
+        let shoulders = self.frame.shoulders(&self.proportions);
+        let (_, shoulders_s) = trunk_path.nearest(shoulders);
+        let axis = trunk_path.at(shoulders_s);
+        let out = body::perpendicular_towards(shoulders - axis.point, axis.tangent);
+        let (branch, junction) = (0..supports.paths.len())
+            .filter(|&i| supports.paths[i].parent == Some(trunk) && supports.paths[i].kind == SupportKind::Branch)
+            .filter_map(|i| {
+                let start = supports.paths[i].at(0.0);
+                let (_, junction) = trunk_path.nearest(start.point);
+                let above = (junction - shoulders_s) * axis.tangent.y.signum();
+                let bearing = body::perpendicular_towards(start.tangent, axis.tangent).dot(out);
+                ((BRANCH_ABOVE.0..BRANCH_ABOVE.1).contains(&above) && bearing > BRANCH_BEARING_COS)
+                    .then_some((i, junction))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        let path = &supports.paths[branch];
+        let surface = trunk_path.at(junction).radius;
+        let outs = ((BRANCH_OUT.1 - BRANCH_OUT.0) / TRY_STEP).round() as usize;
+        let ends = (0..=outs)
+            .map(|k| Placement {
+                support: branch,
+                fraction: (surface + BRANCH_OUT.0 + k as f32 * TRY_STEP) / path.length(),
+                facing: 1.0,
+                around: 0.0,
+            })
+            .collect();
+        Some((branch, ends, out))
+    }
+
+    /// The poses the body may hold while the forelimbs move over, with the move into each:
+    /// turned about the hips and drawn back along the body, each checked with the hind feet
+    /// and the right forefoot still on the old support (the left forefoot swinging).
+    fn reaching_poses(&self, supports: &Supports) -> Vec<(BodyFrame, [f32; 4])> {
+        let mut left_swinging = [None; 4];
+        let foot = &self.feet[Limb::LeftFore.index()];
+        left_swinging[Limb::LeftFore.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+        let mut poses = Vec::new();
+        for pitch in REACH_PITCH_DEG {
+            for back in REACH_BACK {
+                let turn = Quat::from_axis_angle(self.frame.right(), -pitch.to_radians());
+                let hips = self.frame.hips(&self.proportions) - self.frame.forward * back;
+                let forward = turn * self.frame.forward;
+                let centre = hips + forward * (self.proportions.torso_length * 0.5);
+                let pose = BodyFrame { centre, forward, up: turn * self.frame.up };
+                let reach = Move {
+                    from: self.frame,
+                    to: pose,
+                    swings: left_swinging,
+                    bow: Vec3::ZERO,
+                    front_bow: Vec3::ZERO,
+                    duration: 1.0,
+                };
+                if let Some(angles) = self.move_passes(&reach, &self.feet, supports) {
+                    poses.push((pose, angles));
+                }
+            }
+        }
+        poses
+    }
+
+    /// The three moves onto the sloth placed as `placement` says, if some way of making them
+    /// passes the checks; `out` points away from the trunk, the way the hips bow.
+    fn plan_onto(
+        &self,
+        target: usize,
+        placement: Placement,
+        reaching: &[(BodyFrame, [f32; 4])],
+        out: Vec3,
+        supports: &Supports,
+    ) -> Option<Transfer> {
+        if !(0.0..=1.0).contains(&placement.fraction) {
+            return None;
+        }
+        let placed = Sloth::place(supports, placement, self.proportions, self.speed).ok()?;
+        let swing = self.timing().swing;
+        let mut hind = [None; 4];
+        for limb in [Limb::RightHind, Limb::LeftHind] {
+            let foot = &placed.feet[limb.index()];
+            hind[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+        }
+        reaching.iter().find_map(|&(pose, _)| {
+            // Each forelimb's grip: the placed one or a variation of it the limb reaches both
+            // from the reaching body and from the placed one.
+            let [lefts, rights] = [Limb::LeftFore, Limb::RightFore].map(|limb| {
+                let rig = &self.rigs[limb.index()];
+                let reaches = |frame: &BodyFrame, target: Vec3| {
+                    let mut angles = rig.rest;
+                    ccd::solve(rig, frame, &mut angles, target, &self.ccd).error <= GRIP_TOLERANCE
+                };
+                // With some reach to spare from the reaching body, which turns on from there.
+                let reached = |step: &Step| {
+                    let beyond = step.grip + (step.grip - rig.root_in(&pose)).normalize_or_zero() * REACH_SPARE;
+                    reaches(&pose, step.grip) && reaches(&pose, beyond) && reaches(&placed.frame, step.grip)
+                };
+                placed.grip_variations(limb, supports).into_iter().filter(reached).take(GRIPS_TRIED).collect::<Vec<_>>()
+            });
+            let pairs = lefts.iter().flat_map(|&left| rights.iter().map(move |&right| (left, right)));
+            pairs.into_iter().find_map(|(left, right)| {
+                // The body ends where these grips put it, as it will once walking resumes.
+                let mut feet = placed.feet;
+                let mut holding = self.feet;
+                for (limb, step) in [(Limb::LeftFore, left), (Limb::RightFore, right)] {
+                    for foot in [&mut feet[limb.index()], &mut holding[limb.index()]] {
+                        (foot.support, foot.s, foot.grip) = (step.support, step.s, step.grip);
+                    }
+                }
+                let mut end = placed.pose(&feet, &feet.map(|f| f.grip), supports, 0.0);
+                let near = NearSupports::around(&end, &self.proportions, supports);
+                if body::push_clear(&mut end, &self.proportions, &near) < PLAN_CLEARANCE {
+                    return None;
+                }
+                let only = |limb: Limb, step: Step| {
+                    let mut swings = [None; 4];
+                    swings[limb.index()] = Some(step);
+                    swings
+                };
+                SHOULDER_BOW.into_iter().find_map(|(outwards, sideways)| {
+                    let front_bow = out * outwards + pose.right() * sideways;
+                    let turn = Move {
+                        from: pose,
+                        to: end,
+                        swings: hind,
+                        bow: out * HIP_BOW,
+                        front_bow,
+                        duration: 2.0 * swing,
+                    };
+                    self.move_passes(&turn, &holding, supports)?;
+                    let still = |swings| Move {
+                        from: pose,
+                        to: pose,
+                        swings,
+                        bow: Vec3::ZERO,
+                        front_bow: Vec3::ZERO,
+                        duration: swing,
+                    };
+                    let reach = Move { from: self.frame, ..still(only(Limb::LeftFore, left)) };
+                    Some(Transfer {
+                        target,
+                        moves: [reach, still(only(Limb::RightFore, right)), turn],
+                        current: 0,
+                        elapsed: None,
+                    })
+                })
+            })
+        })
+    }
+
+    /// Whether, all through `current`, every foot of `feet` not swinging in it reaches its
+    /// grip and the body keeps clear of the supports; `Some` with the worst reach if so.
+    fn move_passes(&self, current: &Move, feet: &[Foot; 4], supports: &Supports) -> Option<[f32; 4]> {
+        let half_torso = self.proportions.torso_length * 0.5;
+        let mut angles = feet.map(|f| f.angles);
+        let mut worst = [0.0f32; 4];
+        let mut near = NearSupports::default();
+        for k in 0..=CHECKS_PER_MOVE {
+            let frame = current.frame_at(k as f32 / CHECKS_PER_MOVE as f32, half_torso);
+            near.refresh(&frame, &self.proportions, supports);
+            if body::clearance(&frame, &self.proportions, &near) < PLAN_CLEARANCE {
+                return None;
+            }
+            for limb in Limb::ALL.into_iter().filter(|l| current.swings[l.index()].is_none()) {
+                let i = limb.index();
+                let solved = ccd::solve(&self.rigs[i], &frame, &mut angles[i], feet[i].grip, &self.ccd);
+                if solved.error > PLAN_REACH {
+                    return None;
+                }
+                worst[i] = worst[i].max(solved.error);
+            }
+        }
+        Some(worst)
+    }
+
+    /// Grips for `limb` near the one it holds, nearest first: on a trunk a little higher or
+    /// lower and less far round, on a branch a little along it either way.
+    fn grip_variations(&self, limb: Limb, supports: &Supports) -> Vec<Step> {
+        let foot = &self.feet[limb.index()];
+        let path = &supports.paths[foot.support];
+        let (low, high) = path.grip_range(0.0);
+        let mut steps = Vec::new();
+        for along in GRIP_SHIFTS {
+            let s = foot.s + along;
+            if !(low..=high).contains(&s) {
+                continue;
+            }
+            match path.kind {
+                SupportKind::Branch => steps.push(Step {
+                    support: foot.support,
+                    s,
+                    grip: path.surface_towards(s, self.side_on(path, s, limb)),
+                }),
+                SupportKind::Trunk => {
+                    let axis = path.at(s);
+                    let facing = body::perpendicular_towards(self.frame.centre - axis.point, axis.tangent);
+                    let side = axis.tangent.cross(facing) * -limb.side();
+                    for round in TRUNK_GRIP_ROUND_DEG {
+                        let (sin, cos) = round.to_radians().sin_cos();
+                        steps.push(Step {
+                            support: foot.support,
+                            s,
+                            grip: path.surface_towards(s, facing * cos + side * sin),
+                        });
+                    }
+                }
+            }
+        }
+        steps
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sloth::locomotion::Drive;
+    use crate::sloth::rig::Proportions;
+    use crate::tree::{Shape, SupportSpec, Tree};
+
+    /// A vertical trunk with a branch growing from it at `angle` degrees to the trunk below.
+    fn tree(angle: f32) -> Tree {
+        let trunk = Shape::Polyline {
+            points: vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 4.0, 0.0)],
+            radii: vec![0.15, 0.13, 0.1],
+        };
+        let limb = Shape::Fork {
+            parent: "trunk".into(),
+            at: 0.5,
+            yaw_deg: 90.0,
+            pitch_deg: angle - 90.0,
+            length: 2.0,
+            radius: [0.06, 0.035],
+            bend_deg: [0.0, 0.0],
+            sections: 1,
+        };
+        let spec = |name: &str, shape| SupportSpec { name: name.into(), shape, kind: None };
+        Tree::build(&[spec("trunk", trunk), spec("limb", limb)]).unwrap()
+    }
+
+    #[test]
+    fn a_move_starts_and_ends_at_its_poses_and_keeps_the_torso_whole() {
+        let from = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
+        let to = BodyFrame { centre: Vec3::new(0.3, -0.2, 0.0), forward: Vec3::Y, up: Vec3::NEG_X };
+        let bow = Vec3::new(0.0, 0.0, HIP_BOW);
+        let moving = Move { from, to, swings: [None; 4], bow, front_bow: Vec3::ZERO, duration: 1.0 };
+        let half = 0.2;
+        for (t, expected) in [(0.0, from), (1.0, to)] {
+            let frame = moving.frame_at(t, half);
+            assert!(frame.centre.distance(expected.centre) < 1e-5 && frame.forward.distance(expected.forward) < 1e-5);
+            assert!(frame.up.distance(expected.up) < 1e-5, "{t}: {frame:?}");
+        }
+        for k in 0..=20 {
+            let frame = moving.frame_at(k as f32 / 20.0, half);
+            assert!((frame.forward.length() - 1.0).abs() < 1e-5 && frame.forward.dot(frame.up).abs() < 1e-5);
+        }
+        // Mid-move the hips bow out sideways.
+        let middle = moving.frame_at(0.5, half);
+        assert!((middle.centre - middle.forward * half).z > 0.1);
+    }
+
+    #[test]
+    fn walking_in_to_the_trunk_it_stops_and_transfers_head_up_keeping_every_grip() {
+        let tree = tree(110.0);
+        let supports = Supports::new([("t", &tree)]);
+        let (trunk, limb) = (supports.find("t/trunk").unwrap(), supports.find("t/limb").unwrap());
+        let placement = Placement { support: limb, fraction: 0.6, facing: -1.0, around: 0.0 };
+        let mut sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        let mut transferred = false;
+        for _ in 0..60 * 20 {
+            sloth.step(1.0 / 60.0, Drive { direction: 1.0, ..Drive::default() }, &supports);
+            transferred |= sloth.transfer.is_some();
+            for foot in sloth.feet.iter().filter(|f| f.planted()) {
+                assert!(supports.paths[foot.support].distance(foot.position).abs() < 0.01);
+            }
+            assert!(sloth.clearance >= 0.0);
+            if transferred && sloth.transfer.is_none() {
+                break;
+            }
+        }
+        assert!(transferred);
+        assert!(sloth.feet.iter().all(|f| f.support == trunk), "{:?}", sloth.feet.map(|f| f.support));
+        assert!(sloth.frame.forward.y > 0.95, "head up: {}", sloth.frame.forward);
+        let head = sloth.frame.head(&sloth.proportions);
+        assert!(head.y < 2.0, "the head stays below the branch: {head}");
+    }
+
+    #[test]
+    fn there_is_nothing_to_transfer_onto_from_a_branch_that_grows_from_no_trunk() {
+        let shape = Shape::Polyline { points: vec![Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0)], radii: vec![0.05, 0.05] };
+        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let placement = Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
+        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        assert!(!sloth.transfer_in_reach(&supports));
+        assert!(sloth.plan_transfer(&supports).is_none());
+    }
+}
