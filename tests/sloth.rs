@@ -301,9 +301,31 @@ fn climbs_a_trunk_head_up_down_tail_first_and_round_it() {
     assert!(turned > 60.0, "went {turned} degrees round");
 }
 
+fn forest() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest.yaml")).unwrap()
+}
+
+#[test]
+fn in_the_forest_the_sloth_walks_onto_the_limb_in_to_the_trunk_down_it_and_up_again() {
+    // W to the trunk (over onto it by 23 s), S down for 4 s, then W up and over onto the limb.
+    let timeline = "- { at: 0, press: [KeyW] }\n- { at: 23, release: [KeyW] }\n- { at: 23, press: [KeyS] }\n\
+                    - { at: 27, release: [KeyS] }\n- { at: 27, press: [KeyW] }\n";
+    let record = run(&forest(), timeline, 45.0);
+    assert!(record.violations.is_empty(), "{:#?}", record.violations);
+    let route = ["cecropia/side", "cecropia/limb", "cecropia/trunk", "cecropia/limb"];
+    assert_eq!(record.visited, route);
+    let height = |seconds: f32| run(&forest(), timeline, seconds).body.unwrap().sloth.frame.centre.y;
+    let (arrived, down, back) = (height(23.0), height(27.0), height(45.0));
+    assert!(arrived - down > 0.2, "climbed down {} m", arrived - down);
+    assert!(back > arrived, "back up on the limb: {back} m, {arrived} m on arriving at the trunk");
+}
+
 #[test]
 fn in_the_forest_the_sloth_walks_along_a_bough_and_changes_to_the_branch_beside_it() {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest.yaml")).unwrap();
+    let text = forest().replace(
+        "sloth: { support: cecropia/side, at: 0.7, facing: backward }",
+        "sloth: { support: oak/west, at: 0.45 }",
+    );
     let timeline = "- { at: 0, press: [KeyW] }\n- { at: 2, press: [KeyD] }\n- { at: 2.2, release: [KeyD] }\n";
     let record = run(&text, timeline, 20.0);
     assert!(record.violations.is_empty(), "{:#?}", record.violations);
