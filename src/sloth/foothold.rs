@@ -2,7 +2,7 @@
 //!
 //! The first candidate lies a full stride ahead along the foot's support; each retry tries
 //! [`RETRY_STEP`] closer, a leading foot never closer than its pair's foot. A leading foot also
-//! never lands more than [`MAX_LEAD`] strides ahead of its pair, which keeps the stagger such
+//! never lands more than `MAX_LEAD` strides ahead of its pair, which keeps the stagger such
 //! that the pair can always overtake it again. A candidate is valid when
 //! - it lies on the support, away from its free ends and outside every other support, on the
 //!   limb's side (right limbs grip the right side of the branch, left limbs the left), half
@@ -216,7 +216,7 @@ impl Sloth {
     }
 
     /// A side step of `limb` around its trunk, towards the body's right if `around` is positive:
-    /// the grip turns about the trunk's axis by up to [`SIDE_STEP`] of arc, less if the limb
+    /// the grip turns about the trunk's axis by up to `SIDE_STEP` of arc, less if the limb
     /// cannot reach that far.
     pub fn find_side_step(&self, limb: Limb, around: f32, supports: &Supports) -> Option<Step> {
         let foot = &self.feet[limb.index()];

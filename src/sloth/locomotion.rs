@@ -1,6 +1,7 @@
 //! One sloth's locomotion, a fixed step at a time: the gait clock lifts each foot in turn, the
 //! foothold search picks where it lands, the swing carries it there, the body follows the
-//! grips, and every limb's IK reaches for its foot's target.
+//! grips, and every limb's IK reaches for its foot's target. Stopped at a trunk or below a
+//! branch, a planned transfer (see [`super::transfer`]) takes over until it is done.
 
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
@@ -277,12 +278,11 @@ impl Sloth {
         if direction != 0.0 && self.blocked.is_none() && !self.transfer_pending {
             self.moving_time += dt;
             self.advance_clock(dt, direction, supports, None);
-            // Stopped going forward at the trunk a branch grows from, or below a branch: over
-            // onto it if it can be done.
         } else if drive.around != 0.0 && on_trunk && self.change_to.is_none() {
             self.advance_clock(dt, 1.0, supports, Some(drive.around));
         }
         self.advance_swings(dt);
+        // A transfer waits for every foot to hold on, and is dropped if asked to go back.
         if self.transfer_pending && direction < 0.0 {
             self.transfer_pending = false;
         }

@@ -1,6 +1,6 @@
 //! The `sloth` entity kind: a two-toed sloth that hangs under branches, walks along them with
-//! a diagonal-sequence gait, turns onto and changes between branches, and stops where a branch
-//! ends.
+//! a diagonal-sequence gait, turns onto and changes between branches, climbs trunks head up,
+//! transfers between a branch and its trunk, and stops where a branch ends.
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -11,6 +11,7 @@
 //! | [`foothold`] | the foothold search (the source's FindNextStep) |
 //! | [`body`] | the body hanging from its grips, its heading and clearance |
 //! | [`locomotion`] | one sloth, one fixed step at a time |
+//! | [`transfer`] | planned moves between a branch and the trunk it grows from |
 //! | [`mesh`] | the render mesh from the pose |
 //!
 //! All of these are pure and tested; this module adds the scene format, the parameters
