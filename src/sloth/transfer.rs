@@ -95,8 +95,11 @@ const REACH_SPARE: f32 = 0.03;
 /// Grips tried per forelimb, of those it reaches.
 const GRIPS_TRIED: usize = 3;
 
-/// Moments checked per move of a plan.
+/// Moments checked per move of a plan, after a first look at [`COARSE_CHECKS`].
 const CHECKS_PER_MOVE: usize = 24;
+
+/// Moments of the first, coarse check of a move.
+const COARSE_CHECKS: usize = 6;
 
 /// How far above the shoulders the junction of a branch may be for the sloth on the trunk to
 /// transfer onto it, metres (below them when a rising branch leaves room), and how far round
@@ -298,7 +301,7 @@ impl Sloth {
     /// The poses the body may hold while the forelimbs move over, with the move into each:
     /// turned about the hips and drawn back along the body, each checked with the hind feet
     /// and the right forefoot still on the old support (the left forefoot swinging).
-    fn reaching_poses(&self, supports: &Supports) -> Vec<(BodyFrame, [f32; 4])> {
+    fn reaching_poses(&self, supports: &Supports) -> Vec<BodyFrame> {
         let mut left_swinging = [None; 4];
         let foot = &self.feet[Limb::LeftFore.index()];
         left_swinging[Limb::LeftFore.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
@@ -318,8 +321,8 @@ impl Sloth {
                     front_bow: Vec3::ZERO,
                     duration: 1.0,
                 };
-                if let Some(angles) = self.move_passes(&reach, &self.feet, supports) {
-                    poses.push((pose, angles));
+                if self.move_holds(&reach, &self.feet, supports) {
+                    poses.push(pose);
                 }
             }
         }
@@ -332,7 +335,7 @@ impl Sloth {
         &self,
         target: usize,
         placement: Placement,
-        reaching: &[(BodyFrame, [f32; 4])],
+        reaching: &[BodyFrame],
         out: Vec3,
         supports: &Supports,
     ) -> Option<Transfer> {
@@ -346,14 +349,17 @@ impl Sloth {
             let foot = &placed.feet[limb.index()];
             hind[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
         }
-        reaching.iter().find_map(|&(pose, _)| {
+        reaching.iter().find_map(|&pose| {
             // Each forelimb's grip: the placed one or a variation of it the limb reaches both
             // from the reaching body and from the placed one.
             let [lefts, rights] = [Limb::LeftFore, Limb::RightFore].map(|limb| {
                 let rig = &self.rigs[limb.index()];
+                let length: f32 = rig.bones.iter().sum();
                 let reaches = |frame: &BodyFrame, target: Vec3| {
+                    // Beyond the limb's length nothing is reached: no need to solve.
                     let mut angles = rig.rest;
-                    ccd::solve(rig, frame, &mut angles, target, &self.ccd).error <= GRIP_TOLERANCE
+                    target.distance(rig.root_in(frame)) <= length
+                        && ccd::solve(rig, frame, &mut angles, target, &self.ccd).error <= GRIP_TOLERANCE
                 };
                 // With some reach to spare from the reaching body, which turns on from there.
                 let reached = |step: &Step| {
@@ -392,7 +398,7 @@ impl Sloth {
                         front_bow,
                         duration: 2.0 * swing,
                     };
-                    self.move_passes(&turn, &holding, supports)?;
+                    self.move_holds(&turn, &holding, supports).then_some(())?;
                     let still = |swings| Move {
                         from: pose,
                         to: pose,
@@ -414,28 +420,26 @@ impl Sloth {
     }
 
     /// Whether, all through `current`, every foot of `feet` not swinging in it reaches its
-    /// grip and the body keeps clear of the supports; `Some` with the worst reach if so.
-    fn move_passes(&self, current: &Move, feet: &[Foot; 4], supports: &Supports) -> Option<[f32; 4]> {
+    /// grip and the body keeps clear of the supports: first at a few moments, which rejects
+    /// most candidates cheaply, then at [`CHECKS_PER_MOVE`].
+    fn move_holds(&self, current: &Move, feet: &[Foot; 4], supports: &Supports) -> bool {
+        [COARSE_CHECKS, CHECKS_PER_MOVE].into_iter().all(|checks| self.holds_at(current, feet, checks, supports))
+    }
+
+    /// [`Sloth::move_holds`] at `checks + 1` evenly spaced moments.
+    fn holds_at(&self, current: &Move, feet: &[Foot; 4], checks: usize, supports: &Supports) -> bool {
         let half_torso = self.proportions.torso_length * 0.5;
         let mut angles = feet.map(|f| f.angles);
-        let mut worst = [0.0f32; 4];
         let mut near = NearSupports::default();
-        for k in 0..=CHECKS_PER_MOVE {
-            let frame = current.frame_at(k as f32 / CHECKS_PER_MOVE as f32, half_torso);
+        (0..=checks).all(|k| {
+            let frame = current.frame_at(k as f32 / checks as f32, half_torso);
             near.refresh(&frame, &self.proportions, supports);
-            if body::clearance(&frame, &self.proportions, &near) < PLAN_CLEARANCE {
-                return None;
-            }
-            for limb in Limb::ALL.into_iter().filter(|l| current.swings[l.index()].is_none()) {
-                let i = limb.index();
-                let solved = ccd::solve(&self.rigs[i], &frame, &mut angles[i], feet[i].grip, &self.ccd);
-                if solved.error > PLAN_REACH {
-                    return None;
-                }
-                worst[i] = worst[i].max(solved.error);
-            }
-        }
-        Some(worst)
+            body::clearance(&frame, &self.proportions, &near) >= PLAN_CLEARANCE
+                && Limb::ALL.into_iter().filter(|l| current.swings[l.index()].is_none()).all(|limb| {
+                    let i = limb.index();
+                    ccd::solve(&self.rigs[i], &frame, &mut angles[i], feet[i].grip, &self.ccd).error <= PLAN_REACH
+                })
+        })
     }
 
     /// Grips for `limb` near the one it holds, nearest first: on a trunk a little higher or
