@@ -3,21 +3,27 @@
 //! Walking along a branch towards its trunk, the sloth stops when its head comes near the
 //! trunk; climbing a trunk, when its head comes near a branch growing out above it on its
 //! side. From there it moves onto the other support in three moves, the source's transfer:
-//! 1. and 2. the forelimbs, one after the other, reach for their grips on the new support
-//!    while the body holds still (fore limbs first; the hind limbs stay where they are while a
-//!    fore limb is still on the old support);
+//! 1. and 2. the left and then the right forelimb reach over to the new support while the body
+//!    holds still or turns a little about its hips (fore limbs first; the hind limbs stay where
+//!    they are while a fore limb is still on the old support);
 //! 3. both hind limbs let go together and swing over while the body turns about its shoulders
 //!    into its pose on the new support, its hips bowed out from the trunk by up to
 //!    [`HIP_BOW`] (the hindquarters' offset), so that they swing round the trunk, not into it.
 //!
+//! The source also names the lateral sequence for these moves; its transfer rules (fore limbs
+//! first, the hind limbs together) fix the order here, a lateral pair of forelimbs and then the
+//! hind pair at once.
+//!
 //! On a trunk the sloth ends up head up below the branch, its head kept clear of the branch
-//! all the way; on a branch, facing out along it. The end pose is the one the sloth would be
-//! placed in there, so the walk resumes from it as from a placement.
+//! all the way (ending a little round the trunk, or with the shoulders' path bowed aside, moves
+//! the head aside from it); on a branch, facing out along it. The hind feet end where a
+//! placement there would put them and the forefeet near that, the body where those grips hold
+//! it, so the walk resumes as from a placement.
 //!
 //! A transfer is planned whole before it starts and checked at closely spaced moments of every
-//! move: each planted foot reaches its grip within its joint limits, and the body keeps
-//! [`BODY_MARGIN`](body::BODY_MARGIN) from every support. Of the end poses tried (nearest the junction first),
-//! the first that passes is taken; if none does, the sloth stays where it stopped.
+//! move: each planted foot reaches its grip within its joint limits, and the body keeps clear
+//! of every support. Of the candidates tried (end poses nearest the junction first), the first
+//! that passes is taken; if none does, the sloth stays where it stopped.
 
 use super::body::{self, NearSupports};
 use super::ccd;
@@ -55,8 +61,8 @@ const REACH_PITCH_DEG: [f32; 9] = [0.0, -10.0, 10.0, -20.0, 20.0, -30.0, 30.0, -
 const REACH_BACK: [f32; 3] = [0.0, 0.05, 0.1];
 
 /// The least clearance a plan keeps between the body and the supports, metres. The body
-/// follows the plan exactly (it is not pushed out to [`BODY_MARGIN`](body::BODY_MARGIN) on the way), so this is
-/// what it keeps.
+/// follows the plan exactly (it is not pushed out to [`BODY_MARGIN`](body::BODY_MARGIN) on the
+/// way), so this is what it keeps.
 const PLAN_CLEARANCE: f32 = 0.002;
 
 /// How closely a plan's planted feet must reach their grips, metres.
