@@ -271,7 +271,7 @@ impl Sloth {
             self.stuck = [false; 4];
         }
         if self.transfer.is_some() {
-            self.step_transfer(dt, direction != 0.0, supports);
+            self.step_transfer(dt, supports);
             return;
         }
         let on_trunk = supports.paths[self.support()].kind == SupportKind::Trunk;
@@ -374,16 +374,15 @@ impl Sloth {
         }
     }
 
-    /// One step of the transfer under way; `moving` while the controls ask to move.
-    fn step_transfer(&mut self, dt: f32, moving: bool, supports: &Supports) {
+    /// One step of the transfer under way. Once begun, a transfer runs to its end (and counts
+    /// as moving) whatever the controls ask.
+    fn step_transfer(&mut self, dt: f32, supports: &Supports) {
         let Some(transfer) = &mut self.transfer else { return };
         let step = transfer.advance(dt, self.proportions.torso_length * 0.5);
         for (limb, to, duration) in step.lifts {
             self.lift(limb, to, duration, supports);
         }
-        if moving {
-            self.moving_time += dt;
-        }
+        self.moving_time += dt;
         self.advance_swings(dt);
         self.hang(step.frame, false, supports, dt);
         if step.done {

@@ -42,6 +42,10 @@ pub const HIP_BOW: f32 = 0.15;
 /// nearest up, in [`TRY_STEP`] steps.
 const TRUNK_DROP: (f32, f32) = (0.45, 1.0);
 
+/// How far out along a branch from its start the forefeet may be for the sloth to transfer
+/// onto the trunk, metres: the head reaches the trunk well before.
+const TRUNK_NEAR: f32 = 0.8;
+
 /// Where round the trunk the body may end, from the side the branch grows out of, degrees,
 /// in the order tried: off to one side, the head turns aside from the branch.
 const TRUNK_BEARING_DEG: [f32; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
@@ -247,7 +251,7 @@ impl Sloth {
         let trunk = path.parent.filter(|&p| supports.paths[p].kind == SupportKind::Trunk)?;
         let start = path.at(0.0);
         let fore_s = self.feet[Limb::RightFore.index()].s.min(self.feet[Limb::LeftFore.index()].s);
-        if self.frame.forward.dot(start.tangent) > 0.0 || fore_s > self.max_stride() + 0.3 {
+        if self.frame.forward.dot(start.tangent) > 0.0 || fore_s > TRUNK_NEAR {
             return None;
         }
         let trunk_path = &supports.paths[trunk];
