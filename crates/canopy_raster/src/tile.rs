@@ -352,8 +352,9 @@ fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
     (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
 }
 
-/// Pixels whose coverage one mask holds.
-const MASK_PIXELS: u32 = 8;
+/// Pixels whose coverage one mask holds: a little wider than most rows of the standard scene's
+/// triangles (about 3 pixels), which then take one mask; 8 was 4% slower on it.
+const MASK_PIXELS: u32 = 6;
 
 /// Which of [`MASK_PIXELS`] pixels in a row, the first with edge functions `e` and each next
 /// one `step` further, are inside: bit `k` for pixel `k`.
