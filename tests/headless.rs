@@ -1,6 +1,8 @@
 //! System tests: the real plugins, headless, on scenes from disk, checked through the state
 //! dump and the framebuffer.
 
+mod common;
+
 use bevy::math::{UVec2, Vec3};
 use canopy::controls::ReloadScene;
 use canopy::dump::dump_state;
@@ -9,7 +11,6 @@ use canopy::run::{RunOptions, RunOutput, run_headless};
 use canopy::scene::{ActiveScene, SceneStatus};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 fn path(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -147,22 +148,9 @@ fn runs_are_deterministic() {
     assert_eq!(a.framebuffer.color(), b.framebuffer.color());
 }
 
-/// A headless app with `scene` loaded and spawned.
+/// A headless app of the small size playing `scene`, once its scene is live.
 fn live_app(scene: &Path) -> bevy::app::App {
-    let mut app = canopy::app::headless_app(scene, SMALL, false).unwrap();
-    update_until(&mut app, |s| s.status == SceneStatus::Live);
-    app.update();
-    app
-}
-
-/// Steps `app` until `done` holds, failing after a generous wall-clock limit (file loads run
-/// on the IO threads).
-fn update_until(app: &mut bevy::app::App, done: impl Fn(&ActiveScene) -> bool) {
-    let started = Instant::now();
-    while !done(app.world().resource::<ActiveScene>()) {
-        assert!(started.elapsed() < Duration::from_secs(30), "timed out");
-        app.update();
-    }
+    common::live_app(scene, SMALL)
 }
 
 #[test]
@@ -171,7 +159,7 @@ fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
     let scene = folder.path().join("live.yaml");
     std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n").unwrap();
     let mut app = canopy::app::headless_app(&scene, SMALL, false).unwrap();
-    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    common::update_until(&mut app, |s| s.status == SceneStatus::Live);
     let names = |app: &mut bevy::app::App| -> Vec<String> {
         let dump = dump_state(app.world_mut());
         dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap().to_string()).collect()
@@ -180,7 +168,7 @@ fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
 
     std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: bx }\n").unwrap();
     app.world_mut().write_message(ReloadScene);
-    update_until(&mut app, |s| s.error.is_some());
+    common::update_until(&mut app, |s| s.error.is_some());
     let scene_state = app.world().resource::<ActiveScene>();
     assert_eq!(scene_state.status, SceneStatus::Live);
     let error = scene_state.error.clone().unwrap();
@@ -190,7 +178,7 @@ fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
 
     std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n  - name: second\n    shape: { primitive: sphere }\n").unwrap();
     app.world_mut().write_message(ReloadScene);
-    update_until(&mut app, |s| s.generation == 2);
+    common::update_until(&mut app, |s| s.generation == 2);
     app.update();
     assert_eq!(app.world().resource::<ActiveScene>().error, None);
     assert_eq!(names(&mut app), ["camera", "light", "render", "first", "second"]);

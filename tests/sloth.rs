@@ -2,13 +2,13 @@
 //! at every fixed step: planted feet on their support's surface, joints within limits, the body
 //! never inside a support, no NaN; and at the end: progress, speed, gait order.
 
+mod common;
+
 use bevy::math::{UVec2, Vec3};
 use canopy::controls::timeline::Timeline;
-use canopy::scene::{ActiveScene, SceneStatus};
 use canopy::sloth::SlothBody;
 use canopy::sloth::rig::Limb;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 const SIZE: UVec2 = UVec2::new(64, 48);
 
@@ -70,15 +70,7 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
     std::fs::write(&scene, text).unwrap();
     let timeline_file = folder.path().join("timeline.yaml");
     std::fs::write(&timeline_file, timeline).unwrap();
-    let mut app = canopy::app::headless_app(&scene, SIZE, false).unwrap();
-    let started = Instant::now();
-    while app.world().resource::<ActiveScene>().status != SceneStatus::Live {
-        let scene = app.world().resource::<ActiveScene>();
-        assert!(scene.status != SceneStatus::Failed, "{:?}", scene.error);
-        assert!(started.elapsed() < Duration::from_secs(30), "timed out loading");
-        app.update();
-    }
-    app.update();
+    let mut app = common::live_app(&scene, SIZE);
     let timeline = Timeline::load(&timeline_file).unwrap();
     timeline.check(app.world_mut()).unwrap();
     app.insert_resource(timeline);
