@@ -164,6 +164,14 @@ fn orientation(frame: &BodyFrame) -> Quat {
     Quat::from_mat3(&Mat3::from_cols(frame.up.cross(frame.forward), frame.up, frame.forward))
 }
 
+/// Where a transfer ends: the support, a sloth placed there, and the way out from the trunk
+/// (the way the hips bow).
+struct Ending {
+    target: usize,
+    placed: Sloth,
+    out: Vec3,
+}
+
 /// A transfer under way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Transfer {
@@ -353,78 +361,74 @@ impl Sloth {
             return None;
         }
         let placed = Sloth::place(supports, placement, self.proportions, self.speed).ok()?;
-        let swing = self.timing().swing;
-        let mut hind = [None; 4];
-        for limb in [Limb::RightHind, Limb::LeftHind] {
-            let foot = &placed.feet[limb.index()];
-            hind[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
-        }
+        let ending = Ending { target, placed, out };
         reaching.iter().find_map(|&pose| {
-            // Each forelimb's grip: the placed one or a variation of it the limb reaches both
-            // from the reaching body and from the placed one.
-            let [lefts, rights] = [Limb::LeftFore, Limb::RightFore].map(|limb| {
-                let rig = &self.rigs[limb.index()];
-                let length: f32 = rig.bones.iter().sum();
-                let reaches = |frame: &BodyFrame, target: Vec3| {
-                    // Beyond the limb's length nothing is reached: no need to solve.
-                    let mut angles = rig.rest;
-                    target.distance(rig.root_in(frame)) <= length
-                        && ccd::solve(rig, frame, &mut angles, target, &self.ccd).error <= GRIP_TOLERANCE
-                };
-                // With some reach to spare from the reaching body, which turns on from there.
-                let reached = |step: &Step| {
-                    let beyond = step.grip + (step.grip - rig.root_in(&pose)).normalize_or_zero() * REACH_SPARE;
-                    reaches(&pose, step.grip) && reaches(&pose, beyond) && reaches(&placed.frame, step.grip)
-                };
-                placed.grip_variations(limb, supports).into_iter().filter(reached).take(GRIPS_TRIED).collect::<Vec<_>>()
-            });
+            let [lefts, rights] =
+                [Limb::LeftFore, Limb::RightFore].map(|limb| self.fore_grips(limb, &pose, &ending.placed, supports));
             let pairs = lefts.iter().flat_map(|&left| rights.iter().map(move |&right| (left, right)));
-            pairs.into_iter().find_map(|(left, right)| {
-                // The body ends where these grips put it, as it will once walking resumes.
-                let mut feet = placed.feet;
-                let mut holding = self.feet;
-                for (limb, step) in [(Limb::LeftFore, left), (Limb::RightFore, right)] {
-                    for foot in [&mut feet[limb.index()], &mut holding[limb.index()]] {
-                        (foot.support, foot.s, foot.grip) = (step.support, step.s, step.grip);
-                    }
-                }
-                let mut end = placed.pose(&feet, &feet.map(|f| f.grip), supports, 0.0);
-                let near = NearSupports::around(&end, &self.proportions, supports);
-                if body::push_clear(&mut end, &self.proportions, &near) < PLAN_CLEARANCE {
-                    return None;
-                }
-                let only = |limb: Limb, step: Step| {
-                    let mut swings = [None; 4];
-                    swings[limb.index()] = Some(step);
-                    swings
-                };
-                SHOULDER_BOW.into_iter().find_map(|(outwards, sideways)| {
-                    let front_bow = out * outwards + pose.right() * sideways;
-                    let turn = Move {
-                        from: pose,
-                        to: end,
-                        swings: hind,
-                        bow: out * HIP_BOW,
-                        front_bow,
-                        duration: 2.0 * swing,
-                    };
-                    self.move_holds(&turn, &holding, supports).then_some(())?;
-                    let still = |swings| Move {
-                        from: pose,
-                        to: pose,
-                        swings,
-                        bow: Vec3::ZERO,
-                        front_bow: Vec3::ZERO,
-                        duration: swing,
-                    };
-                    let reach = Move { from: self.frame, ..still(only(Limb::LeftFore, left)) };
-                    Some(Transfer {
-                        target,
-                        moves: [reach, still(only(Limb::RightFore, right)), turn],
-                        current: 0,
-                        elapsed: None,
-                    })
-                })
+            pairs.into_iter().find_map(|(left, right)| self.moves_onto(&ending, pose, [left, right], supports))
+        })
+    }
+
+    /// Up to [`GRIPS_TRIED`] grips for forelimb `limb` on the new support, nearest the placed
+    /// sloth's first: each reached from the placed body, and from the reaching body `pose` with
+    /// [`REACH_SPARE`] to spare (that body turns on from there).
+    fn fore_grips(&self, limb: Limb, pose: &BodyFrame, placed: &Sloth, supports: &Supports) -> Vec<Step> {
+        let rig = &self.rigs[limb.index()];
+        let length: f32 = rig.bones.iter().sum();
+        let reaches = |frame: &BodyFrame, target: Vec3| {
+            // Beyond the limb's length nothing is reached: no need to solve.
+            let mut angles = rig.rest;
+            target.distance(rig.root_in(frame)) <= length
+                && ccd::solve(rig, frame, &mut angles, target, &self.ccd).error <= GRIP_TOLERANCE
+        };
+        let reached = |step: &Step| {
+            let beyond = step.grip + (step.grip - rig.root_in(pose)).normalize_or_zero() * REACH_SPARE;
+            reaches(pose, step.grip) && reaches(pose, beyond) && reaches(&placed.frame, step.grip)
+        };
+        placed.grip_variations(limb, supports).into_iter().filter(reached).take(GRIPS_TRIED).collect()
+    }
+
+    /// The transfer whose forelimbs reach from the body at `pose` to the grips `fore` (left,
+    /// right) and whose body then turns into the pose those grips and the placed sloth's hind
+    /// grips hold, if one of the shoulder paths tried passes the checks.
+    fn moves_onto(&self, ending: &Ending, pose: BodyFrame, fore: [Step; 2], supports: &Supports) -> Option<Transfer> {
+        let [left, right] = fore;
+        // The body ends where the grips put it, as it will once walking resumes.
+        let mut feet = ending.placed.feet;
+        let mut holding = self.feet;
+        for (limb, step) in [(Limb::LeftFore, left), (Limb::RightFore, right)] {
+            for foot in [&mut feet[limb.index()], &mut holding[limb.index()]] {
+                (foot.support, foot.s, foot.grip) = (step.support, step.s, step.grip);
+            }
+        }
+        let mut end = ending.placed.pose(&feet, &feet.map(|f| f.grip), supports, 0.0);
+        let near = NearSupports::around(&end, &self.proportions, supports);
+        if body::push_clear(&mut end, &self.proportions, &near) < PLAN_CLEARANCE {
+            return None;
+        }
+        let swing = self.timing().swing;
+        let swinging = |limbs: &[Limb]| {
+            let mut swings = [None; 4];
+            for &limb in limbs {
+                let foot = &feet[limb.index()];
+                swings[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+            }
+            swings
+        };
+        let still =
+            |swings| Move { from: pose, to: pose, swings, bow: Vec3::ZERO, front_bow: Vec3::ZERO, duration: swing };
+        let reach = Move { from: self.frame, ..still(swinging(&[Limb::LeftFore])) };
+        let hind = swinging(&[Limb::RightHind, Limb::LeftHind]);
+        SHOULDER_BOW.into_iter().find_map(|(outwards, sideways)| {
+            let front_bow = ending.out * outwards + pose.right() * sideways;
+            let bow = ending.out * HIP_BOW;
+            let turn = Move { from: pose, to: end, swings: hind, bow, front_bow, duration: 2.0 * swing };
+            self.move_holds(&turn, &holding, supports).then(|| Transfer {
+                target: ending.target,
+                moves: [reach, still(swinging(&[Limb::RightFore])), turn],
+                current: 0,
+                elapsed: None,
             })
         })
     }
