@@ -158,7 +158,7 @@ pub struct Sloth {
     pub transfer: Option<Transfer>,
     /// Stopped going forward next to a support it may transfer onto, the sloth waits for its
     /// swinging feet to land before planning the transfer.
-    pub transfer_pending: bool,
+    transfer_pending: bool,
     /// The support segments near the body, for its clearance.
     near: NearSupports,
 }
