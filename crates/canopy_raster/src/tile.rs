@@ -526,9 +526,7 @@ fn fill_depth(setup: &Setup, band: &mut DepthBand) {
         let z = (Vec4::splat(z0 + bias) + l1 * dz1 + l2 * dz2).to_array();
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
         for (texel, z) in band.depth[at..at + lanes].iter_mut().zip(z) {
-            if z < *texel {
-                *texel = z;
-            }
+            *texel = texel.min(z);
         }
     });
 }
