@@ -103,11 +103,12 @@ pub struct RenderStats {
     pub shadow_triangles: usize,
 }
 
-/// A vertex projected to the screen: its clip position, which planes it is outside of, and
-/// (when it needs no clipping) its fixed-point screen position, depth and `1/w`.
+/// A vertex projected to the screen: which planes it is outside of and (when it needs no
+/// clipping) its fixed-point screen position, depth and `1/w`. Kept small, as the tiles read
+/// it scattered: the rare triangle that needs clipping computes its clip positions again from
+/// the world positions.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct ScreenVertex {
-    pub clip: Vec4,
     /// [`outside`] bits.
     pub code: u8,
     /// Screen x in sub-pixel units.
@@ -125,7 +126,7 @@ impl ScreenVertex {
     fn new(clip: Vec4, width: u32, height: u32) -> Self {
         let code = outcode(clip);
         if code & outside::CLIPPED != 0 {
-            return Self { clip, code, ..Self::default() };
+            return Self { code, ..Self::default() };
         }
         Self { code, ..Self::projected(clip, width, height) }
     }
@@ -140,7 +141,7 @@ impl ScreenVertex {
         let limit = 3.0 * MAX_TARGET_SIZE as f32 * steps;
         let x = floor_i32(((ndc.x + 1.0) * 0.5 * width as f32 * steps).clamp(-limit, limit) + 0.5);
         let y = floor_i32(((1.0 - ndc.y) * 0.5 * height as f32 * steps).clamp(-limit, limit) + 0.5);
-        Self { clip, code: 0, x, y, z: ndc.z.max(0.0), inv_w }
+        Self { code: 0, x, y, z: ndc.z.max(0.0), inv_w }
     }
 }
 
@@ -200,9 +201,11 @@ struct Geometry<'a> {
     varyings: Option<&'a [Varyings]>,
 }
 
-/// A view being binned: its projected vertices, its target size and whether back faces go.
+/// A view being binned: its projection, its projected vertices, its target size and whether
+/// back faces go.
 #[derive(Clone, Copy)]
 struct BinTarget<'a> {
+    clip_from_world: Mat4,
     vertices: &'a [ScreenVertex],
     width: u32,
     height: u32,
@@ -262,16 +265,29 @@ impl Renderer {
         };
         self.shadow.reset(settings.shadow_map_size, light_clip);
 
-        self.vertex_stage(pool, frame, aspect, width, height, light_clip);
+        let view_projection = frame.camera.view_projection(aspect);
+        self.vertex_stage(pool, frame, view_projection, width, height, light_clip);
         let threads = pool.thread_num().max(1);
-        if light_clip.is_some() {
+        if let Some(light_clip) = light_clip {
             let size = settings.shadow_map_size;
-            let view = BinTarget { vertices: &self.light_vertices, width: size, height: size, cull_back_faces: false };
+            let view = BinTarget {
+                clip_from_world: light_clip,
+                vertices: &self.light_vertices,
+                width: size,
+                height: size,
+                cull_back_faces: false,
+            };
             let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: None };
             stats.shadow_triangles = bin(pool, threads, &mut self.shadow_chunks, geometry, frame, view);
             self.draw_shadow_map(pool, frame);
         }
-        let view = BinTarget { vertices: &self.vertices, width, height, cull_back_faces: true };
+        let view = BinTarget {
+            clip_from_world: view_projection,
+            vertices: &self.vertices,
+            width,
+            height,
+            cull_back_faces: true,
+        };
         let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: Some(&self.varyings) };
         stats.triangles_rasterized = bin(pool, threads, &mut self.chunks, geometry, frame, view);
 
@@ -308,7 +324,7 @@ impl Renderer {
         &mut self,
         pool: &TaskPool,
         frame: &Frame,
-        aspect: f32,
+        view_projection: Mat4,
         width: u32,
         height: u32,
         light_clip: Option<Mat4>,
@@ -330,7 +346,6 @@ impl Renderer {
         self.varyings.resize(vertices, [0.0; VARYINGS]);
         self.light_vertices.resize(if light_clip.is_some() { vertices } else { 0 }, ScreenVertex::default());
 
-        let view_projection = frame.camera.view_projection(aspect);
         let threads = pool.thread_num().max(1);
         let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
         let (spans, shadow, map_size) = (&self.spans, &self.shadow, frame.settings.shadow_map_size);
@@ -489,7 +504,7 @@ fn bin_run(chunk: &mut Chunk, range: Range<usize>, geometry: Geometry, frame: &F
         let vertex_varyings = indices.map(|i| geometry.varyings.map_or([0.0; VARYINGS], |v| v[i]));
         let flat_diffuse = flat_diffuse(indices.map(|i| geometry.world[i]), &frame.light);
         let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
-            position: corners[k].clip,
+            position: view.clip_from_world * geometry.world[indices[k]].extend(1.0),
             varyings: vertex_varyings[k],
         }));
         let polygon = clip.vertices();
