@@ -384,7 +384,8 @@ impl Sloth {
         }
         self.moving_time += dt;
         self.advance_swings(dt);
-        self.hang(step.frame, false, supports, dt);
+        let targets = self.feet.map(|f| f.target());
+        self.hang(step.frame, &targets, false, supports, dt);
         if step.done {
             self.transfer = None;
             self.change_to = None;
@@ -397,13 +398,12 @@ impl Sloth {
     fn settle(&mut self, supports: &Supports, dt: f32) {
         let targets = self.feet.map(|f| f.target());
         let frame = self.pose(&self.feet, &targets, supports, dt);
-        self.hang(frame, true, supports, dt);
+        self.hang(frame, &targets, true, supports, dt);
     }
 
     /// Puts the body at `frame` (pushed clear of the supports if `push`, else as planned) and
-    /// solves every limb's IK for its foot's target.
-    fn hang(&mut self, mut frame: BodyFrame, push: bool, supports: &Supports, dt: f32) {
-        let targets = self.feet.map(|f| f.target());
+    /// solves every limb's IK for its foot's target of `targets`.
+    fn hang(&mut self, mut frame: BodyFrame, targets: &[Vec3; 4], push: bool, supports: &Supports, dt: f32) {
         self.near.refresh(&frame, &self.proportions, supports);
         self.clearance = if push {
             body::push_clear(&mut frame, &self.proportions, &self.near)

@@ -233,10 +233,7 @@ impl Sloth {
         if self.feet.iter().any(|f| f.support != support || !f.planted()) {
             return None;
         }
-        let (target, ends, out) = match supports.paths[support].kind {
-            SupportKind::Branch => self.trunk_ends(support, supports)?,
-            SupportKind::Trunk => self.branch_ends(support, supports)?,
-        };
+        let (target, ends, out) = self.transfer_ends(supports)?;
         let reaching = self.reaching_poses(supports);
         ends.into_iter().find_map(|placement| self.plan_onto(target, placement, &reaching, out, supports))
     }
@@ -244,10 +241,16 @@ impl Sloth {
     /// Whether there is a support nearby to transfer onto (whether a transfer onto it passes
     /// the checks is another matter).
     pub fn transfer_in_reach(&self, supports: &Supports) -> bool {
+        self.transfer_ends(supports).is_some()
+    }
+
+    /// The support to transfer onto from the one the forelimbs lead on, the placements to end
+    /// in there, nearest the junction first, and the way out from the trunk.
+    fn transfer_ends(&self, supports: &Supports) -> Option<(usize, Vec<Placement>, Vec3)> {
         let support = self.support();
         match supports.paths[support].kind {
-            SupportKind::Branch => self.trunk_ends(support, supports).is_some(),
-            SupportKind::Trunk => self.branch_ends(support, supports).is_some(),
+            SupportKind::Branch => self.trunk_ends(support, supports),
+            SupportKind::Trunk => self.branch_ends(support, supports),
         }
     }
 
