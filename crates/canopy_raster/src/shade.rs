@@ -5,6 +5,7 @@
 //! depends on the shading mode, the texture and shadows, chosen once per triangle so that the
 //! pixel loops are compiled for each combination.
 
+use crate::shadow::CONSTANT_BIAS;
 use crate::texture::{Sampler, Texture};
 use bevy_math::{Vec2, Vec3};
 use std::sync::Arc;
@@ -65,6 +66,21 @@ pub mod slot {
     pub const UV: usize = 7;
     /// Shadow-map position: texel x, texel y, light depth.
     pub const SHADOW: usize = 9;
+}
+
+/// How far the value at `index` may be off when a triangle is interpolated in screen space
+/// instead of perspective-correctly, in the value's own units: a sixteenth of what a pixel can
+/// show of it. Colours, diffuse terms and normals reach the image through 8-bit channels;
+/// texture coordinates and shadow-map positions are measured in texels; light depths against
+/// the shadow bias.
+#[inline(always)]
+pub(crate) fn affine_tolerance(index: usize, texture: Option<&Texture>) -> f32 {
+    match index {
+        slot::UV | 8 => 1.0 / (16.0 * texture.map_or(1, |t| t.width().max(t.height())) as f32),
+        slot::SHADOW | 10 => 1.0 / 16.0,
+        11 => CONSTANT_BIAS / 16.0,
+        _ => 1.0 / (16.0 * 255.0),
+    }
 }
 
 /// The combination a pixel loop is compiled for.

@@ -6,7 +6,8 @@
 //! exactly one of them. Depth is interpolated linearly in screen space (as the projection
 //! demands); every other value perspective-correctly: the pixel's barycentric weights are
 //! divided by `w` at each vertex and renormalized with the interpolated `1/w`, then weigh the
-//! vertex values.
+//! vertex values. A triangle whose `w` varies too little for that to move any value beyond
+//! its tolerance (a sixteenth of what a pixel shows of it) is interpolated in screen space.
 //!
 //! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
 //! it is skipped before setup reaches its pixels.
@@ -16,9 +17,11 @@ use crate::pipeline::{
     BinEntry, CLIPPED_BIT, Chunk, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH, edge,
     flat_diffuse, pixel_bounds,
 };
-use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, slot};
+use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, slot};
 use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
 use bevy_math::{Vec2, Vec3, Vec4};
+use std::ops::{Add, Mul};
+use wide::i32x8;
 
 /// A tile's farthest depth is read anew once this many pixels have been covered in it since the
 /// last reading, times the tile's area: the reading then costs at most one depth read per
@@ -223,6 +226,8 @@ struct Setup {
     inv_w: [f32; 3],
     /// The least depth of the three vertices.
     nearest: f32,
+    /// Whether the edge functions fit `i32` over the walk (see [`fits_narrow`]).
+    narrow: bool,
 }
 
 impl Setup {
@@ -272,15 +277,18 @@ impl Setup {
             z,
             inv_w: order.map(|k| vertices[k].inv_w),
             nearest: z[0].min(z[1]).min(z[2]),
+            narrow: fits_narrow(p),
         })
     }
 }
 
-/// The pixels of one row inside a triangle: `first..end`, and the edge functions at `first`.
+/// The pixels of one row inside a triangle, `first..end`, and the barycentric weights of
+/// vertices 1 and 2 at `first`.
 struct RowSpan {
     first: u32,
     end: u32,
-    edges: [i64; 3],
+    l1: f32,
+    l2: f32,
 }
 
 impl Setup {
@@ -293,15 +301,20 @@ impl Setup {
         // Barycentric weights of vertices 1 and 2 change by these per pixel to the right.
         let step_l1 = self.step_x[1] as f32 * self.inv_area;
         let step_l2 = self.step_x[2] as f32 * self.inv_area;
+        let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
+        let narrow_steps = narrow(self.step_x);
+        let narrow_mask_steps = i32::mask_steps(narrow_steps);
         let mut row_edges = self.start;
         let mut fragments = 0;
         for py in self.rect.min_y..=self.rect.max_y {
-            let span = self.span(row_edges);
-            step(&mut row_edges, self.step_y);
-            let Some(RowSpan { first, end, edges }) = span else { continue };
+            let span = if self.narrow {
+                self.span(narrow(row_edges), narrow_steps, &narrow_mask_steps)
+            } else {
+                self.span(row_edges, self.step_x, &self.step_x)
+            };
+            row_edges = add(row_edges, self.step_y);
+            let Some(RowSpan { first, end, l1: l1_first, l2: l2_first }) = span else { continue };
             fragments += u64::from(end - first);
-            let l1_first = edges[1] as f32 * self.inv_area;
-            let l2_first = edges[2] as f32 * self.inv_area;
             for run in (first..end).step_by(LANES) {
                 let offset = (run - first) as f32;
                 let l1 = Vec4::splat(l1_first + offset * step_l1) + LANE_OFFSETS * step_l1;
@@ -314,34 +327,50 @@ impl Setup {
 
     /// The covered pixels of the row whose first pixel (at `rect.min_x`) has edge functions
     /// `row_edges`. They form one interval (the triangle is convex), found from coverage masks
-    /// of [`MASK_PIXELS`] pixels at a time, without a branch per pixel.
+    /// of [`EdgeValue::MASK_PIXELS`] pixels at a time, without a branch per pixel.
     #[inline(always)]
-    fn span(&self, row_edges: [i64; 3]) -> Option<RowSpan> {
-        let mask_step = self.step_x.map(|s| s * i64::from(MASK_PIXELS));
-        let mut e = row_edges;
+    fn span<E: EdgeValue>(&self, row_edges: [E; 3], step_x: [E; 3], mask_steps: &E::MaskSteps) -> Option<RowSpan> {
+        let pixels = E::MASK_PIXELS;
         let mut x = self.rect.min_x;
+        let remaining = self.rect.max_x - x + 1;
+        if remaining <= pixels {
+            // The whole row in one mask: no loop to leave.
+            let mask = E::coverage(row_edges, mask_steps) & ((1 << remaining) - 1);
+            if mask == 0 {
+                return None;
+            }
+            let offset = mask.trailing_zeros();
+            return Some(self.row_span(row_edges, step_x, x + offset, x + 32 - mask.leading_zeros()));
+        }
+        let mask_step = step_x.map(|s| s * E::from_u32(pixels));
+        let mut e = row_edges;
         let mut first = None;
         let mut end = x;
         while x <= self.rect.max_x {
             let remaining = self.rect.max_x - x + 1;
-            let valid = if remaining >= MASK_PIXELS { u32::MAX >> (32 - MASK_PIXELS) } else { (1 << remaining) - 1 };
-            let mask = coverage_mask(e, self.step_x) & valid;
+            let valid = if remaining >= pixels { u32::MAX >> (32 - pixels) } else { (1 << remaining) - 1 };
+            let mask = E::coverage(e, mask_steps) & valid;
             if mask != 0 {
                 first.get_or_insert(x + mask.trailing_zeros());
                 end = x + 32 - mask.leading_zeros();
-                if end < x + remaining.min(MASK_PIXELS) {
+                if end < x + remaining.min(pixels) {
                     break;
                 }
             } else if first.is_some() {
                 break;
             }
-            x += MASK_PIXELS;
-            step(&mut e, mask_step);
+            x += pixels;
+            e = add(e, mask_step);
         }
-        let first = first?;
-        let offset = i64::from(first - self.rect.min_x);
-        let edges = [0, 1, 2].map(|k| row_edges[k] + offset * self.step_x[k]);
-        Some(RowSpan { first, end, edges })
+        Some(self.row_span(row_edges, step_x, first?, end))
+    }
+
+    /// The span `first..end` of the row whose first pixel has edge functions `row_edges`.
+    #[inline(always)]
+    fn row_span<E: EdgeValue>(&self, row_edges: [E; 3], step_x: [E; 3], first: u32, end: u32) -> RowSpan {
+        let offset = E::from_u32(first - self.rect.min_x);
+        let weight = |k: usize| (row_edges[k] + offset * step_x[k]).to_f32() * self.inv_area;
+        RowSpan { first, end, l1: weight(1), l2: weight(2) }
     }
 }
 
@@ -352,29 +381,97 @@ fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
     (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
 }
 
-/// Pixels whose coverage one mask holds: a little wider than most rows of the standard scene's
-/// triangles (about 3 pixels), which then take one mask; 8 was 4% slower on it.
-const MASK_PIXELS: u32 = 6;
-
-/// Which of [`MASK_PIXELS`] pixels in a row, the first with edge functions `e` and each next
-/// one `step` further, are inside: bit `k` for pixel `k`.
-#[inline(always)]
-fn coverage_mask(e: [i64; 3], step: [i64; 3]) -> u32 {
-    let mut mask = 0;
-    for k in 0..MASK_PIXELS {
-        let k = i64::from(k);
-        let edges = (e[0] + k * step[0]) | (e[1] + k * step[1]) | (e[2] + k * step[2]);
-        mask |= u32::from(edges >= 0) << k;
-    }
-    mask
+/// Whether every edge function value a walk over `rect` computes for the triangle `p`
+/// (sub-pixel units) fits an `i32`.
+///
+/// A value at pixel centre `s` is `(b - a) x (s - a)` for two corners `a`, `b`: at most
+/// `w h + h |s.x - a.x|` for the triangle's bounding box `w` by `h`. The walk reads up to two
+/// masks past the rect's last pixel and one row past its last row, all inside the bounding
+/// box widened by [`NARROW_MARGIN`] pixels.
+fn fits_narrow(p: [(i64, i64); 3]) -> bool {
+    let extent = |c: [i64; 3]| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]);
+    let margin = NARROW_MARGIN * SUBPIXEL_STEPS;
+    let (w, h) = (extent(p.map(|c| c.0)), extent(p.map(|c| c.1)) + margin);
+    h * (2 * w + margin) + 1 < i64::from(i32::MAX)
 }
 
-/// Advances edge functions by one step.
-#[inline(always)]
-fn step(edges: &mut [i64; 3], by: [i64; 3]) {
-    for (edge, by) in edges.iter_mut().zip(by) {
-        *edge += by;
+/// Pixels past a triangle's bounding box that a narrow walk may evaluate edge functions at.
+const NARROW_MARGIN: i64 = 2 * <i32 as EdgeValue>::MASK_PIXELS as i64;
+
+/// An integer type edge functions are stepped in: `i32` for the triangles whose values fit
+/// (see [`fits_narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
+trait EdgeValue: Copy + Add<Output = Self> + Mul<Output = Self> {
+    /// Pixels one coverage mask holds.
+    const MASK_PIXELS: u32;
+    /// Each edge's steps to the pixels of a mask, prepared once per triangle.
+    type MaskSteps;
+    fn mask_steps(step_x: [Self; 3]) -> Self::MaskSteps;
+    /// Which of the mask's pixels, the first with edge functions `e`, are inside: bit `k` for
+    /// pixel `k`.
+    fn coverage(e: [Self; 3], steps: &Self::MaskSteps) -> u32;
+    fn from_u32(value: u32) -> Self;
+    fn to_f32(self) -> f32;
+}
+
+impl EdgeValue for i64 {
+    /// A little wider than most rows of the standard scene's triangles (about 3 pixels), which
+    /// then take one mask; 8 was 4% slower on it.
+    const MASK_PIXELS: u32 = 6;
+    type MaskSteps = [i64; 3];
+
+    fn mask_steps(step_x: [i64; 3]) -> [i64; 3] {
+        step_x
     }
+
+    #[inline(always)]
+    fn coverage(e: [i64; 3], step: &[i64; 3]) -> u32 {
+        let mut mask = 0;
+        for k in 0..i64::from(Self::MASK_PIXELS) {
+            let edges = (e[0] + k * step[0]) | (e[1] + k * step[1]) | (e[2] + k * step[2]);
+            mask |= u32::from(edges >= 0) << k;
+        }
+        mask
+    }
+
+    fn from_u32(value: u32) -> Self {
+        value.into()
+    }
+
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+
+impl EdgeValue for i32 {
+    const MASK_PIXELS: u32 = 8;
+    /// Each edge's offsets from the mask's first pixel, one lane per pixel.
+    type MaskSteps = [i32x8; 3];
+
+    #[inline(always)]
+    fn mask_steps(step_x: [i32; 3]) -> [i32x8; 3] {
+        step_x.map(|s| i32x8::new(std::array::from_fn(|k| k as i32 * s)))
+    }
+
+    #[inline(always)]
+    fn coverage(e: [i32; 3], steps: &[i32x8; 3]) -> u32 {
+        let lanes = |k: usize| i32x8::splat(e[k]) + steps[k];
+        // A pixel is inside when no edge function is negative: no sign bit in their union.
+        !(lanes(0) | lanes(1) | lanes(2)).to_bitmask() & 0xff
+    }
+
+    fn from_u32(value: u32) -> Self {
+        value as i32
+    }
+
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+
+/// Edge functions advanced by one step.
+#[inline(always)]
+fn add<E: EdgeValue>(edges: [E; 3], by: [E; 3]) -> [E; 3] {
+    [edges[0] + by[0], edges[1] + by[1], edges[2] + by[2]]
 }
 
 /// Shading mode numbers for the const-generic pixel loops.
@@ -447,6 +544,8 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     let [z0, z1, z2] = setup.z;
     let [w0, w1, w2] = setup.inv_w;
     let (dz1, dz2, dw1, dw2) = (z1 - z0, z2 - z0, w1 - w0, w2 - w0);
+    // Small or distant triangles skip the per-pixel division.
+    let affine = affine_is_close(setup.inv_w, &to_1, &to_2, |k| pass.uses(k).then(|| affine_tolerance(k, texture)));
     let width = band.width as usize;
     setup.covered_runs(|py, run, lanes, l1, l2| {
         let z = (Vec4::splat(z0) + l1 * dz1 + l2 * dz2).to_array();
@@ -459,8 +558,12 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
             }
         }
         if drawn.contains(&true) {
-            let w = (Vec4::splat(w0) + l1 * dw1 + l2 * dw2).recip();
-            let (p1, p2) = (l1 * w1 * w, l2 * w2 * w);
+            let (p1, p2) = if affine {
+                (l1, l2)
+            } else {
+                let w = (Vec4::splat(w0) + l1 * dw1 + l2 * dw2).recip();
+                (l1 * w1 * w, l2 * w2 * w)
+            };
             let value = |k: usize| Vec4::splat(base[k]) + p1 * to_1[k] + p2 * to_2[k];
             let diffuse = match MODE {
                 FLAT => Vec4::splat(triangle.flat_diffuse),
@@ -515,6 +618,32 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     })
 }
 
+/// Whether interpolating in screen space keeps every value within `tolerance` of its
+/// perspective-correct interpolation, for a triangle with `1/w` of `inv_w` at its vertices and
+/// values differing by `to_1` and `to_2` from vertex 0 to vertices 1 and 2.
+///
+/// Write the vertices' `1/w` as `m (1 + s_k)` with `0 <= s_k <= spread`, `spread` the ratio of
+/// the largest to the least less one. At a point with screen-space weights `b_k`, the
+/// perspective-correct weights are `b_k (1 + s_k) / (1 + sum(b_j s_j))`, so a value moves by
+/// the covariance of `s` and the value under the weights `b`, divided by at least one: at
+/// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
+/// Values whose `tolerance` is `None` are not interpolated and not checked.
+#[inline(always)]
+fn affine_is_close(
+    inv_w: [f32; 3],
+    to_1: &Varyings,
+    to_2: &Varyings,
+    tolerance: impl Fn(usize) -> Option<f32>,
+) -> bool {
+    let spread = inv_w[0].max(inv_w[1]).max(inv_w[2]) / inv_w[0].min(inv_w[1]).min(inv_w[2]) - 1.0;
+    (0..VARYINGS).all(|k| {
+        tolerance(k).is_none_or(|tolerance| {
+            let range = to_1[k].max(to_2[k]).max(0.0) - to_1[k].min(to_2[k]).min(0.0);
+            spread * range * 0.25 <= tolerance
+        })
+    })
+}
+
 /// The depth-only pixel loop of the shadow map, with the slope-scaled bias.
 fn fill_depth(setup: &Setup, band: &mut DepthBand) {
     let [z0, z1, z2] = setup.z;
@@ -529,4 +658,93 @@ fn fill_depth(setup: &Setup, band: &mut DepthBand) {
             *texel = texel.min(z);
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A screen vertex at whole sub-pixel position `(x, y)`.
+    fn vertex((x, y): (i32, i32)) -> ScreenVertex {
+        ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 }
+    }
+
+    /// Every run a walk visits: row, first pixel, covered pixels, and the weights at them.
+    fn runs(setup: &Setup) -> Vec<(u32, u32, usize, Vec4, Vec4)> {
+        let mut runs = Vec::new();
+        setup.covered_runs(|y, x, lanes, l1, l2| runs.push((y, x, lanes, l1, l2)));
+        runs
+    }
+
+    const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
+
+    #[test]
+    fn small_triangles_walk_narrow_and_large_ones_wide() {
+        let steps = SUBPIXEL_STEPS as i32;
+        let small = [(70, 35), (90, 40), (75, 60)].map(|(x, y)| vertex((x * steps, y * steps)));
+        let large = [(0, 0), (900, 40), (100, 600)].map(|(x, y)| vertex((x * steps, y * steps)));
+        assert!(Setup::new(small.each_ref(), TILE, false).unwrap().narrow);
+        assert!(!Setup::new(large.each_ref(), TILE, false).unwrap().narrow);
+    }
+
+    proptest! {
+        /// The `i32` walk visits exactly the pixels of the `i64` one, with the same weights.
+        #[test]
+        fn narrow_walks_match_wide_ones(
+            corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
+        ) {
+            let vertices = corners.map(vertex);
+            let Some(narrow) = Setup::new(vertices.each_ref(), TILE, false) else { return Ok(()) };
+            prop_assume!(narrow.narrow);
+            let wide = Setup { narrow: false, ..narrow };
+            let (a, b) = (runs(&narrow), runs(&wide));
+            prop_assert_eq!(a.len(), b.len());
+            for (a, b) in a.iter().zip(&b) {
+                prop_assert_eq!((a.0, a.1, a.2), (b.0, b.1, b.2));
+                prop_assert!(a.3.abs_diff_eq(b.3, 1e-5) && a.4.abs_diff_eq(b.4, 1e-5));
+            }
+        }
+
+        /// When a triangle is judged close enough to affine, every value at every point inside
+        /// it is within its tolerance of the perspective-correct value.
+        #[test]
+        fn affine_interpolation_stays_within_tolerance(
+            inv_w in 0.2f32..5.0,
+            spread in prop::array::uniform3(0.0f32..0.01),
+            to_1 in prop::array::uniform12(-1.0f32..1.0),
+            to_2 in prop::array::uniform12(-1.0f32..1.0),
+            weights in (0.0f32..1.0, 0.0f32..1.0),
+        ) {
+            let inv_w = spread.map(|s| inv_w * (1.0 + s));
+            let tolerance = [0.002; VARYINGS];
+            prop_assume!(affine_is_close(inv_w, &to_1, &to_2, |k| Some(tolerance[k])));
+            let (b1, b2) = if weights.0 + weights.1 > 1.0 { (1.0 - weights.0, 1.0 - weights.1) } else { weights };
+            let error = affine_error(inv_w, [1.0 - b1 - b2, b1, b2]);
+            for k in 0..VARYINGS {
+                let error = error.0 * to_1[k] + error.1 * to_2[k];
+                prop_assert!(error.abs() <= tolerance[k] * (1.0 + 1e-3) + 1e-7, "slot {k}: {error}");
+            }
+        }
+    }
+
+    /// How far the perspective-correct weights of vertices 1 and 2 are from the screen-space
+    /// weights `b`.
+    fn affine_error(inv_w: [f32; 3], b: [f32; 3]) -> (f32, f32) {
+        let total = b[0] * inv_w[0] + b[1] * inv_w[1] + b[2] * inv_w[2];
+        (b[1] * inv_w[1] / total - b[1], b[2] * inv_w[2] / total - b[2])
+    }
+
+    #[test]
+    fn the_affine_bound_is_nearly_reached_midway_along_an_edge() {
+        // One vertex 1% nearer; a value changing by one along that edge: at the edge's middle
+        // the error is 0.01 / 4 / 1.005, and the criterion accepts exactly up to 0.01 / 4.
+        let inv_w = [1.0, 1.01, 1.0];
+        let mut to_1 = [0.0; VARYINGS];
+        to_1[0] = 1.0;
+        let error = affine_error(inv_w, [0.5, 0.5, 0.0]).0;
+        assert!((error - 0.0025 / 1.005).abs() < 1e-6, "{error}");
+        assert!(affine_is_close(inv_w, &to_1, &[0.0; VARYINGS], |_| Some(0.0026)));
+        assert!(!affine_is_close(inv_w, &to_1, &[0.0; VARYINGS], |_| Some(0.0024)));
+    }
 }
