@@ -9,6 +9,7 @@
 
 use crate::camera::{Camera, Light};
 use bevy_math::{Mat4, Vec3, Vec4};
+use wide::{f32x4, i32x4};
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
 /// is `[0, 1]`).
@@ -117,11 +118,15 @@ impl ShadowMap {
         // Clamped into the border: a point off the map reads only border texels (with a zero
         // weight on the second texel of a pair when it sits on the far border).
         let (low, high) = (Vec4::splat(-1.0), Vec4::splat(self.size as f32));
-        let (x, y) = (x.max(low).min(high), y.max(low).min(high));
-        let (column, row) = (x.floor(), y.floor());
+        // Counted from the border's first texel, the clamped positions are not negative: their
+        // whole part is the stored column and row, found four at a time by truncation.
+        let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
+        let lanes = |v: Vec4| f32x4::new(v.to_array());
+        let (column, row) = (lanes(x).fast_trunc_int(), lanes(y).fast_trunc_int());
+        let first = (row * i32x4::splat(self.stride() as i32) + column).to_array().map(|i| i as usize);
+        let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());
+        let (column, row) = (whole(column), whole(row));
         let stride = self.stride();
-        let (columns, rows) = ((column + 1.0).to_array(), (row + 1.0).to_array());
-        let first: [usize; 4] = std::array::from_fn(|lane| rows[lane] as usize * stride + columns[lane] as usize);
         let lit = |offset: usize| {
             let texels = Vec4::from_array(std::array::from_fn(|lane| self.depth[first[lane] + offset]));
             Vec4::select(depth.cmple(texels), Vec4::ONE, Vec4::ZERO)
