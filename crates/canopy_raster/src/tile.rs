@@ -260,19 +260,17 @@ impl Setup {
             rect.min_x as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
             rect.min_y as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
         );
-        let edges = [(1, 2), (2, 0), (0, 1)];
-        let start = edges.map(|(a, b)| {
-            let bias = if is_top_left(p[a], p[b]) { 0 } else { -1 };
-            edge(p[a], p[b], sample) + bias
-        });
+        let [a, b, c] = p;
+        // Edge k runs between the two vertices other than k.
+        let edges = [(b, c), (c, a), (a, b)];
+        let start = edges.map(|(from, to)| edge(from, to, sample) + if is_top_left(from, to) { 0 } else { -1 });
         let z = order.map(|k| vertices[k].z);
-        let step_x = edges.map(|(a, b)| (p[a].1 - p[b].1) * SUBPIXEL_STEPS);
         Some(Self {
             order,
             rect,
             start,
-            step_x,
-            step_y: edges.map(|(a, b)| (p[b].0 - p[a].0) * SUBPIXEL_STEPS),
+            step_x: edges.map(|(from, to)| (from.1 - to.1) * SUBPIXEL_STEPS),
+            step_y: edges.map(|(from, to)| (to.0 - from.0) * SUBPIXEL_STEPS),
             inv_area: 1.0 / area.abs() as f32,
             z,
             inv_w: order.map(|k| vertices[k].inv_w),
