@@ -75,10 +75,11 @@ pub mod slot {
 /// the shadow bias.
 #[inline(always)]
 pub(crate) fn affine_tolerance(index: usize, texture: Option<&Texture>) -> f32 {
+    const LIGHT_DEPTH: usize = slot::SHADOW + 2;
     match index {
-        slot::UV | 8 => 1.0 / (16.0 * texture.map_or(1, |t| t.width().max(t.height())) as f32),
-        slot::SHADOW | 10 => 1.0 / 16.0,
-        11 => CONSTANT_BIAS / 16.0,
+        slot::UV..slot::SHADOW => 1.0 / (16.0 * texture.map_or(1, |t| t.width().max(t.height())) as f32),
+        slot::SHADOW..LIGHT_DEPTH => 1.0 / 16.0,
+        LIGHT_DEPTH => CONSTANT_BIAS / 16.0,
         _ => 1.0 / (16.0 * 255.0),
     }
 }
