@@ -81,7 +81,7 @@ impl ShadowMap {
         }
     }
 
-    /// The map's rows for drawing, each [`ShadowMap::row_stride`] long with its texels at
+    /// The map's rows for drawing, [`ShadowMap::row_layout`] apart, with their texels at
     /// `BORDER_BEFORE..BORDER_BEFORE + size`.
     pub(crate) fn rows_mut(&mut self) -> &mut [f32] {
         let (stride, size) = (self.stride(), self.size as usize);
@@ -123,10 +123,10 @@ impl ShadowMap {
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let lanes = |v: Vec4| f32x4::new(v.to_array());
         let (column, row) = (lanes(x).fast_trunc_int(), lanes(y).fast_trunc_int());
-        let first = (row * i32x4::splat(self.stride() as i32) + column).to_array().map(|i| i as usize);
+        let stride = self.stride();
+        let first = (row * i32x4::splat(stride as i32) + column).to_array().map(|i| i as usize);
         let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());
         let (column, row) = (whole(column), whole(row));
-        let stride = self.stride();
         let lit = |offset: usize| {
             let texels = Vec4::from_array(std::array::from_fn(|lane| self.depth[first[lane] + offset]));
             Vec4::select(depth.cmple(texels), Vec4::ONE, Vec4::ZERO)

@@ -14,8 +14,8 @@
 
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{
-    BinEntry, CLIPPED_BIT, Chunk, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH, edge,
-    flat_diffuse, pixel_bounds,
+    BinEntry, CLIPPED_BIT, Chunk, ClippedTriangle, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH,
+    edge, flat_diffuse, pixel_bounds,
 };
 use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, slot};
 use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
@@ -58,25 +58,41 @@ struct Triangle<'a> {
     material: &'a Material,
 }
 
+/// Where the corners of a binned triangle are kept.
+enum Corners<'a> {
+    /// A triangle made by clipping, kept whole in its chunk.
+    Clipped(&'a ClippedTriangle),
+    /// A mesh triangle: its vertices' indices in the frame's vertex arrays.
+    Mesh([usize; 3]),
+}
+
+/// Finds the corners of the triangle `entry` of `chunk`.
+#[inline(always)]
+fn locate<'a>(frame: &Frame, spans: &[Span], chunk: &'a Chunk, entry: BinEntry) -> Corners<'a> {
+    if entry.triangle & CLIPPED_BIT != 0 {
+        return Corners::Clipped(&chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize]);
+    }
+    let first = spans[entry.instance as usize].first_vertex;
+    let mesh = &frame.instances[entry.instance as usize].mesh;
+    Corners::Mesh(mesh.triangles[entry.triangle as usize].map(|i| first + i as usize))
+}
+
 impl TileContext<'_> {
     fn resolve<'b>(&'b self, chunk: &'b Chunk, entry: BinEntry, flat: bool) -> Triangle<'b> {
-        let instance = &self.frame.instances[entry.instance as usize];
-        if entry.triangle & CLIPPED_BIT != 0 {
-            let clipped = &chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize];
-            return Triangle {
+        let material = &self.frame.instances[entry.instance as usize].material;
+        match locate(self.frame, self.spans, chunk, entry) {
+            Corners::Clipped(clipped) => Triangle {
                 vertices: clipped.vertices.each_ref(),
                 varyings: clipped.varyings.each_ref(),
                 flat_diffuse: clipped.flat_diffuse,
-                material: &instance.material,
-            };
-        }
-        let first = self.spans[entry.instance as usize].first_vertex;
-        let indices = instance.mesh.triangles[entry.triangle as usize].map(|i| first + i as usize);
-        Triangle {
-            vertices: indices.map(|i| &self.vertices[i]),
-            varyings: indices.map(|i| &self.varyings[i]),
-            flat_diffuse: if flat { flat_diffuse(indices.map(|i| self.world[i]), &self.frame.light) } else { 0.0 },
-            material: &instance.material,
+                material,
+            },
+            Corners::Mesh(indices) => Triangle {
+                vertices: indices.map(|i| &self.vertices[i]),
+                varyings: indices.map(|i| &self.varyings[i]),
+                flat_diffuse: if flat { flat_diffuse(indices.map(|i| self.world[i]), &self.frame.light) } else { 0.0 },
+                material,
+            },
         }
     }
 
@@ -184,14 +200,9 @@ pub(crate) fn draw_depth_band<'a>(
     }
     let rows = (band.depth.len() / band.stride) as u32;
     let tiles_x = width.div_ceil(TILE_WIDTH);
-    let corners = |chunk: &'a Chunk, entry: BinEntry| {
-        if entry.triangle & CLIPPED_BIT != 0 {
-            chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize].vertices.each_ref()
-        } else {
-            let first = spans[entry.instance as usize].first_vertex;
-            let mesh = &frame.instances[entry.instance as usize].mesh;
-            mesh.triangles[entry.triangle as usize].map(|i| &vertices[first + i as usize])
-        }
+    let corners = |chunk: &'a Chunk, entry: BinEntry| match locate(frame, spans, chunk, entry) {
+        Corners::Clipped(clipped) => clipped.vertices.each_ref(),
+        Corners::Mesh(indices) => indices.map(|i| &vertices[i]),
     };
     for tx in 0..tiles_x {
         let rect = tile_rect(tx, band.y0, width, rows);
@@ -302,13 +313,14 @@ impl Setup {
         let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
         let narrow_steps = narrow(self.step_x);
         let narrow_mask_steps = i32::mask_steps(narrow_steps);
+        let wide_mask_steps = i64::mask_steps(self.step_x);
         let mut row_edges = self.start;
         let mut fragments = 0;
         for py in self.rect.min_y..=self.rect.max_y {
             let span = if self.narrow {
                 self.span(narrow(row_edges), narrow_steps, &narrow_mask_steps)
             } else {
-                self.span(row_edges, self.step_x, &self.step_x)
+                self.span(row_edges, self.step_x, &wide_mask_steps)
             };
             row_edges = add(row_edges, self.step_y);
             let Some(RowSpan { first, end, l1: l1_first, l2: l2_first }) = span else { continue };
@@ -384,8 +396,8 @@ fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
 ///
 /// A value at pixel centre `s` is `(b - a) x (s - a)` for two corners `a`, `b`: at most
 /// `w h + h |s.x - a.x|` for the triangle's bounding box `w` by `h`. The walk reads up to two
-/// masks past the rect's last pixel and one row past its last row, all inside the bounding
-/// box widened by [`NARROW_MARGIN`] pixels.
+/// mask widths past the rect's last pixel (the last mask's lanes, then one more step) and one
+/// row past its last row, all inside the bounding box widened by [`NARROW_MARGIN`] pixels.
 fn fits_narrow(p: [(i64, i64); 3]) -> bool {
     let extent = |c: [i64; 3]| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]);
     let margin = NARROW_MARGIN * SUBPIXEL_STEPS;
