@@ -86,7 +86,9 @@ impl Framebuffer {
         let band_pixels = row_pixels * rows as usize;
         let width = self.width;
         self.color
-            .chunks_mut(band_pixels * 4)
+            .as_chunks_mut::<4>()
+            .0
+            .chunks_mut(band_pixels)
             .zip(self.depth.chunks_mut(band_pixels))
             .enumerate()
             .map(move |(index, (color, depth))| Band { y0: index as u32 * rows, width, color, depth })
@@ -104,8 +106,8 @@ pub(crate) struct Band<'a> {
     pub y0: u32,
     /// Row length in pixels.
     pub width: u32,
-    /// RGBA8 bytes of the band's rows.
-    pub color: &'a mut [u8],
+    /// RGBA8 pixels of the band's rows.
+    pub color: &'a mut [[u8; 4]],
     /// Depth of the band's rows.
     pub depth: &'a mut [f32],
 }

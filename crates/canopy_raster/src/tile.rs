@@ -4,24 +4,28 @@
 //! 1/[`SUBPIXEL_STEPS`] of a pixel, sampled at pixel centres and stepped incrementally, with the
 //! top-left fill rule: a pixel whose centre lies on an edge shared by two triangles is drawn by
 //! exactly one of them. Depth is interpolated linearly in screen space (as the projection
-//! demands); every other value perspective-correctly: the pixel's barycentric weights are
-//! divided by `w` at each vertex and renormalized with the interpolated `1/w`, then weigh the
-//! vertex values. A triangle whose `w` varies too little for that to move any value beyond
-//! its tolerance (a sixteenth of what a pixel shows of it) is interpolated in screen space.
+//! demands); every other value perspective-correctly, as the screen-space plane of the value
+//! divided by `w` over the plane of `1/w`. A triangle whose `w` varies too little for that to
+//! move any value beyond its tolerance (a sixteenth of what a pixel shows of it) is
+//! interpolated in screen space.
+//!
+//! Pixels are depth-tested, shaded and stored in runs of [`LANES`] along a row, with lane masks
+//! instead of a branch per pixel; a run is read and written whole unless it reaches past the
+//! end of its row.
 //!
 //! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
 //! it is skipped before setup reaches its pixels.
 
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{
-    BinEntry, CLIPPED_BIT, Chunk, ClippedTriangle, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_WIDTH,
-    edge, flat_diffuse, pixel_bounds,
+    BinEntry, CLIPPED_BIT, Chunk, ClippedTriangle, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_HEIGHT,
+    TILE_WIDTH, edge, flat_diffuse, pixel_bounds,
 };
 use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, slot};
 use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::ops::{Add, Mul};
-use wide::i32x8;
+use wide::{f32x4, i32x8, u32x4};
 
 /// A tile's farthest depth is read anew once this many pixels have been covered in it since the
 /// last reading, times the tile's area: the reading then costs at most one depth read per
@@ -128,14 +132,7 @@ fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
 /// Clears one band of the framebuffer and draws every triangle binned into its tiles.
 /// Returns the fragments covered and the triangle-tile pairs skipped as occluded.
 pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u64) {
-    // Cleared sixteen pixels at a time from a repeated pattern.
-    let pattern: [u8; 64] = std::array::from_fn(|i| context.frame.background[i % 4]);
-    let mut runs = band.color.chunks_exact_mut(pattern.len());
-    for run in &mut runs {
-        run.copy_from_slice(&pattern);
-    }
-    let rest = runs.into_remainder();
-    rest.copy_from_slice(&pattern[..rest.len()]);
+    band.color.fill(context.frame.background);
     band.depth.fill(FAR_DEPTH);
     let pass =
         |textured: bool| Pass { shading: context.frame.settings.shading, textured, shadowed: context.shadow.is_some() };
@@ -291,96 +288,62 @@ impl Setup {
     }
 }
 
-/// The pixels of one row inside a triangle, `first..end`, and the barycentric weights of
-/// vertices 1 and 2 at `first`.
-struct RowSpan {
-    first: u32,
-    end: u32,
-    l1: f32,
-    l2: f32,
-}
-
 impl Setup {
     /// Walks each row's covered span in runs of up to [`LANES`] pixels, calling
-    /// `visit(y, x, lanes, l1, l2)` for each: `x` is the run's first pixel, `lanes` how many
-    /// of its pixels are covered, and `l1`, `l2` the barycentric weights of vertices 1 and 2
-    /// at the run's pixels (one per lane). Returns the pixels covered.
+    /// `visit(y, x, lanes)` for each: `x` is the run's first pixel and bit `k` of `lanes` is
+    /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
-    fn covered_runs(&self, mut visit: impl FnMut(u32, u32, usize, Vec4, Vec4)) -> u64 {
-        // Barycentric weights of vertices 1 and 2 change by these per pixel to the right.
-        let step_l1 = self.step_x[1] as f32 * self.inv_area;
-        let step_l2 = self.step_x[2] as f32 * self.inv_area;
-        let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
-        let narrow_steps = narrow(self.step_x);
-        let narrow_mask_steps = i32::mask_steps(narrow_steps);
-        let wide_mask_steps = i64::mask_steps(self.step_x);
-        let mut row_edges = self.start;
+    fn covered_runs(&self, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
+        let rows = if self.narrow {
+            let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
+            self.coverage(narrow(self.start), narrow(self.step_x), narrow(self.step_y))
+        } else {
+            self.coverage(self.start, self.step_x, self.step_y)
+        };
         let mut fragments = 0;
-        for py in self.rect.min_y..=self.rect.max_y {
-            let span = if self.narrow {
-                self.span(narrow(row_edges), narrow_steps, &narrow_mask_steps)
-            } else {
-                self.span(row_edges, self.step_x, &wide_mask_steps)
-            };
-            row_edges = add(row_edges, self.step_y);
-            let Some(RowSpan { first, end, l1: l1_first, l2: l2_first }) = span else { continue };
-            fragments += u64::from(end - first);
-            for run in (first..end).step_by(LANES) {
-                let offset = (run - first) as f32;
-                let l1 = Vec4::splat(l1_first + offset * step_l1) + LANE_OFFSETS * step_l1;
-                let l2 = Vec4::splat(l2_first + offset * step_l2) + LANE_OFFSETS * step_l2;
-                visit(py, run, ((end - run) as usize).min(LANES), l1, l2);
+        for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(&rows) {
+            if coverage == 0 {
+                continue;
+            }
+            let mut x = coverage.trailing_zeros();
+            fragments += u64::from(u64::BITS - coverage.leading_zeros() - x);
+            let mut rest = coverage >> x;
+            while rest != 0 {
+                visit(y, self.rect.min_x + x, (rest & RUN_MASK) as u32);
+                rest >>= LANES;
+                x += LANES as u32;
             }
         }
         fragments
     }
 
-    /// The covered pixels of the row whose first pixel (at `rect.min_x`) has edge functions
-    /// `row_edges`. They form one interval (the triangle is convex), found from coverage masks
-    /// of [`EdgeValue::MASK_PIXELS`] pixels at a time, without a branch per pixel.
+    /// Which pixels of the rect the triangle covers, with edge functions stepped in `E`: one
+    /// bit per pixel (at most [`TILE_WIDTH`] of them) and a word per row (at most
+    /// [`TILE_HEIGHT`]), found [`MASK_PIXELS`] pixels at a time without a branch per pixel.
+    ///
+    /// The triangle is convex, so each row's covered pixels run from its lowest set bit to its
+    /// highest.
     #[inline(always)]
-    fn span<E: EdgeValue>(&self, row_edges: [E; 3], step_x: [E; 3], mask_steps: &E::MaskSteps) -> Option<RowSpan> {
-        let pixels = E::MASK_PIXELS;
-        let mut x = self.rect.min_x;
-        let remaining = self.rect.max_x - x + 1;
-        if remaining <= pixels {
-            // The whole row in one mask: no loop to leave.
-            let mask = E::coverage(row_edges, mask_steps) & ((1 << remaining) - 1);
-            if mask == 0 {
-                return None;
+    fn coverage<E: EdgeValue>(&self, start: [E; 3], step_x: [E; 3], step_y: [E; 3]) -> [u64; TILE_HEIGHT as usize] {
+        const { assert!(TILE_WIDTH <= u64::BITS) };
+        let mask_steps = E::mask_steps(step_x);
+        let group_step = step_x.map(|s| s * E::from_u32(MASK_PIXELS));
+        let width = self.rect.max_x - self.rect.min_x + 1;
+        let groups = width.div_ceil(MASK_PIXELS);
+        let valid = u64::MAX >> (u64::BITS - width);
+        let mut rows = [0; TILE_HEIGHT as usize];
+        let mut row_edges = start;
+        for row in &mut rows[..(self.rect.max_y - self.rect.min_y + 1) as usize] {
+            let mut coverage = 0u64;
+            let mut edges = row_edges;
+            for group in 0..groups {
+                coverage |= u64::from(E::coverage(edges, &mask_steps)) << (group * MASK_PIXELS);
+                edges = add(edges, group_step);
             }
-            let offset = mask.trailing_zeros();
-            return Some(self.row_span(row_edges, step_x, x + offset, x + 32 - mask.leading_zeros()));
+            *row = coverage & valid;
+            row_edges = add(row_edges, step_y);
         }
-        let mask_step = step_x.map(|s| s * E::from_u32(pixels));
-        let mut e = row_edges;
-        let mut first = None;
-        let mut end = x;
-        while x <= self.rect.max_x {
-            let remaining = self.rect.max_x - x + 1;
-            let valid = if remaining >= pixels { u32::MAX >> (32 - pixels) } else { (1 << remaining) - 1 };
-            let mask = E::coverage(e, mask_steps) & valid;
-            if mask != 0 {
-                first.get_or_insert(x + mask.trailing_zeros());
-                end = x + 32 - mask.leading_zeros();
-                if end < x + remaining.min(pixels) {
-                    break;
-                }
-            } else if first.is_some() {
-                break;
-            }
-            x += pixels;
-            e = add(e, mask_step);
-        }
-        Some(self.row_span(row_edges, step_x, first?, end))
-    }
-
-    /// The span `first..end` of the row whose first pixel has edge functions `row_edges`.
-    #[inline(always)]
-    fn row_span<E: EdgeValue>(&self, row_edges: [E; 3], step_x: [E; 3], first: u32, end: u32) -> RowSpan {
-        let offset = E::from_u32(first - self.rect.min_x);
-        let weight = |k: usize| (row_edges[k] + offset * step_x[k]).to_f32() * self.inv_area;
-        RowSpan { first, end, l1: weight(1), l2: weight(2) }
+        rows
     }
 }
 
@@ -406,13 +369,14 @@ fn fits_narrow(p: [(i64, i64); 3]) -> bool {
 }
 
 /// Pixels past a triangle's bounding box that a narrow walk may evaluate edge functions at.
-const NARROW_MARGIN: i64 = 2 * <i32 as EdgeValue>::MASK_PIXELS as i64;
+const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
+
+/// Pixels one coverage mask holds.
+const MASK_PIXELS: u32 = 8;
 
 /// An integer type edge functions are stepped in: `i32` for the triangles whose values fit
 /// (see [`fits_narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
 trait EdgeValue: Copy + Add<Output = Self> + Mul<Output = Self> {
-    /// Pixels one coverage mask holds.
-    const MASK_PIXELS: u32;
     /// Each edge's steps to the pixels of a mask, prepared once per triangle.
     type MaskSteps;
     fn mask_steps(step_x: [Self; 3]) -> Self::MaskSteps;
@@ -420,13 +384,9 @@ trait EdgeValue: Copy + Add<Output = Self> + Mul<Output = Self> {
     /// pixel `k`.
     fn coverage(e: [Self; 3], steps: &Self::MaskSteps) -> u32;
     fn from_u32(value: u32) -> Self;
-    fn to_f32(self) -> f32;
 }
 
 impl EdgeValue for i64 {
-    /// A little wider than most rows of the standard scene's triangles (about 3 pixels), which
-    /// then take one mask; 8 was 4% slower on it.
-    const MASK_PIXELS: u32 = 6;
     type MaskSteps = [i64; 3];
 
     fn mask_steps(step_x: [i64; 3]) -> [i64; 3] {
@@ -436,7 +396,7 @@ impl EdgeValue for i64 {
     #[inline(always)]
     fn coverage(e: [i64; 3], step: &[i64; 3]) -> u32 {
         let mut mask = 0;
-        for k in 0..i64::from(Self::MASK_PIXELS) {
+        for k in 0..i64::from(MASK_PIXELS) {
             let edges = (e[0] + k * step[0]) | (e[1] + k * step[1]) | (e[2] + k * step[2]);
             mask |= u32::from(edges >= 0) << k;
         }
@@ -446,14 +406,9 @@ impl EdgeValue for i64 {
     fn from_u32(value: u32) -> Self {
         value.into()
     }
-
-    fn to_f32(self) -> f32 {
-        self as f32
-    }
 }
 
 impl EdgeValue for i32 {
-    const MASK_PIXELS: u32 = 8;
     /// Each edge's offsets from the mask's first pixel, one lane per pixel.
     type MaskSteps = [i32x8; 3];
 
@@ -471,10 +426,6 @@ impl EdgeValue for i32 {
 
     fn from_u32(value: u32) -> Self {
         value as i32
-    }
-
-    fn to_f32(self) -> f32 {
-        self as f32
     }
 }
 
@@ -524,6 +475,65 @@ const ROUNDING_BIAS: f32 = 8_388_608.0;
 /// Each lane's offset from the run's first pixel.
 const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
 
+/// The coverage bits of one run.
+const RUN_MASK: u64 = (1 << LANES) - 1;
+
+/// Four-lane packs of interpolated values: the [`Varyings`] four to a pack, then depth and
+/// `1/w`.
+const PACKS: usize = VARYINGS / LANES + 1;
+
+/// Where depth and `1/w` are in the last pack.
+const DEPTH: usize = VARYINGS;
+const INV_W: usize = VARYINGS + 1;
+
+/// A triangle's interpolated values as planes over the pixels of its rect: each value at the
+/// centre of the rect's first pixel and its change per pixel right and down, in packs of four.
+///
+/// Depth and `1/w` are linear in screen space; the other values are too when the triangle is
+/// drawn affinely, and otherwise their planes hold the values divided by `w`, to be
+/// multiplied by the pixel's `w` (the reciprocal of the interpolated `1/w`).
+struct Planes<const N: usize> {
+    origin: [Vec4; N],
+    dx: [Vec4; N],
+    dy: [Vec4; N],
+}
+
+impl<const N: usize> Planes<N> {
+    /// The planes through `values` at the setup's vertices (in its order), for the packs
+    /// `used` accepts (the others stay zero).
+    #[inline(always)]
+    fn new(setup: &Setup, values: [[Vec4; N]; 3], used: impl Fn(usize) -> bool) -> Self {
+        let weight = |edge: i64| edge as f32 * setup.inv_area;
+        // Barycentric weights of vertices 1 and 2 at the rect's first pixel, and their steps.
+        let (o1, o2) = (weight(setup.start[1]), weight(setup.start[2]));
+        let (x1, x2) = (weight(setup.step_x[1]), weight(setup.step_x[2]));
+        let (y1, y2) = (weight(setup.step_y[1]), weight(setup.step_y[2]));
+        let [v0, v1, v2] = values;
+        let to_1: [Vec4; N] = std::array::from_fn(|p| v1[p] - v0[p]);
+        let to_2: [Vec4; N] = std::array::from_fn(|p| v2[p] - v0[p]);
+        let plane = |p: usize, w1: f32, w2: f32, base: Vec4| {
+            if used(p) { base + to_1[p] * w1 + to_2[p] * w2 } else { Vec4::ZERO }
+        };
+        Self {
+            origin: std::array::from_fn(|p| plane(p, o1, o2, v0[p])),
+            dx: std::array::from_fn(|p| plane(p, x1, x2, Vec4::ZERO)),
+            dy: std::array::from_fn(|p| plane(p, y1, y2, Vec4::ZERO)),
+        }
+    }
+
+    /// Every value at pixel offset (`x`, `y`) from the rect's first pixel.
+    #[inline(always)]
+    fn at(&self, x: f32, y: f32) -> [Vec4; N] {
+        std::array::from_fn(|p| self.origin[p] + self.dx[p] * x + self.dy[p] * y)
+    }
+
+    /// Value `k`'s change from a run's first pixel to each lane.
+    #[inline(always)]
+    fn lane_steps(&self, k: usize) -> Vec4 {
+        LANE_OFFSETS * self.dx[k / LANES][k % LANES]
+    }
+}
+
 /// The colour pixel loop for one combination of shading mode, texture and shadows.
 ///
 /// Coverage is decided per pixel, exactly, as one interval per row; depth tests, interpolation
@@ -535,97 +545,172 @@ fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     band: &mut Band,
 ) -> u64 {
     let pass = Pass { shading: shading_of(MODE), textured: TEXTURED, shadowed: SHADOWED };
+    let texture = triangle.material.texture.as_deref();
+    let varyings = setup.order.map(|k| triangle.varyings[k]);
+    // Small or distant triangles skip the per-pixel division.
+    let affine = {
+        let [v0, v1, v2] = varyings;
+        let to_1 = std::array::from_fn(|k| v1[k] - v0[k]);
+        let to_2 = std::array::from_fn(|k| v2[k] - v0[k]);
+        affine_is_close(setup.inv_w, &to_1, &to_2, |k| pass.uses(k).then(|| affine_tolerance(k, texture)))
+    };
+    let values: [[Vec4; PACKS]; 3] = std::array::from_fn(|vertex| {
+        let (varyings, z, inv_w) = (varyings[vertex], setup.z[vertex], setup.inv_w[vertex]);
+        let scale = if affine { 1.0 } else { inv_w };
+        std::array::from_fn(|p| match p {
+            _ if p * LANES < VARYINGS => Vec4::from_slice(&varyings[p * LANES..]) * scale,
+            _ => Vec4::new(z, inv_w, 0.0, 0.0),
+        })
+    });
+    let uses = |k: usize| k >= VARYINGS || pass.uses(k);
+    let planes = Planes::new(setup, values, |p| (p * LANES..(p + 1) * LANES).any(uses));
+    let shading = TriangleShading {
+        lane_steps: std::array::from_fn(|k| if uses(k) { planes.lane_steps(k) } else { Vec4::ZERO }),
+        planes,
+        affine,
+        origin: (setup.rect.min_x, setup.rect.min_y),
+        triangle,
+        context,
+    };
+    setup.covered_runs(|py, run, lanes| shade_run::<MODE, TEXTURED, SHADOWED>(&shading, band, py, run, lanes))
+}
+
+/// What the runs of a triangle share.
+struct TriangleShading<'a> {
+    planes: Planes<PACKS>,
+    /// Each value's change from a run's first pixel to its lanes.
+    lane_steps: [Vec4; VARYINGS + 2],
+    /// Whether the values are interpolated in screen space.
+    affine: bool,
+    /// The first pixel of the planes' rect.
+    origin: (u32, u32),
+    triangle: &'a Triangle<'a>,
+    context: &'a TileContext<'a>,
+}
+
+/// Depth-tests, shades and stores one run of [`LANES`] pixels from `(x, y)`, those of `lanes`'
+/// set bits.
+#[inline(always)]
+fn shade_run<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
+    shading: &TriangleShading,
+    band: &mut Band,
+    y: u32,
+    x: u32,
+    lanes: u32,
+) {
+    let TriangleShading { planes, lane_steps, affine, origin, triangle, context } = shading;
     let light = &context.frame.light;
     let material = triangle.material;
-    let texture = material.texture.as_deref();
-    let pcf = context.frame.settings.pcf;
-    let [v0, v1, v2] = setup.order.map(|k| triangle.varyings[k]);
-    // Vertex 0's values and the differences to vertices 1 and 2, for the values this pass reads.
-    let mut base = [0.0; VARYINGS];
-    let mut to_1 = [0.0; VARYINGS];
-    let mut to_2 = [0.0; VARYINGS];
-    for k in 0..VARYINGS {
-        if pass.uses(k) {
-            base[k] = v0[k];
-            to_1[k] = v1[k] - v0[k];
-            to_2[k] = v2[k] - v0[k];
+    let at_run = planes.at((x - origin.0) as f32, (y - origin.1) as f32);
+    let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
+    let z = lanes_of(lane_value(DEPTH));
+    let width = band.width as usize;
+    let at = (y - band.y0) as usize * width + x as usize;
+    let valid = (width - x as usize).min(LANES);
+    let depth = f32x4::new(read_run(band.depth, at, valid, 0.0));
+    let drawn = z.simd_lt(depth) & covered(lanes);
+    let drawn_lanes = drawn.to_bitmask();
+    if drawn_lanes == 0 {
+        return;
+    }
+    write_run(band.depth, at, valid, drawn.bitselect(z, depth).to_array());
+    let w = if *affine { Vec4::ONE } else { lane_value(INV_W).recip() };
+    let value = |k: usize| if *affine { lane_value(k) } else { lane_value(k) * w };
+    let diffuse = match MODE {
+        FLAT => Vec4::splat(triangle.flat_diffuse),
+        GOURAUD if !SHADOWED => Vec4::ZERO,
+        GOURAUD => value(slot::DIFFUSE),
+        _ => {
+            let (nx, ny, nz) = (value(slot::NORMAL), value(slot::NORMAL + 1), value(slot::NORMAL + 2));
+            let towards = -light.direction;
+            let cosine = (nx * towards.x + ny * towards.y + nz * towards.z)
+                / (nx * nx + ny * ny + nz * nz).max(Vec4::splat(1e-12)).sqrt();
+            cosine.max(Vec4::ZERO) * light.diffuse
+        }
+    };
+    let mut visibility = Vec4::ONE;
+    if SHADOWED && let Some(map) = context.shadow {
+        let (sx, sy, depth) = (value(slot::SHADOW), value(slot::SHADOW + 1), value(slot::SHADOW + 2));
+        visibility = map.visibility_lanes(sx, sy, depth, context.frame.settings.pcf);
+    }
+    let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
+    if MODE != GOURAUD || SHADOWED {
+        let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
+        for c in &mut rgb {
+            *c *= intensity;
         }
     }
-    let [z0, z1, z2] = setup.z;
-    let [w0, w1, w2] = setup.inv_w;
-    let (dz1, dz2, dw1, dw2) = (z1 - z0, z2 - z0, w1 - w0, w2 - w0);
-    // Small or distant triangles skip the per-pixel division.
-    let affine = affine_is_close(setup.inv_w, &to_1, &to_2, |k| pass.uses(k).then(|| affine_tolerance(k, texture)));
-    let width = band.width as usize;
-    setup.covered_runs(|py, run, lanes, l1, l2| {
-        let z = (Vec4::splat(z0) + l1 * dz1 + l2 * dz2).to_array();
-        let at = (py - band.y0) as usize * width + run as usize;
-        let mut drawn = [false; LANES];
-        for (lane, (depth, z)) in band.depth[at..at + lanes].iter_mut().zip(z).enumerate() {
-            if z < *depth {
-                *depth = z;
-                drawn[lane] = true;
-            }
-        }
-        if drawn.contains(&true) {
-            let (p1, p2) = if affine {
-                (l1, l2)
-            } else {
-                let w = (Vec4::splat(w0) + l1 * dw1 + l2 * dw2).recip();
-                (l1 * w1 * w, l2 * w2 * w)
-            };
-            let value = |k: usize| Vec4::splat(base[k]) + p1 * to_1[k] + p2 * to_2[k];
-            let diffuse = match MODE {
-                FLAT => Vec4::splat(triangle.flat_diffuse),
-                GOURAUD if !SHADOWED => Vec4::ZERO,
-                GOURAUD => value(slot::DIFFUSE),
-                _ => {
-                    let (nx, ny, nz) = (value(slot::NORMAL), value(slot::NORMAL + 1), value(slot::NORMAL + 2));
-                    let towards = -light.direction;
-                    let cosine = (nx * towards.x + ny * towards.y + nz * towards.z)
-                        / (nx * nx + ny * ny + nz * nz).max(Vec4::splat(1e-12)).sqrt();
-                    cosine.max(Vec4::ZERO) * light.diffuse
-                }
-            };
-            let mut visibility = Vec4::ONE;
-            if SHADOWED && let Some(map) = context.shadow {
-                let (x, y, depth) = (value(slot::SHADOW), value(slot::SHADOW + 1), value(slot::SHADOW + 2));
-                visibility = map.visibility_lanes(x, y, depth, pcf);
-            }
-            let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
-            if MODE != GOURAUD || SHADOWED {
-                let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
-                for c in &mut rgb {
-                    *c *= intensity;
-                }
-            }
-            if TEXTURED && let Some(texture) = texture {
-                let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
-                let mut texels = [[0.0; LANES]; 3];
-                for lane in 0..LANES {
-                    if drawn[lane] {
-                        let texel = texture.sample(Vec2::new(u[lane], v[lane]), material.sampler);
-                        for (channel, texels) in texels.iter_mut().enumerate() {
-                            texels[lane] = texel[channel];
-                        }
-                    }
-                }
-                for (c, texels) in rgb.iter_mut().zip(texels) {
-                    *c *= Vec4::from_array(texels);
-                }
-            }
-            // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole
-            // number, in the low mantissa bits: a cheap exact conversion to bytes.
-            let [r, g, b] = rgb.map(|c| (c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_array());
-            for lane in 0..LANES {
-                if drawn[lane] {
-                    let byte = |c: f32| c.to_bits() as u8;
-                    let pixel = (at + lane) * 4;
-                    band.color[pixel..pixel + 4].copy_from_slice(&[byte(r[lane]), byte(g[lane]), byte(b[lane]), 255]);
+    if TEXTURED && let Some(texture) = material.texture.as_deref() {
+        let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
+        let mut texels = [[0.0; LANES]; 3];
+        for lane in 0..LANES {
+            if drawn_lanes & 1 << lane != 0 {
+                let texel = texture.sample(Vec2::new(u[lane], v[lane]), material.sampler);
+                for (channel, texels) in texels.iter_mut().enumerate() {
+                    texels[lane] = texel[channel];
                 }
             }
         }
-    })
+        for (c, texels) in rgb.iter_mut().zip(texels) {
+            *c *= Vec4::from_array(texels);
+        }
+    }
+    // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole number,
+    // in the low mantissa bits: a cheap exact conversion to bytes.
+    let [r, g, b] = rgb.map(|c| lanes_of(c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits());
+    let byte = u32x4::splat(0xff);
+    let pixels = (r & byte) | (g & byte) << 8 | (b & byte) << 16 | byte << 24;
+    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(read_run(band.color, at, valid, [0; 4])).map(u32::from_le));
+    let blended = drawn.to_bits().bitselect(pixels, old);
+    write_run(band.color, at, valid, bytemuck::cast(blended.to_array().map(u32::to_le)));
+}
+
+/// The four lanes of a [`Vec4`] as a [`f32x4`], for the mask operations glam lacks.
+#[inline(always)]
+fn lanes_of(v: Vec4) -> f32x4 {
+    f32x4::new(v.to_array())
+}
+
+/// The lane mask with lane `k` set when bit `k` of `lanes` is.
+#[inline(always)]
+fn covered(lanes: u32) -> f32x4 {
+    const MASKS: [[u32; LANES]; 1 << LANES] = {
+        let mut masks = [[0; LANES]; 1 << LANES];
+        let mut bits = 0;
+        while bits < masks.len() {
+            let mut lane = 0;
+            while lane < LANES {
+                if bits & 1 << lane != 0 {
+                    masks[bits][lane] = !0;
+                }
+                lane += 1;
+            }
+            bits += 1;
+        }
+        masks
+    };
+    f32x4::from_bits(u32x4::new(MASKS[lanes as usize & (MASKS.len() - 1)]))
+}
+
+/// The [`LANES`] values of a run starting at `at`, of which the first `valid` lie in the row
+/// (the rest, past the row's end, read as `fill`).
+#[inline(always)]
+fn read_run<T: Copy>(values: &[T], at: usize, valid: usize, fill: T) -> [T; LANES] {
+    if valid == LANES {
+        values[at..at + LANES].try_into().expect("a run is LANES long")
+    } else {
+        std::array::from_fn(|k| if k < valid { values[at + k] } else { fill })
+    }
+}
+
+/// Stores a run read by [`read_run`]: its first `valid` values.
+#[inline(always)]
+fn write_run<T: Copy>(values: &mut [T], at: usize, valid: usize, run: [T; LANES]) {
+    if valid == LANES {
+        values[at..at + LANES].copy_from_slice(&run);
+    } else {
+        values[at..at + valid].copy_from_slice(&run[..valid]);
+    }
 }
 
 /// Whether interpolating in screen space keeps every value within `tolerance` of its
@@ -645,10 +730,12 @@ fn affine_is_close(
     to_2: &Varyings,
     tolerance: impl Fn(usize) -> Option<f32>,
 ) -> bool {
-    let spread = inv_w[0].max(inv_w[1]).max(inv_w[2]) / inv_w[0].min(inv_w[1]).min(inv_w[2]) - 1.0;
+    // Plain comparisons: the values are finite, so the NaN handling of `f32::max` is not needed.
+    let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
+    let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
     (0..VARYINGS).all(|k| {
         tolerance(k).is_none_or(|tolerance| {
-            let range = to_1[k].max(to_2[k]).max(0.0) - to_1[k].min(to_2[k]).min(0.0);
+            let range = max(max(to_1[k], to_2[k]), 0.0) - min(min(to_1[k], to_2[k]), 0.0);
             spread * range * 0.25 <= tolerance
         })
     })
@@ -656,17 +743,18 @@ fn affine_is_close(
 
 /// The depth-only pixel loop of the shadow map, with the slope-scaled bias.
 fn fill_depth(setup: &Setup, band: &mut DepthBand) {
-    let [z0, z1, z2] = setup.z;
-    let (dz1, dz2) = (z1 - z0, z2 - z0);
-    // Depth changes by these per pixel right and down.
-    let slope = |step: [i64; 3]| (step[1] as f32 * dz1 + step[2] as f32 * dz2) * setup.inv_area;
-    let bias = CONSTANT_BIAS + SLOPE_BIAS * slope(setup.step_x).abs().max(slope(setup.step_y).abs());
-    setup.covered_runs(|py, run, lanes, l1, l2| {
-        let z = (Vec4::splat(z0 + bias) + l1 * dz1 + l2 * dz2).to_array();
+    let planes = Planes::new(setup, setup.z.map(|z| [Vec4::new(z, 0.0, 0.0, 0.0)]), |_| true);
+    let (dx, dy) = (planes.dx[0].x, planes.dy[0].x);
+    let bias = CONSTANT_BIAS + SLOPE_BIAS * dx.abs().max(dy.abs());
+    let lane_steps = planes.lane_steps(0);
+    let (min_x, min_y) = (setup.rect.min_x, setup.rect.min_y);
+    setup.covered_runs(|py, run, lanes| {
+        let z = planes.at((run - min_x) as f32, (py - min_y) as f32)[0].x + bias;
+        let z = lanes_of(Vec4::splat(z) + lane_steps);
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
-        for (texel, z) in band.depth[at..at + lanes].iter_mut().zip(z) {
-            *texel = texel.min(z);
-        }
+        let valid = (band.width - run).min(LANES as u32) as usize;
+        let depth = f32x4::new(read_run(band.depth, at, valid, 0.0));
+        write_run(band.depth, at, valid, covered(lanes).bitselect(depth.min(z), depth).to_array());
     });
 }
 
@@ -680,10 +768,10 @@ mod tests {
         ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 }
     }
 
-    /// Every run a walk visits: row, first pixel, covered pixels, and the weights at them.
-    fn runs(setup: &Setup) -> Vec<(u32, u32, usize, Vec4, Vec4)> {
+    /// Every run a walk visits: row, first pixel and coverage bits.
+    fn runs(setup: &Setup) -> Vec<(u32, u32, u32)> {
         let mut runs = Vec::new();
-        setup.covered_runs(|y, x, lanes, l1, l2| runs.push((y, x, lanes, l1, l2)));
+        setup.covered_runs(|y, x, lanes| runs.push((y, x, lanes)));
         runs
     }
 
@@ -699,7 +787,7 @@ mod tests {
     }
 
     proptest! {
-        /// The `i32` walk visits exactly the pixels of the `i64` one, with the same weights.
+        /// The `i32` walk visits exactly the pixels of the `i64` one.
         #[test]
         fn narrow_walks_match_wide_ones(
             corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
@@ -708,12 +796,30 @@ mod tests {
             let Some(narrow) = Setup::new(vertices.each_ref(), TILE, false) else { return Ok(()) };
             prop_assume!(narrow.narrow);
             let wide = Setup { narrow: false, ..narrow };
-            let (a, b) = (runs(&narrow), runs(&wide));
-            prop_assert_eq!(a.len(), b.len());
-            for (a, b) in a.iter().zip(&b) {
-                prop_assert_eq!((a.0, a.1, a.2), (b.0, b.1, b.2));
-                prop_assert!(a.3.abs_diff_eq(b.3, 1e-5) && a.4.abs_diff_eq(b.4, 1e-5));
+            prop_assert_eq!(runs(&narrow), runs(&wide));
+        }
+
+        /// The runs hold exactly the pixels of the rect whose edge functions are all
+        /// non-negative, each once.
+        #[test]
+        fn runs_cover_exactly_the_inside_pixels(
+            corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
+        ) {
+            let vertices = corners.map(vertex);
+            let Some(setup) = Setup::new(vertices.each_ref(), TILE, false) else { return Ok(()) };
+            let mut visited = Vec::new();
+            for (y, x, lanes) in runs(&setup) {
+                visited.extend((0..LANES as u32).filter(|k| lanes & 1 << k != 0).map(|k| (x + k, y)));
             }
+            let rect = setup.rect;
+            let inside: Vec<(u32, u32)> = (rect.min_y..=rect.max_y)
+                .flat_map(|y| (rect.min_x..=rect.max_x).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let (dx, dy) = (i64::from(x - rect.min_x), i64::from(y - rect.min_y));
+                    (0..3).all(|k| setup.start[k] + dx * setup.step_x[k] + dy * setup.step_y[k] >= 0)
+                })
+                .collect();
+            prop_assert_eq!(visited, inside);
         }
 
         /// When a triangle is judged close enough to affine, every value at every point inside
