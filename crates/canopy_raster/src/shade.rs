@@ -7,8 +7,9 @@
 
 use crate::shadow::CONSTANT_BIAS;
 use crate::texture::{Sampler, Texture};
-use bevy_math::{Vec2, Vec3};
+use bevy_math::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
+use wide::f32x4;
 
 /// How light is computed across a triangle; the sources compare all three.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
@@ -104,6 +105,12 @@ impl Pass {
             _ => self.shadowed,
         }
     }
+}
+
+/// The four lanes of a [`Vec4`] as a [`f32x4`], for the mask operations glam lacks.
+#[inline(always)]
+pub(crate) fn lanes_of(v: Vec4) -> f32x4 {
+    f32x4::new(v.to_array())
 }
 
 #[cfg(test)]

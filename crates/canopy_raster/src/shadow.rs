@@ -8,8 +8,9 @@
 //! (bilinear percentage-closer filtering).
 
 use crate::camera::{Camera, Light};
+use crate::shade::lanes_of;
 use bevy_math::{Mat4, Vec3, Vec4};
-use wide::{f32x4, i32x4};
+use wide::i32x4;
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
 /// is `[0, 1]`).
@@ -121,8 +122,7 @@ impl ShadowMap {
         // Counted from the border's first texel, the clamped positions are not negative: their
         // whole part is the stored column and row, found four at a time by truncation.
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
-        let lanes = |v: Vec4| f32x4::new(v.to_array());
-        let (column, row) = (lanes(x).fast_trunc_int(), lanes(y).fast_trunc_int());
+        let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
         let stride = self.stride();
         let first = (row * i32x4::splat(stride as i32) + column).to_array().map(|i| i as usize);
         let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());

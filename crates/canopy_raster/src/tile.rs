@@ -21,7 +21,7 @@ use crate::pipeline::{
     BinEntry, CLIPPED_BIT, Chunk, ClippedTriangle, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_HEIGHT,
     TILE_WIDTH, edge, flat_diffuse, pixel_bounds,
 };
-use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, slot};
+use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, lanes_of, slot};
 use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::ops::{Add, Mul};
@@ -663,12 +663,6 @@ fn shade_run<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(read_run(band.color, at, valid, [0; 4])).map(u32::from_le));
     let blended = drawn.to_bits().bitselect(pixels, old);
     write_run(band.color, at, valid, bytemuck::cast(blended.to_array().map(u32::to_le)));
-}
-
-/// The four lanes of a [`Vec4`] as a [`f32x4`], for the mask operations glam lacks.
-#[inline(always)]
-fn lanes_of(v: Vec4) -> f32x4 {
-    f32x4::new(v.to_array())
 }
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
