@@ -123,6 +123,7 @@ pub(crate) struct ScreenVertex {
 
 impl ScreenVertex {
     /// Projects a clip-space position onto a `width` x `height` target.
+    #[inline(always)]
     fn new(clip: Vec4, width: u32, height: u32) -> Self {
         let code = outcode(clip);
         if code & outside::CLIPPED != 0 {
@@ -133,6 +134,7 @@ impl ScreenVertex {
 
     /// Projects a clip-space position known to be inside the near plane and the guard band
     /// (up to rounding).
+    #[inline(always)]
     fn projected(clip: Vec4, width: u32, height: u32) -> Self {
         let inv_w = 1.0 / clip.w;
         let ndc = clip.truncate() * inv_w;
@@ -348,41 +350,23 @@ impl Renderer {
 
         let threads = pool.thread_num().max(1);
         let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
-        let (spans, shadow, map_size) = (&self.spans, &self.shadow, frame.settings.shadow_map_size);
         let lit = frame.settings.shading == Shading::Gouraud && light_clip.is_none();
+        let stage = VertexStage {
+            frame,
+            spans: &self.spans,
+            view_projection,
+            width,
+            height,
+            light: light_clip.map(|clip| (clip, frame.settings.shadow_map_size)),
+            lit,
+        };
         let mut light_runs = self.light_vertices.chunks_mut(run);
         pool.scope(|scope| {
             let runs = self.world.chunks_mut(run).zip(self.vertices.chunks_mut(run)).zip(self.varyings.chunks_mut(run));
             for (index, ((world, screen), varyings)) in runs.enumerate() {
-                let light_run = light_runs.next();
-                scope.spawn(async move {
-                    let first = index * run;
-                    let outputs = world.iter_mut().zip(screen.iter_mut()).zip(varyings.iter_mut()).enumerate();
-                    let mut light_run = light_run.map(|run| run.iter_mut());
-                    let mut span_index = spans.partition_point(|s| s.first_vertex <= first) - 1;
-                    for (offset, ((world, screen), varyings)) in outputs {
-                        let global = first + offset;
-                        while span_index + 1 < spans.len() && spans[span_index + 1].first_vertex <= global {
-                            span_index += 1;
-                        }
-                        let span = &spans[span_index];
-                        let instance = &frame.instances[span_index];
-                        let local = global - span.first_vertex;
-                        let position = span.model.transform_point3(instance.mesh.positions[local]);
-                        let normal = (span.normal_matrix * instance.mesh.normals[local]).normalize_or_zero();
-                        *world = position;
-                        *screen = ScreenVertex::new(view_projection * position.extend(1.0), width, height);
-                        *varyings = vertex_varyings(instance, local, normal, &frame.light, lit);
-                        if let (Some(light_clip), Some(light_vertex)) =
-                            (light_clip, light_run.as_mut().and_then(Iterator::next))
-                        {
-                            let clip = light_clip * position.extend(1.0);
-                            *light_vertex = ScreenVertex::new(clip, map_size, map_size);
-                            let at = shadow.locate(position);
-                            varyings[slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&at.to_array());
-                        }
-                    }
-                });
+                let outputs = VertexOutputs { world, screen, varyings, light: light_runs.next().unwrap_or_default() };
+                let stage = &stage;
+                scope.spawn(async move { stage.run(index * run, outputs) });
             }
         });
     }
@@ -401,10 +385,81 @@ impl Renderer {
     }
 }
 
+/// What the vertex stage reads: the frame, where each instance's vertices start and the
+/// projections they go through.
+struct VertexStage<'a> {
+    frame: &'a Frame<'a>,
+    spans: &'a [Span],
+    view_projection: Mat4,
+    width: u32,
+    height: u32,
+    /// The shadow map's projection and side in texels, when shadows are drawn.
+    light: Option<(Mat4, u32)>,
+    /// Whether the vertex colours are lit (Gouraud shading without shadows).
+    lit: bool,
+}
+
+/// One run of the vertex stage's outputs, from the same first vertex on.
+struct VertexOutputs<'a> {
+    world: &'a mut [Vec3],
+    screen: &'a mut [ScreenVertex],
+    varyings: &'a mut [Varyings],
+    /// Empty when shadows are off.
+    light: &'a mut [ScreenVertex],
+}
+
+impl VertexStage<'_> {
+    /// Transforms, lights and projects the run of vertices from global index `first` on,
+    /// instance by instance.
+    fn run(&self, first: usize, out: VertexOutputs) {
+        let mut span_index = self.spans.partition_point(|s| s.first_vertex <= first).saturating_sub(1);
+        let mut done = 0;
+        while done < out.world.len() {
+            let span = &self.spans[span_index];
+            let instance = &self.frame.instances[span_index];
+            let local = first + done - span.first_vertex;
+            let count = (instance.mesh.positions.len() - local).min(out.world.len() - done);
+            let outputs = VertexOutputs {
+                world: &mut out.world[done..done + count],
+                screen: &mut out.screen[done..done + count],
+                varyings: &mut out.varyings[done..done + count],
+                light: if out.light.is_empty() { &mut [] } else { &mut out.light[done..done + count] },
+            };
+            self.instance_run(span, instance, local, outputs);
+            done += count;
+            span_index += 1;
+        }
+    }
+
+    /// The vertices of one instance from its vertex `local` on, as many as `out` holds.
+    fn instance_run(&self, span: &Span, instance: &Instance, local: usize, out: VertexOutputs) {
+        let mesh = &instance.mesh;
+        let range = local..local + out.world.len();
+        let clip_from_model = self.view_projection * span.model;
+        let light_from_model = self.light.map(|(clip, size)| (clip * span.model, size));
+        let inputs = mesh.positions[range.clone()].iter().zip(&mesh.normals[range.clone()]).zip(range);
+        let outputs = out.world.iter_mut().zip(out.screen.iter_mut()).zip(out.varyings.iter_mut());
+        for (k, (((&position, &normal), index), ((world, screen), varyings))) in inputs.zip(outputs).enumerate() {
+            *world = span.model.transform_point3(position);
+            let model = position.extend(1.0);
+            *screen = ScreenVertex::new(clip_from_model * model, self.width, self.height);
+            let normal = (span.normal_matrix * normal).normalize_or_zero();
+            *varyings = vertex_varyings(instance, index, normal, &self.frame.light, self.lit);
+            if let Some((light_from_model, size)) = light_from_model {
+                let clip = light_from_model * model;
+                out.light[k] = ScreenVertex::new(clip, size, size);
+                let texel = ShadowMap::locate_clip(clip, size);
+                varyings[slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&texel.to_array());
+            }
+        }
+    }
+}
+
 /// The varyings of one vertex before the shadow position is known.
 ///
 /// When `lit` the colour is the lit colour (Gouraud without shadows: nothing is left to light
 /// per pixel).
+#[inline(always)]
 fn vertex_varyings(instance: &Instance, local: usize, normal: Vec3, light: &Light, lit: bool) -> Varyings {
     let material = &instance.material;
     let mesh = &instance.mesh;

@@ -98,8 +98,14 @@ impl ShadowMap {
     /// Where a world point falls in the map: texel x, texel y (from the top-left corner) and
     /// light depth, the values the pixel stage interpolates.
     pub fn locate(&self, world: Vec3) -> Vec3 {
-        let clip = self.clip_from_world * world.extend(1.0);
-        let size = self.size as f32;
+        Self::locate_clip(self.clip_from_world * world.extend(1.0), self.size)
+    }
+
+    /// [`ShadowMap::locate`] of a point already in the light's clip space, on a map of `size`
+    /// texels a side.
+    #[inline(always)]
+    pub(crate) fn locate_clip(clip: Vec4, size: u32) -> Vec3 {
+        let size = size as f32;
         Vec3::new((clip.x + 1.0) * 0.5 * size, (1.0 - clip.y) * 0.5 * size, clip.z)
     }
 

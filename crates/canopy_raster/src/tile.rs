@@ -294,12 +294,13 @@ impl Setup {
     /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
     fn covered_runs(&self, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
-        let rows = if self.narrow {
+        let mut rows = [0; TILE_HEIGHT as usize];
+        if self.narrow {
             let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
-            self.coverage(narrow(self.start), narrow(self.step_x), narrow(self.step_y))
+            self.coverage(narrow(self.start), narrow(self.step_x), narrow(self.step_y), &mut rows);
         } else {
-            self.coverage(self.start, self.step_x, self.step_y)
-        };
+            self.coverage(self.start, self.step_x, self.step_y, &mut rows);
+        }
         let mut fragments = 0;
         for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(&rows) {
             if coverage == 0 {
@@ -317,21 +318,27 @@ impl Setup {
         fragments
     }
 
-    /// Which pixels of the rect the triangle covers, with edge functions stepped in `E`: one
-    /// bit per pixel (at most [`TILE_WIDTH`] of them) and a word per row (at most
-    /// [`TILE_HEIGHT`]), found [`MASK_PIXELS`] pixels at a time without a branch per pixel.
+    /// Writes which pixels of the rect the triangle covers into `rows`, with edge functions
+    /// stepped in `E`: one bit per pixel (at most [`TILE_WIDTH`] of them) and a word per row
+    /// (at most [`TILE_HEIGHT`]), found [`MASK_PIXELS`] pixels at a time without a branch per
+    /// pixel.
     ///
     /// The triangle is convex, so each row's covered pixels run from its lowest set bit to its
     /// highest.
     #[inline(always)]
-    fn coverage<E: EdgeValue>(&self, start: [E; 3], step_x: [E; 3], step_y: [E; 3]) -> [u64; TILE_HEIGHT as usize] {
+    fn coverage<E: EdgeValue>(
+        &self,
+        start: [E; 3],
+        step_x: [E; 3],
+        step_y: [E; 3],
+        rows: &mut [u64; TILE_HEIGHT as usize],
+    ) {
         const { assert!(TILE_WIDTH <= u64::BITS) };
         let mask_steps = E::mask_steps(step_x);
         let group_step = step_x.map(|s| s * E::from_u32(MASK_PIXELS));
         let width = self.rect.max_x - self.rect.min_x + 1;
         let groups = width.div_ceil(MASK_PIXELS);
         let valid = u64::MAX >> (u64::BITS - width);
-        let mut rows = [0; TILE_HEIGHT as usize];
         let mut row_edges = start;
         for row in &mut rows[..(self.rect.max_y - self.rect.min_y + 1) as usize] {
             let mut coverage = 0u64;
@@ -343,7 +350,6 @@ impl Setup {
             *row = coverage & valid;
             row_edges = add(row_edges, step_y);
         }
-        rows
     }
 }
 
