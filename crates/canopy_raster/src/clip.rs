@@ -7,7 +7,7 @@
 //! test and the screen bounds.
 
 use crate::shade::Varyings;
-use bevy_math::Vec4;
+use bevy_math::{BVec4A, Mat4, Vec4};
 
 /// How far outside the viewport, in viewport half-sizes, vertices may lie before x/y clipping
 /// cuts the triangle.
@@ -69,16 +69,53 @@ pub mod outside {
 
 /// Which planes `position` lies outside of, as [`outside`] bits.
 pub fn outcode(p: Vec4) -> u8 {
-    let mut code = 0;
-    let mut set = |outside: bool, bit: u8| code |= if outside { bit } else { 0 };
-    set(p.z < 0.0, outside::NEAR);
-    set(p.z > p.w, outside::FAR);
-    set(p.x < -p.w, outside::LEFT);
-    set(p.x > p.w, outside::RIGHT);
-    set(p.y < -p.w, outside::BOTTOM);
-    set(p.y > p.w, outside::TOP);
-    set(p.x.abs() > GUARD_BAND * p.w || p.y.abs() > GUARD_BAND * p.w, outside::GUARD);
-    code
+    ClipLanes::splat(p).outcodes()[0]
+}
+
+/// Four homogeneous positions, one per lane of each coordinate, for the vertex stage to work
+/// on four vertices at once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ClipLanes {
+    pub x: Vec4,
+    pub y: Vec4,
+    pub z: Vec4,
+    pub w: Vec4,
+}
+
+impl ClipLanes {
+    /// The same position in every lane.
+    pub fn splat(p: Vec4) -> Self {
+        Self { x: Vec4::splat(p.x), y: Vec4::splat(p.y), z: Vec4::splat(p.z), w: Vec4::splat(p.w) }
+    }
+
+    /// `matrix` applied to the four points `(x, y, z, 1)` given lane by lane.
+    #[inline(always)]
+    pub fn transform(matrix: Mat4, [x, y, z]: [Vec4; 3]) -> Self {
+        let row = |k: usize| {
+            Vec4::splat(matrix.x_axis[k]) * x
+                + Vec4::splat(matrix.y_axis[k]) * y
+                + Vec4::splat(matrix.z_axis[k]) * z
+                + Vec4::splat(matrix.w_axis[k])
+        };
+        Self { x: row(0), y: row(1), z: row(2), w: row(3) }
+    }
+
+    /// Which planes each lane's position lies outside of, as [`outside`] bits.
+    #[inline(always)]
+    pub fn outcodes(&self) -> [u8; 4] {
+        // Each plane adds its bit where the lane is outside; the bits are distinct powers of
+        // two, so the float sum is exact.
+        let bit = |outside: BVec4A, bit: u8| Vec4::select(outside, Vec4::splat(f32::from(bit)), Vec4::ZERO);
+        let guard = self.w * GUARD_BAND;
+        let code = bit(self.z.cmplt(Vec4::ZERO), outside::NEAR)
+            + bit(self.z.cmpgt(self.w), outside::FAR)
+            + bit(self.x.cmplt(-self.w), outside::LEFT)
+            + bit(self.x.cmpgt(self.w), outside::RIGHT)
+            + bit(self.y.cmplt(-self.w), outside::BOTTOM)
+            + bit(self.y.cmpgt(self.w), outside::TOP)
+            + bit(self.x.abs().cmpgt(guard) | self.y.abs().cmpgt(guard), outside::GUARD);
+        code.to_array().map(|c| c as u8)
+    }
 }
 
 /// A convex polygon of at most [`MAX_CLIPPED`] vertices, stored inline.
@@ -135,6 +172,28 @@ mod tests {
 
     fn codes(triangle: &[ClipVertex; 3]) -> [u8; 3] {
         triangle.map(|v| outcode(v.position))
+    }
+
+    #[test]
+    fn outcodes_name_every_plane_a_lane_is_outside_of() {
+        let lanes = [
+            (Vec4::new(0.2, -0.3, 0.5, 1.0), 0),
+            (Vec4::new(0.0, 0.0, -0.1, 1.0), outside::NEAR),
+            (Vec4::new(-2.0, 2.0, 3.0, 2.5), outside::FAR),
+            (Vec4::new(-5.0, 1.5, 0.5, 1.0), outside::LEFT | outside::TOP | outside::GUARD),
+            (Vec4::new(1.5, -4.5, 0.5, 1.0), outside::RIGHT | outside::BOTTOM | outside::GUARD),
+        ];
+        for (p, expected) in lanes {
+            assert_eq!(outcode(p), expected, "{p}");
+        }
+        // Four at once agree with one at a time.
+        let four = ClipLanes {
+            x: Vec4::new(0.2, 0.0, -2.0, -5.0),
+            y: Vec4::new(-0.3, 0.0, 2.0, 1.5),
+            z: Vec4::new(0.5, -0.1, 3.0, 0.5),
+            w: Vec4::new(1.0, 1.0, 2.5, 1.0),
+        };
+        assert_eq!(four.outcodes(), [0, 1, 2, 3].map(|k| lanes[k].1));
     }
 
     #[test]

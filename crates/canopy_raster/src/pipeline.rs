@@ -15,16 +15,17 @@
 //! of its own.
 
 use crate::camera::{Camera, Light};
-use crate::clip::{ClipVertex, clip_triangle, outcode, outside};
+use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
-use crate::shade::{Material, Shading, VARYINGS, Varyings, slot};
+use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
 use crate::shadow::{ShadowMap, fit_light};
 use crate::tile::{self, DepthBand, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
 use std::sync::Arc;
+use wide::i32x4;
 
 /// Tile width in pixels.
 pub const TILE_WIDTH: u32 = 64;
@@ -122,37 +123,51 @@ pub(crate) struct ScreenVertex {
 }
 
 impl ScreenVertex {
-    /// Projects a clip-space position onto a `width` x `height` target.
+    /// Projects four clip-space positions onto a `width` x `height` target.
     #[inline(always)]
-    fn new(clip: Vec4, width: u32, height: u32) -> Self {
-        let code = outcode(clip);
-        if code & outside::CLIPPED != 0 {
-            return Self { code, ..Self::default() };
-        }
-        Self { code, ..Self::projected(clip, width, height) }
+    fn lanes(clip: &ClipLanes, width: u32, height: u32) -> [Self; 4] {
+        let codes = clip.outcodes();
+        let projected = Self::project(clip, width, height);
+        std::array::from_fn(|k| {
+            let code = codes[k];
+            let kept = if code & outside::CLIPPED == 0 { projected[k] } else { Self::default() };
+            Self { code, ..kept }
+        })
     }
 
     /// Projects a clip-space position known to be inside the near plane and the guard band
     /// (up to rounding).
-    #[inline(always)]
     fn projected(clip: Vec4, width: u32, height: u32) -> Self {
-        let inv_w = 1.0 / clip.w;
-        let ndc = clip.truncate() * inv_w;
+        Self::project(&ClipLanes::splat(clip), width, height)[0]
+    }
+
+    /// Projects four clip-space positions, each inside the near plane and the guard band up
+    /// to rounding.
+    #[inline(always)]
+    fn project(clip: &ClipLanes, width: u32, height: u32) -> [Self; 4] {
+        let inv_w = Vec4::ONE / clip.w;
         let steps = SUBPIXEL_STEPS as f32;
-        // The clamp only guards against rounding past the guard band after clipping.
-        let limit = 3.0 * MAX_TARGET_SIZE as f32 * steps;
-        let x = floor_i32(((ndc.x + 1.0) * 0.5 * width as f32 * steps).clamp(-limit, limit) + 0.5);
-        let y = floor_i32(((1.0 - ndc.y) * 0.5 * height as f32 * steps).clamp(-limit, limit) + 0.5);
-        Self { code: 0, x, y, z: ndc.z.max(0.0), inv_w }
+        // The limits only guard against rounding past the guard band after clipping; `max`
+        // comes first so that a position without a direction (on the eye point) lands on one.
+        let limit = Vec4::splat(3.0 * MAX_TARGET_SIZE as f32 * steps);
+        let fixed = |v: Vec4| floor_lanes(v.max(-limit).min(limit) + 0.5);
+        let x = fixed((clip.x * inv_w + 1.0) * 0.5 * width as f32 * steps);
+        let y = fixed((1.0 - clip.y * inv_w) * 0.5 * height as f32 * steps);
+        let (z, inv_w) = ((clip.z * inv_w).max(Vec4::ZERO).to_array(), inv_w.to_array());
+        std::array::from_fn(|k| Self { code: 0, x: x[k], y: y[k], z: z[k], inv_w: inv_w[k] })
     }
 }
 
-/// The largest whole number not above `x`, for `x` well within `i32` (the baseline x86-64
-/// target has no rounding instruction, and the library call is slow).
+/// The largest whole number not above each lane of `v`, for values well within `i32` (the
+/// baseline x86-64 target has no rounding instruction).
 #[inline(always)]
-fn floor_i32(x: f32) -> i32 {
-    let truncated = x as i32;
-    if (truncated as f32) > x { truncated - 1 } else { truncated }
+fn floor_lanes(v: Vec4) -> [i32; 4] {
+    let v = lanes_of(v);
+    let truncated = v.fast_trunc_int();
+    // Truncation moves negative fractions up; the lanes it moved step back down (a true
+    // comparison is all ones, minus one as an integer).
+    let moved_up: i32x4 = bytemuck::cast(v.simd_lt(truncated.round_float()));
+    (truncated + moved_up).to_array()
 }
 
 /// A triangle made by clipping, kept whole with its projected vertices.
@@ -431,28 +446,70 @@ impl VertexStage<'_> {
         }
     }
 
-    /// The vertices of one instance from its vertex `local` on, as many as `out` holds.
+    /// The vertices of one instance from its vertex `local` on, as many as `out` holds, four
+    /// at a time.
     fn instance_run(&self, span: &Span, instance: &Instance, local: usize, out: VertexOutputs) {
         let mesh = &instance.mesh;
-        let range = local..local + out.world.len();
+        let count = out.world.len();
         let clip_from_model = self.view_projection * span.model;
         let light_from_model = self.light.map(|(clip, size)| (clip * span.model, size));
-        let inputs = mesh.positions[range.clone()].iter().zip(&mesh.normals[range.clone()]).zip(range);
-        let outputs = out.world.iter_mut().zip(out.screen.iter_mut()).zip(out.varyings.iter_mut());
-        for (k, (((&position, &normal), index), ((world, screen), varyings))) in inputs.zip(outputs).enumerate() {
-            *world = span.model.transform_point3(position);
-            let model = position.extend(1.0);
-            *screen = ScreenVertex::new(clip_from_model * model, self.width, self.height);
-            let normal = (span.normal_matrix * normal).normalize_or_zero();
-            *varyings = vertex_varyings(instance, index, normal, &self.frame.light, self.lit);
-            if let Some((light_from_model, size)) = light_from_model {
-                let clip = light_from_model * model;
-                out.light[k] = ScreenVertex::new(clip, size, size);
-                let texel = ShadowMap::locate_clip(clip, size);
-                varyings[slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&texel.to_array());
+        let normal_matrix = Mat4::from_mat3(span.normal_matrix);
+        let (positions, normals) = (&mesh.positions[local..local + count], &mesh.normals[local..local + count]);
+        let towards_light = -self.frame.light.direction;
+        for group in (0..count).step_by(VERTEX_LANES) {
+            let lanes = group..(group + VERTEX_LANES).min(count);
+            let position = gather(&positions[lanes.clone()]);
+            let world = ClipLanes::transform(span.model, position);
+            let screen = ScreenVertex::lanes(&ClipLanes::transform(clip_from_model, position), self.width, self.height);
+            let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
+            let cosine = normal[0] * towards_light.x + normal[1] * towards_light.y + normal[2] * towards_light.z;
+            let diffuse = cosine.max(Vec4::ZERO) * self.frame.light.diffuse;
+            let light = light_from_model.map(|(light_from_model, size)| {
+                let clip = ClipLanes::transform(light_from_model, position);
+                (ScreenVertex::lanes(&clip, size, size), columns([clip.x, clip.y, clip.z, clip.w]), size)
+            });
+            let (world, normal, diffuse) = (columns([world.x, world.y, world.z]), columns(normal), diffuse.to_array());
+            for (k, i) in lanes.enumerate() {
+                out.world[i] = Vec3::from_array(world[k]);
+                out.screen[i] = screen[k];
+                let normal = Vec3::from_array(normal[k]);
+                out.varyings[i] = vertex_varyings(instance, local + i, normal, diffuse[k], &self.frame.light, self.lit);
+                if let Some((vertices, clip, size)) = &light {
+                    out.light[i] = vertices[k];
+                    let texel = ShadowMap::locate_clip(Vec4::from_array(clip[k]), *size);
+                    out.varyings[i][slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&texel.to_array());
+                }
             }
         }
     }
+}
+
+/// Vertices the vertex stage works on at once.
+const VERTEX_LANES: usize = 4;
+
+/// Up to [`VERTEX_LANES`] points as lanes of their coordinates; lanes past the points repeat
+/// the last one.
+#[inline(always)]
+fn gather(points: &[Vec3]) -> [Vec4; 3] {
+    let at = |k: usize| points[k.min(points.len() - 1)];
+    let [a, b, c, d] = [at(0), at(1), at(2), at(3)];
+    [Vec4::new(a.x, b.x, c.x, d.x), Vec4::new(a.y, b.y, c.y, d.y), Vec4::new(a.z, b.z, c.z, d.z)]
+}
+
+/// Lanes back to the [`VERTEX_LANES`] vectors they hold: entry `k` has lane `k` of each
+/// component.
+#[inline(always)]
+fn columns<const N: usize>(components: [Vec4; N]) -> [[f32; N]; VERTEX_LANES] {
+    let components = components.map(|c| c.to_array());
+    std::array::from_fn(|k| components.map(|c| c[k]))
+}
+
+/// Each lane's vector scaled to unit length, or zero where that is not possible.
+#[inline(always)]
+fn normalize_or_zero(v: ClipLanes) -> [Vec4; 3] {
+    let scale = Vec4::ONE / (v.x * v.x + v.y * v.y + v.z * v.z).sqrt();
+    let valid = scale.is_finite_mask() & scale.cmpgt(Vec4::ZERO);
+    [v.x, v.y, v.z].map(|c| Vec4::select(valid, c * scale, Vec4::ZERO))
 }
 
 /// The varyings of one vertex before the shadow position is known.
@@ -460,10 +517,16 @@ impl VertexStage<'_> {
 /// When `lit` the colour is the lit colour (Gouraud without shadows: nothing is left to light
 /// per pixel).
 #[inline(always)]
-fn vertex_varyings(instance: &Instance, local: usize, normal: Vec3, light: &Light, lit: bool) -> Varyings {
+fn vertex_varyings(
+    instance: &Instance,
+    local: usize,
+    normal: Vec3,
+    diffuse: f32,
+    light: &Light,
+    lit: bool,
+) -> Varyings {
     let material = &instance.material;
     let mesh = &instance.mesh;
-    let diffuse = light.diffuse_term(normal);
     let mut color = material.color * mesh.colors.get(local).copied().unwrap_or(Vec3::ONE);
     if lit {
         color *= light.combine(diffuse, 1.0);
@@ -678,6 +741,12 @@ mod tests {
             mesh.triangles.push([0, 1 + i, 1 + (i + 1) % rim_points as u32]);
         }
         mesh
+    }
+
+    #[test]
+    fn lanes_floor_like_whole_numbers() {
+        assert_eq!(floor_lanes(Vec4::new(-1.5, -1.0, 0.25, 2.0)), [-2, -1, 0, 2]);
+        assert_eq!(floor_lanes(Vec4::new(-0.0, -0.75, 1e6 + 0.5, -1e6 - 0.5)), [0, -1, 1_000_000, -1_000_001]);
     }
 
     #[test]
