@@ -1,6 +1,6 @@
 //! The perspective camera and the directional light the rasterizer draws with.
 
-use bevy_math::{Mat4, Vec2, Vec3};
+use bevy_math::{Mat4, Vec2, Vec3, Vec4};
 
 /// A perspective camera looking from `eye` towards `target`, with +y up (or +z when looking
 /// straight up or down).
@@ -75,7 +75,15 @@ pub struct Light {
 impl Light {
     /// The diffuse term `diffuse * max(n . -direction, 0)` for a unit normal.
     pub fn diffuse_term(&self, normal: Vec3) -> f32 {
-        self.diffuse * normal.dot(-self.direction).max(0.0)
+        self.diffuse_lanes(normal.to_array().map(Vec4::splat)).x
+    }
+
+    /// [`Light::diffuse_term`] of four unit normals at once, given as lanes of their x, y and
+    /// z.
+    #[inline(always)]
+    pub(crate) fn diffuse_lanes(&self, [x, y, z]: [Vec4; 3]) -> Vec4 {
+        let towards = -self.direction;
+        (x * towards.x + y * towards.y + z * towards.z).max(Vec4::ZERO) * self.diffuse
     }
 
     /// Total intensity from a diffuse term scaled by `visibility` (1 lit, 0 in shadow).

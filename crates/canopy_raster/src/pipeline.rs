@@ -455,15 +455,13 @@ impl VertexStage<'_> {
         let light_from_model = self.light.map(|(clip, size)| (clip * span.model, size));
         let normal_matrix = Mat4::from_mat3(span.normal_matrix);
         let (positions, normals) = (&mesh.positions[local..local + count], &mesh.normals[local..local + count]);
-        let towards_light = -self.frame.light.direction;
         for group in (0..count).step_by(VERTEX_LANES) {
             let lanes = group..(group + VERTEX_LANES).min(count);
             let position = gather(&positions[lanes.clone()]);
             let world = ClipLanes::transform(span.model, position);
             let screen = ScreenVertex::lanes(&ClipLanes::transform(clip_from_model, position), self.width, self.height);
             let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
-            let cosine = normal[0] * towards_light.x + normal[1] * towards_light.y + normal[2] * towards_light.z;
-            let diffuse = cosine.max(Vec4::ZERO) * self.frame.light.diffuse;
+            let diffuse = self.frame.light.diffuse_lanes(normal);
             let light = light_from_model.map(|(light_from_model, size)| {
                 let clip = ClipLanes::transform(light_from_model, position);
                 (ScreenVertex::lanes(&clip, size, size), columns([clip.x, clip.y, clip.z, clip.w]), size)
