@@ -451,22 +451,23 @@ impl VertexStage<'_> {
     fn instance_run(&self, span: &Span, instance: &Instance, local: usize, out: VertexOutputs) {
         let mesh = &instance.mesh;
         let count = out.world.len();
-        let clip_from_model = self.view_projection * span.model;
-        let light_from_model = self.light.map(|(clip, size)| (clip * span.model, size));
         let normal_matrix = Mat4::from_mat3(span.normal_matrix);
         let (positions, normals) = (&mesh.positions[local..local + count], &mesh.normals[local..local + count]);
         for group in (0..count).step_by(VERTEX_LANES) {
             let lanes = group..(group + VERTEX_LANES).min(count);
             let position = gather(&positions[lanes.clone()]);
             let world = ClipLanes::transform(span.model, position);
-            let screen = ScreenVertex::lanes(&ClipLanes::transform(clip_from_model, position), self.width, self.height);
+            // Projected from the world positions, exactly as clipping projects them again.
+            let world = [world.x, world.y, world.z];
+            let screen =
+                ScreenVertex::lanes(&ClipLanes::transform(self.view_projection, world), self.width, self.height);
             let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
             let diffuse = self.frame.light.diffuse_lanes(normal);
-            let light = light_from_model.map(|(light_from_model, size)| {
-                let clip = ClipLanes::transform(light_from_model, position);
+            let light = self.light.map(|(light_clip, size)| {
+                let clip = ClipLanes::transform(light_clip, world);
                 (ScreenVertex::lanes(&clip, size, size), columns([clip.x, clip.y, clip.z, clip.w]), size)
             });
-            let (world, normal, diffuse) = (columns([world.x, world.y, world.z]), columns(normal), diffuse.to_array());
+            let (world, normal, diffuse) = (columns(world), columns(normal), diffuse.to_array());
             for (k, i) in lanes.enumerate() {
                 out.world[i] = Vec3::from_array(world[k]);
                 out.screen[i] = screen[k];
@@ -739,6 +740,45 @@ mod tests {
             mesh.triangles.push([0, 1 + i, 1 + (i + 1) % rim_points as u32]);
         }
         mesh
+    }
+
+    #[test]
+    fn projected_vertices_are_those_clipping_computes_from_world_positions() {
+        // A triangle that needs clipping projects its kept corners again from their world
+        // positions; a neighbour that needs none reads the vertex stage's projection. Both
+        // must give the same sub-pixel position, or the edge they share could crack.
+        let model = Mat4::from_scale_rotation_translation(
+            Vec3::new(1.3, 0.7, 1.1),
+            bevy_math::Quat::from_euler(bevy_math::EulerRot::XYZ, 0.4, -0.9, 0.3),
+            Vec3::new(0.17, -0.23, 0.31),
+        );
+        let sphere = instance(MeshData::sphere(24, 48), model, Vec3::ONE);
+        let camera = camera_at(Vec3::new(0.3, 0.4, 2.7), Vec3::new(0.05, 0.0, 0.0));
+        let frame = Frame {
+            camera,
+            light: full_light(),
+            background: SKY,
+            instances: &[sphere],
+            settings: RenderSettings { shadows: true, ..RenderSettings::default() },
+        };
+        let (width, height) = (97, 61);
+        let mut renderer = Renderer::default();
+        renderer.render(&mut Framebuffer::new(width, height), &TaskPool::new(), &frame);
+        let view_projection = camera.view_projection(width as f32 / height as f32);
+        let light_clip = renderer.shadow_map().clip_from_world();
+        let size = frame.settings.shadow_map_size;
+        let views =
+            [(&renderer.vertices, view_projection, width, height), (&renderer.light_vertices, light_clip, size, size)];
+        for (vertices, clip_from_world, width, height) in views {
+            for (vertex, world) in vertices.iter().zip(&renderer.world).filter(|(v, _)| v.code & outside::CLIPPED == 0)
+            {
+                let expected = ScreenVertex::projected(clip_from_world * world.extend(1.0), width, height);
+                assert_eq!(
+                    (vertex.x, vertex.y, vertex.z, vertex.inv_w),
+                    (expected.x, expected.y, expected.z, expected.inv_w)
+                );
+            }
+        }
     }
 
     #[test]
