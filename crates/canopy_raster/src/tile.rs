@@ -169,16 +169,18 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
     (fragments, occluded)
 }
 
-/// The farthest depth held in `rect` of a band.
+/// The farthest depth held in `rect` of a band, four depths at a time.
 fn farthest_depth(depth: &[f32], width: u32, y0: u32, rect: PixelBounds) -> f32 {
-    (rect.min_y..=rect.max_y)
-        .map(|y| {
-            let row = ((y - y0) * width) as usize;
-            depth[row + rect.min_x as usize..=row + rect.max_x as usize]
-                .iter()
-                .fold(0.0f32, |m, &d| if d > m { d } else { m })
-        })
-        .fold(0.0, f32::max)
+    let mut farthest = Vec4::ZERO;
+    let mut rest = 0.0f32;
+    for y in rect.min_y..=rect.max_y {
+        let row = ((y - y0) * width) as usize;
+        let depths = &depth[row + rect.min_x as usize..=row + rect.max_x as usize];
+        let runs = depths.chunks_exact(LANES);
+        rest = runs.remainder().iter().fold(rest, |m, &d| m.max(d));
+        farthest = runs.fold(farthest, |m, run| m.max(Vec4::from_slice(run)));
+    }
+    farthest.max_element().max(rest)
 }
 
 /// Clears one band of the shadow map and draws the depths of every triangle binned into its
@@ -776,6 +778,25 @@ mod tests {
     }
 
     const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
+
+    #[test]
+    fn the_farthest_depth_is_found_in_whole_runs_and_in_the_rest_of_a_row() {
+        // A band 13 pixels wide from row 8 on; the rect's rows are 6 pixels long: one run of
+        // four and a rest of two.
+        let (width, y0) = (13, 8);
+        let rect = PixelBounds { min_x: 3, max_x: 8, min_y: 9, max_y: 11 };
+        let mut depth = vec![0.9; width as usize * 4];
+        for y in rect.min_y..=rect.max_y {
+            let row = ((y - y0) * width) as usize;
+            depth[row + 3..=row + 8].fill(0.25);
+        }
+        let at = |x: u32, y: u32| ((y - y0) * width + x) as usize;
+        assert_eq!(farthest_depth(&depth, width, y0, rect), 0.25, "pixels outside the rect do not count");
+        depth[at(5, 10)] = 0.5;
+        assert_eq!(farthest_depth(&depth, width, y0, rect), 0.5, "inside a run");
+        depth[at(8, 11)] = 0.75;
+        assert_eq!(farthest_depth(&depth, width, y0, rect), 0.75, "in the rest of a row");
+    }
 
     #[test]
     fn small_triangles_walk_narrow_and_large_ones_wide() {
