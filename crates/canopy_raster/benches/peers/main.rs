@@ -7,7 +7,9 @@
 //! them its rows say why they are missing.
 //!
 //! Every renderer draws the same mesh with the same matrices; the coverage column (the share
-//! of pixels not left at the background) shows that they drew the same picture.
+//! of pixels not left at the background) shows that they drew the same picture. The ratio
+//! column is the median over rounds of each frame's time over Canopy's frame of the same
+//! round, which is steadier than a ratio of medians on a machine whose speed drifts.
 
 mod euc_peer;
 mod gl_peer;
@@ -73,6 +75,14 @@ fn median(samples: &mut [f64]) -> f64 {
     samples[samples.len() / 2]
 }
 
+/// The median over rounds of `samples[round] / base[round]`: each frame is compared with
+/// Canopy's frame of the same round, so that the machine's slow and fast stretches, which
+/// last many rounds, cancel out of the ratio.
+fn median_ratio(samples: &[f64], base: &[f64]) -> f64 {
+    let mut ratios: Vec<f64> = samples.iter().zip(base).map(|(sample, base)| sample / base).collect();
+    median(&mut ratios)
+}
+
 fn main() {
     let mut rounds = 40;
     let mut args = std::env::args().skip(1);
@@ -113,6 +123,7 @@ fn main() {
         Ok(gl) => println!("llvmpipe: {} (threads: LP_NUM_THREADS or one per core)", gl.renderer_name()),
         Err(reason) => println!("llvmpipe: not measured: {reason}"),
     }
+    println!("Ratios: median over rounds of a frame's time over Canopy's (unshadowed) frame of the same round");
     println!();
     println!("| camera | renderer | ms / frame (median) | triangles / s | coverage | Canopy faster by |");
     println!("|---|---|---:|---:|---:|---:|");
@@ -139,17 +150,18 @@ fn main() {
         // Coverage of each renderer's last frame of this camera (Canopy's without shadows).
         canopy.render(camera, false);
         let coverage = [Some(canopy.coverage()), None, Some(euc.coverage()), gl.as_mut().ok().map(|gl| gl.coverage())];
-        let canopy_ms = median(&mut samples[0]);
+        let canopy = samples[0].clone();
         for (index, contender) in Contender::ALL.into_iter().enumerate() {
             if samples[index].is_empty() {
                 continue;
             }
+            let ratio = median_ratio(&samples[index], &canopy);
             let ms = median(&mut samples[index]);
             let coverage = coverage[index].map_or("same".to_string(), |c| format!("{:.1}%", c * 100.0));
             let ratio = match contender {
                 Contender::Canopy => "-".to_string(),
-                Contender::CanopyShadowed => format!("shadows cost {:.2}x", ms / canopy_ms),
-                _ => format!("{:.1}x", ms / canopy_ms),
+                Contender::CanopyShadowed => format!("shadows cost {ratio:.2}x"),
+                _ => format!("{ratio:.1}x"),
             };
             println!(
                 "| {} | {} | {ms:.2} | {:.1} M | {coverage} | {ratio} |",
