@@ -92,11 +92,14 @@ fn main() {
         }
     }
 
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // The thread that calls `render` works through the frame's tasks too, so one worker per
+    // other core keeps every core busy without two of Canopy's threads sharing one.
+    let workers = (cores - 1).max(1);
     let mut canopy = Canopy {
         renderer: Renderer::default(),
         target: Framebuffer::new(WIDTH, HEIGHT),
-        pool: TaskPoolBuilder::new().num_threads(threads).build(),
+        pool: TaskPoolBuilder::new().num_threads(workers).build(),
         instances: vec![standard::instance()],
     };
     let mesh = canopy.instances[0].mesh.clone();
@@ -118,7 +121,10 @@ fn main() {
         "Standard scene: {} triangles at {WIDTH}x{HEIGHT}, {rounds} interleaved frames per renderer",
         mesh.triangle_count()
     );
-    println!("Canopy: {threads} threads on the task pool; euc 0.5.3: one thread (it has no parallel mode)");
+    println!(
+        "Canopy: the calling thread and {workers} task pool worker(s) on {cores} cores; \
+         euc 0.5.3: one thread (it has no parallel mode)"
+    );
     match &gl {
         Ok(gl) => println!("llvmpipe: {} (threads: LP_NUM_THREADS or one per core)", gl.renderer_name()),
         Err(reason) => println!("llvmpipe: not measured: {reason}"),
