@@ -156,12 +156,12 @@ fn main() {
         // Coverage of each renderer's last frame of this camera (Canopy's without shadows).
         canopy.render(camera, false);
         let coverage = [Some(canopy.coverage()), None, Some(euc.coverage()), gl.as_mut().ok().map(|gl| gl.coverage())];
-        let canopy = samples[0].clone();
+        let canopy_frames = samples[0].clone();
         for (index, contender) in Contender::ALL.into_iter().enumerate() {
             if samples[index].is_empty() {
                 continue;
             }
-            let ratio = median_ratio(&samples[index], &canopy);
+            let ratio = median_ratio(&samples[index], &canopy_frames);
             let ms = median(&mut samples[index]);
             let coverage = coverage[index].map_or("same".to_string(), |c| format!("{:.1}%", c * 100.0));
             let ratio = match contender {
