@@ -7,7 +7,8 @@
 //! | [`camera`] | the perspective camera and the directional light |
 //! | [`clip`] | near-plane and guard-band clipping in clip space |
 //! | [`pipeline`] | the frame: vertex stage, tile binning, parallel tile rasterization |
-//! | `tile` | per-tile triangle setup and the pixel loops |
+//! | `setup` | triangle setup: bounds, edge functions, interpolation planes |
+//! | `tile` | coverage walks and the pixel loops of one tile |
 //! | [`shade`] | materials, shading modes, interpolated values |
 //! | [`texture`] | PNG/BMP textures, nearest and bilinear sampling, repeat and clamp |
 //! | [`shadow`] | the light's fitted orthographic shadow map and its lookup |
@@ -23,6 +24,7 @@ pub mod clip;
 pub mod framebuffer;
 pub mod mesh;
 pub mod pipeline;
+mod setup;
 pub mod shade;
 pub mod shadow;
 pub mod standard;

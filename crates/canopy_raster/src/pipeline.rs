@@ -2,12 +2,10 @@
 //! then parallel rasterization of the tiles, for the shadow map first (when on) and then for
 //! the image.
 //!
-//! Binning does the least per triangle that sorts it: trivial rejection against the view
-//! volume, back-face and zero-area culling from the fixed-point screen vertices, and the
-//! triangle's pixel bounds. The full setup (edge functions, interpolants) happens once per
-//! tile a triangle touches, right before its pixels are drawn, while its vertices are still in
-//! cache. Triangles crossing the near plane or the guard band are clipped during binning and
-//! kept whole in their chunk.
+//! Binning rejects triangles outside the view volume, clips those crossing the near plane or
+//! the guard band, and sets each remaining triangle up once (see [`setup`](crate::setup)):
+//! culling, pixel bounds, edge functions and the planes of its values. It then lists the
+//! setup's index in the bin of every tile its bounds meet. The tiles read nothing else.
 //!
 //! Draw order is kept: chunks are contiguous runs of triangles and each tile walks the chunks
 //! in order, so earlier triangles win depth ties exactly as in a sequential renderer. Every
@@ -18,7 +16,10 @@ use crate::camera::{Camera, Light};
 use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
-use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
+use crate::setup::{BiasedDepth, Interpolated, Plane, Surface, TriangleSetup, Viewport};
+use crate::shade::{
+    Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
+};
 use crate::shadow::{ShadowMap, fit_light};
 use crate::tile::{self, DepthBand, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
@@ -105,9 +106,8 @@ pub struct RenderStats {
 }
 
 /// A vertex projected to the screen: which planes it is outside of and (when it needs no
-/// clipping) its fixed-point screen position, depth and `1/w`. Kept small, as the tiles read
-/// it scattered: the rare triangle that needs clipping computes its clip positions again from
-/// the world positions.
+/// clipping) its fixed-point screen position, depth and `1/w`. The rare triangle that needs
+/// clipping computes its clip positions again from the world positions.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct ScreenVertex {
     /// [`outside`] bits.
@@ -170,33 +170,15 @@ fn floor_lanes(v: Vec4) -> [i32; 4] {
     (truncated + moved_up).to_array()
 }
 
-/// A triangle made by clipping, kept whole with its projected vertices.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ClippedTriangle {
-    pub vertices: [ScreenVertex; 3],
-    pub varyings: [Varyings; 3],
-    /// The flat-shading diffuse term of the triangle it was cut from.
-    pub flat_diffuse: f32,
-}
-
-/// A triangle's place in a tile bin: a mesh triangle of an instance, or a clipped triangle of
-/// the same chunk when [`CLIPPED_BIT`] is set.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct BinEntry {
-    pub triangle: u32,
-    pub instance: u32,
-}
-
-/// Marks a [`BinEntry`] whose triangle is in its chunk's clipped list.
-pub(crate) const CLIPPED_BIT: u32 = 1 << 31;
-
 /// The binning output of one run of triangles.
 #[derive(Debug, Default)]
 pub(crate) struct Chunk {
-    /// Per tile, the triangles touching it, in draw order.
-    pub bins: Vec<Vec<BinEntry>>,
-    pub clipped: Vec<ClippedTriangle>,
-    binned: usize,
+    /// Per tile, the indices in `setups` of the triangles touching it, in draw order.
+    pub bins: Vec<Vec<u32>>,
+    /// The run's visible triangles, set up.
+    pub setups: Vec<TriangleSetup>,
+    /// The planes of the setups.
+    pub planes: Vec<Plane>,
 }
 
 /// Where an instance's vertices and triangles start in the frame's global numbering, and its
@@ -214,28 +196,34 @@ pub(crate) struct Span {
 struct Geometry<'a> {
     spans: &'a [Span],
     world: &'a [Vec3],
-    /// Varyings for clipping; `None` for depth-only views.
-    varyings: Option<&'a [Varyings]>,
+    /// What the colour pixels interpolate; `None` for depth-only views.
+    colour: Option<ColourValues<'a>>,
 }
 
-/// A view being binned: its projection, its projected vertices, its target size and whether
-/// back faces go.
+/// What binning needs to set up triangles for the colour image.
+#[derive(Clone, Copy)]
+struct ColourValues<'a> {
+    varyings: &'a [Varyings],
+    shading: Shading,
+    /// Whether the shadow map is read.
+    shadowed: bool,
+}
+
+/// A view being binned: its projection, its projected vertices and its viewport.
 #[derive(Clone, Copy)]
 struct BinTarget<'a> {
     clip_from_world: Mat4,
     vertices: &'a [ScreenVertex],
-    width: u32,
-    height: u32,
-    cull_back_faces: bool,
+    viewport: Viewport,
 }
 
 impl BinTarget<'_> {
     fn tiles_x(&self) -> u32 {
-        self.width.div_ceil(TILE_WIDTH)
+        self.viewport.width.div_ceil(TILE_WIDTH)
     }
 
     fn tiles(&self) -> usize {
-        (self.tiles_x() * self.height.div_ceil(TILE_HEIGHT)) as usize
+        (self.tiles_x() * self.viewport.height.div_ceil(TILE_HEIGHT)) as usize
     }
 }
 
@@ -290,34 +278,23 @@ impl Renderer {
             let view = BinTarget {
                 clip_from_world: light_clip,
                 vertices: &self.light_vertices,
-                width: size,
-                height: size,
-                cull_back_faces: false,
+                viewport: Viewport { width: size, height: size, cull_back_faces: false },
             };
-            let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: None };
+            let geometry = Geometry { spans: &self.spans, world: &self.world, colour: None };
             stats.shadow_triangles = bin(pool, threads, &mut self.shadow_chunks, geometry, frame, view);
-            self.draw_shadow_map(pool, frame);
+            self.draw_shadow_map(pool);
         }
         let view = BinTarget {
             clip_from_world: view_projection,
             vertices: &self.vertices,
-            width,
-            height,
-            cull_back_faces: true,
+            viewport: Viewport { width, height, cull_back_faces: true },
         };
-        let geometry = Geometry { spans: &self.spans, world: &self.world, varyings: Some(&self.varyings) };
+        let shadow = self.shadow.is_active().then_some(&self.shadow);
+        let colour = ColourValues { varyings: &self.varyings, shading: settings.shading, shadowed: shadow.is_some() };
+        let geometry = Geometry { spans: &self.spans, world: &self.world, colour: Some(colour) };
         stats.triangles_rasterized = bin(pool, threads, &mut self.chunks, geometry, frame, view);
 
-        let context = TileContext {
-            frame,
-            chunks: &self.chunks,
-            world: &self.world,
-            vertices: &self.vertices,
-            varyings: &self.varyings,
-            spans: &self.spans,
-            shadow: self.shadow.is_active().then_some(&self.shadow),
-            tiles_x: width.div_ceil(TILE_WIDTH),
-        };
+        let context = TileContext { frame, chunks: &self.chunks, shadow, tiles_x: width.div_ceil(TILE_WIDTH) };
         let counts = pool.scope(|scope| {
             for (row, band) in target.bands_mut(TILE_HEIGHT).enumerate() {
                 let context = &context;
@@ -387,14 +364,14 @@ impl Renderer {
     }
 
     /// Clears the shadow map and draws the binned light-view triangles into it, depth only.
-    fn draw_shadow_map(&mut self, pool: &TaskPool, frame: &Frame) {
+    fn draw_shadow_map(&mut self, pool: &TaskPool) {
         let size = self.shadow.size();
         let (stride, first) = self.shadow.row_layout();
-        let (chunks, vertices, spans) = (&self.shadow_chunks, &self.light_vertices, &self.spans);
+        let chunks = &self.shadow_chunks;
         pool.scope(|scope| {
             for (row, depth) in self.shadow.rows_mut().chunks_mut(stride * TILE_HEIGHT as usize).enumerate() {
                 let band = DepthBand { y0: row as u32 * TILE_HEIGHT, width: size, stride, first, depth };
-                scope.spawn(async move { tile::draw_depth_band(frame, chunks, vertices, spans, row as u32, band) });
+                scope.spawn(async move { tile::draw_depth_band(chunks, row as u32, band) });
             }
         });
     }
@@ -585,66 +562,119 @@ fn bin(
     for chunk in chunks.iter_mut() {
         chunk.bins.resize_with(tiles, Vec::new);
         chunk.bins.iter_mut().for_each(Vec::clear);
-        chunk.clipped.clear();
-        chunk.binned = 0;
+        chunk.setups.clear();
+        chunk.planes.clear();
     }
     pool.scope(|scope| {
         for (range, chunk) in runs(total, parts).zip(chunks.iter_mut()) {
             scope.spawn(async move { bin_run(chunk, range, geometry, frame, view) });
         }
     });
-    chunks.iter().map(|c| c.binned).sum()
+    chunks.iter().map(|c| c.setups.len()).sum()
 }
 
-/// Bins the global triangles `range` into `chunk`.
+/// Sets up and bins the global triangles `range` into `chunk`, instance by instance, each with
+/// the setup compiled for its pass.
 fn bin_run(chunk: &mut Chunk, range: Range<usize>, geometry: Geometry, frame: &Frame, view: BinTarget) {
     let spans = geometry.spans;
     let mut span_index = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
-    for global in range {
-        while span_index + 1 < spans.len() && spans[span_index + 1].first_triangle <= global {
-            span_index += 1;
-        }
+    let mut global = range.start;
+    while global < range.end {
         let span = &spans[span_index];
-        let local = global - span.first_triangle;
-        let indices = frame.instances[span_index].mesh.triangles[local].map(|i| span.first_vertex + i as usize);
+        let instance = &frame.instances[span_index];
+        let triangles =
+            global - span.first_triangle..instance.mesh.triangle_count().min(range.end - span.first_triangle);
+        global += triangles.len();
+        let run = InstanceRun { index: span_index, span, instance, triangles };
+        match geometry.colour {
+            None => bin_instance::<BiasedDepth>(chunk, run, geometry, frame, view),
+            Some(colour) => {
+                let pass = Pass {
+                    shading: colour.shading,
+                    textured: instance.material.texture.is_some(),
+                    shadowed: colour.shadowed,
+                };
+                with_compiled_pass!(pass, bin_instance(chunk, run, geometry, frame, view));
+            }
+        }
+        span_index += 1;
+    }
+}
+
+/// Some of the triangles of one instance.
+struct InstanceRun<'a> {
+    /// The instance's place in the frame.
+    index: usize,
+    span: &'a Span,
+    instance: &'a Instance,
+    /// Which of its triangles.
+    triangles: Range<usize>,
+}
+
+/// Sets up and bins the triangles of `run` into `chunk`, interpolating what `I` says.
+fn bin_instance<I: Interpolated>(
+    chunk: &mut Chunk,
+    run: InstanceRun,
+    geometry: Geometry,
+    frame: &Frame,
+    view: BinTarget,
+) {
+    const NO_VARYINGS: Varyings = [0.0; VARYINGS];
+    let flat = I::PASS.is_some_and(|pass| pass.shading == Shading::Flat);
+    let tolerance =
+        I::PASS.map_or([0.0; VARYINGS], |pass| affine_tolerances(pass, run.instance.material.texture.as_deref()));
+    for triangle in &run.instance.mesh.triangles[run.triangles] {
+        let indices = triangle.map(|i| run.span.first_vertex + i as usize);
         let corners = indices.map(|i| &view.vertices[i]);
         if corners[0].code & corners[1].code & corners[2].code & outside::VIEW != 0 {
             continue;
         }
-        let entry = BinEntry { triangle: local as u32, instance: span_index as u32 };
+        let flat_diffuse = if flat { flat_diffuse(indices.map(|i| geometry.world[i]), &frame.light) } else { 0.0 };
+        let surface = Surface { instance: run.index as u32, tolerance: &tolerance, flat_diffuse };
+        let varyings = |i: usize| geometry.colour.map_or(&NO_VARYINGS, |colour| &colour.varyings[i]);
         if (corners[0].code | corners[1].code | corners[2].code) & outside::CLIPPED == 0 {
-            if let Some(bounds) = screen_bounds(corners.map(|v| (v.x, v.y)), view) {
-                chunk.push(entry, bounds, view);
+            let varyings = indices.map(varyings);
+            if let Some(setup) = TriangleSetup::new::<I>(corners, varyings, view.viewport, surface, &mut chunk.planes) {
+                chunk.push(setup, view);
             }
             continue;
         }
-        let vertex_varyings = indices.map(|i| geometry.varyings.map_or([0.0; VARYINGS], |v| v[i]));
-        let flat_diffuse = flat_diffuse(indices.map(|i| geometry.world[i]), &frame.light);
         let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
             position: view.clip_from_world * geometry.world[indices[k]].extend(1.0),
-            varyings: vertex_varyings[k],
+            varyings: *varyings(indices[k]),
         }));
         let polygon = clip.vertices();
         for i in 1..polygon.len().saturating_sub(1) {
             let fan = [polygon[0], polygon[i], polygon[i + 1]];
-            let vertices = fan.map(|v| ScreenVertex::projected(v.position, view.width, view.height));
-            let Some(bounds) = screen_bounds(vertices.map(|v| (v.x, v.y)), view) else { continue };
-            let triangle = ClippedTriangle { vertices, varyings: fan.map(|v| v.varyings), flat_diffuse };
-            let entry = BinEntry { triangle: chunk.clipped.len() as u32 | CLIPPED_BIT, ..entry };
-            chunk.clipped.push(triangle);
-            chunk.push(entry, bounds, view);
+            let (width, height) = (view.viewport.width, view.viewport.height);
+            let vertices = fan.map(|v| ScreenVertex::projected(v.position, width, height));
+            let varyings = fan.each_ref().map(|v| &v.varyings);
+            if let Some(setup) =
+                TriangleSetup::new::<I>(vertices.each_ref(), varyings, view.viewport, surface, &mut chunk.planes)
+            {
+                chunk.push(setup, view);
+            }
         }
     }
 }
 
 impl Chunk {
-    /// Adds `entry` to the bins of every tile its pixel `bounds` touch.
-    fn push(&mut self, entry: BinEntry, bounds: PixelBounds, view: BinTarget) {
-        self.binned += 1;
-        let tiles_x = view.tiles_x();
-        for ty in bounds.min_y / TILE_HEIGHT..=bounds.max_y / TILE_HEIGHT {
-            for tx in bounds.min_x / TILE_WIDTH..=bounds.max_x / TILE_WIDTH {
-                self.bins[(ty * tiles_x + tx) as usize].push(entry);
+    /// Adds `setup` to the bins of every tile its bounds touch.
+    #[inline(always)]
+    fn push(&mut self, setup: TriangleSetup, view: BinTarget) {
+        let index = self.setups.len() as u32;
+        let (bounds, tiles_x) = (setup.bounds, view.tiles_x());
+        self.setups.push(setup);
+        let (first_x, last_x) = (bounds.min_x / TILE_WIDTH, bounds.max_x / TILE_WIDTH);
+        let (first_y, last_y) = (bounds.min_y / TILE_HEIGHT, bounds.max_y / TILE_HEIGHT);
+        if first_x == last_x && first_y == last_y {
+            // Most triangles are much smaller than a tile.
+            self.bins[(first_y * tiles_x + first_x) as usize].push(index);
+            return;
+        }
+        for ty in first_y..=last_y {
+            for tx in first_x..=last_x {
+                self.bins[(ty * tiles_x + tx) as usize].push(index);
             }
         }
     }
@@ -664,20 +694,6 @@ pub(crate) struct PixelBounds {
 #[inline(always)]
 pub(crate) fn edge(a: (i64, i64), b: (i64, i64), p: (i64, i64)) -> i64 {
     (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
-}
-
-/// Culls a projected triangle (zero area, or facing away when the view culls back faces) and
-/// returns the pixels whose centres its bounding box holds, or `None` if it covers no pixel
-/// centre of the target.
-fn screen_bounds(corners: [(i32, i32); 3], view: BinTarget) -> Option<PixelBounds> {
-    let [a, b, c] = corners.map(|(x, y)| (x as i64, y as i64));
-    let area = edge(a, b, c);
-    // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the screen.
-    if area == 0 || (view.cull_back_faces && area > 0) {
-        return None;
-    }
-    let bounds = pixel_bounds([a, b, c], view.width, view.height)?;
-    Some(bounds)
 }
 
 /// The pixels whose centres lie in the bounding box of `corners` (sub-pixel units), clipped to

@@ -69,20 +69,21 @@ pub mod slot {
     pub const SHADOW: usize = 9;
 }
 
-/// How far the value at `index` may be off when a triangle is interpolated in screen space
-/// instead of perspective-correctly, in the value's own units: a sixteenth of what a pixel can
-/// show of it. Colours, diffuse terms and normals reach the image through 8-bit channels;
-/// texture coordinates and shadow-map positions are measured in texels; light depths against
-/// the shadow bias.
-#[inline(always)]
-pub(crate) fn affine_tolerance(index: usize, texture: Option<&Texture>) -> f32 {
+/// How far each value may be off when a triangle is interpolated in screen space instead of
+/// perspective-correctly, in the value's own units: a sixteenth of what a pixel can show of
+/// it. Colours, diffuse terms and normals reach the image through 8-bit channels; texture
+/// coordinates (on `texture`) and shadow-map positions are measured in texels; light depths
+/// against the shadow bias. Values `pass` does not read may be off by any amount.
+pub(crate) fn affine_tolerances(pass: Pass, texture: Option<&Texture>) -> Varyings {
     const LIGHT_DEPTH: usize = slot::SHADOW + 2;
-    match index {
-        slot::UV..slot::SHADOW => 1.0 / (16.0 * texture.map_or(1, |t| t.width().max(t.height())) as f32),
+    let texels = texture.map_or(1, |t| t.width().max(t.height())) as f32;
+    std::array::from_fn(|index| match index {
+        _ if !pass.uses(index) => f32::INFINITY,
+        slot::UV..slot::SHADOW => 1.0 / (16.0 * texels),
         slot::SHADOW..LIGHT_DEPTH => 1.0 / 16.0,
         LIGHT_DEPTH => CONSTANT_BIAS / 16.0,
         _ => 1.0 / (16.0 * 255.0),
-    }
+    })
 }
 
 /// The combination a pixel loop is compiled for.
@@ -95,17 +96,68 @@ pub(crate) struct Pass {
 
 impl Pass {
     /// Whether the pixel needs the varying at `slot`.
-    pub fn uses(self, index: usize) -> bool {
+    pub const fn uses(self, index: usize) -> bool {
         match index {
             0..3 => true,
             // Gouraud without shadows interpolates the colour lit at the vertices.
-            slot::DIFFUSE => self.shading == Shading::Gouraud && self.shadowed,
-            4..7 => self.shading == Shading::Phong,
+            slot::DIFFUSE => matches!(self.shading, Shading::Gouraud) && self.shadowed,
+            4..7 => matches!(self.shading, Shading::Phong),
             7..9 => self.textured,
             _ => self.shadowed,
         }
     }
 }
+
+/// A [`Pass`] fixed at compile time: the setup and pixel loops built for it fold its choices
+/// away.
+pub(crate) trait CompiledPass {
+    const PASS: Pass;
+}
+
+/// The [`CompiledPass`] of a shading mode number (see [`mode`]), texture and shadows.
+pub(crate) struct Compiled<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>;
+
+impl<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool> CompiledPass for Compiled<MODE, TEXTURED, SHADOWED> {
+    const PASS: Pass = Pass {
+        shading: match MODE {
+            mode::FLAT => Shading::Flat,
+            mode::GOURAUD => Shading::Gouraud,
+            _ => Shading::Phong,
+        },
+        textured: TEXTURED,
+        shadowed: SHADOWED,
+    };
+}
+
+/// Shading mode numbers, for [`Compiled`].
+pub(crate) mod mode {
+    pub const FLAT: u8 = 0;
+    pub const GOURAUD: u8 = 1;
+    pub const PHONG: u8 = 2;
+}
+
+/// Calls `function::<C>(arguments)` with `C` the [`Compiled`] pass equal to `pass`.
+macro_rules! with_compiled_pass {
+    ($pass:expr, $function:ident($($argument:expr),* $(,)?)) => {{
+        use $crate::shade::{Compiled, Shading, mode::{FLAT, GOURAUD, PHONG}};
+        let pass: $crate::shade::Pass = $pass;
+        match (pass.shading, pass.textured, pass.shadowed) {
+            (Shading::Flat, false, false) => $function::<Compiled<FLAT, false, false>>($($argument),*),
+            (Shading::Flat, true, false) => $function::<Compiled<FLAT, true, false>>($($argument),*),
+            (Shading::Flat, false, true) => $function::<Compiled<FLAT, false, true>>($($argument),*),
+            (Shading::Flat, true, true) => $function::<Compiled<FLAT, true, true>>($($argument),*),
+            (Shading::Gouraud, false, false) => $function::<Compiled<GOURAUD, false, false>>($($argument),*),
+            (Shading::Gouraud, true, false) => $function::<Compiled<GOURAUD, true, false>>($($argument),*),
+            (Shading::Gouraud, false, true) => $function::<Compiled<GOURAUD, false, true>>($($argument),*),
+            (Shading::Gouraud, true, true) => $function::<Compiled<GOURAUD, true, true>>($($argument),*),
+            (Shading::Phong, false, false) => $function::<Compiled<PHONG, false, false>>($($argument),*),
+            (Shading::Phong, true, false) => $function::<Compiled<PHONG, true, false>>($($argument),*),
+            (Shading::Phong, false, true) => $function::<Compiled<PHONG, false, true>>($($argument),*),
+            (Shading::Phong, true, true) => $function::<Compiled<PHONG, true, true>>($($argument),*),
+        }
+    }};
+}
+pub(crate) use with_compiled_pass;
 
 /// The four lanes of a [`Vec4`] as a [`f32x4`], for the mask operations glam lacks.
 #[inline(always)]

@@ -1,29 +1,20 @@
-//! The tile stage: triangle setup against one tile and the pixel loops.
+//! The tile stage: each tile draws the triangles binned into it, in draw order, from their
+//! setups.
 //!
-//! Coverage uses exact integer edge functions on screen coordinates snapped to
-//! 1/[`SUBPIXEL_STEPS`] of a pixel, sampled at pixel centres and stepped incrementally, with the
-//! top-left fill rule: a pixel whose centre lies on an edge shared by two triangles is drawn by
-//! exactly one of them. Depth is interpolated linearly in screen space (as the projection
-//! demands); every other value perspective-correctly, as the screen-space plane of the value
-//! divided by `w` over the plane of `1/w`. A triangle whose `w` varies too little for that to
-//! move any value beyond its tolerance (a sixteenth of what a pixel shows of it) is
-//! interpolated in screen space.
-//!
-//! Pixels are depth-tested, shaded and stored in runs of [`LANES`] along a row, with lane masks
-//! instead of a branch per pixel; a run is read and written whole unless it reaches past the
-//! end of its row.
+//! A triangle's walk over a tile finds its covered pixels row by row with its exact edge
+//! functions, [`MASK_PIXELS`] pixels at a time. Pixels are then depth-tested, shaded and stored
+//! in runs of [`LANES`] along a row, with lane masks instead of a branch per pixel; a run is
+//! read and written whole unless it reaches past the end of its row.
 //!
 //! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
-//! it is skipped before setup reaches its pixels.
+//! it is skipped before any of its pixels is visited.
 
 use crate::framebuffer::{Band, FAR_DEPTH};
-use crate::pipeline::{
-    BinEntry, CLIPPED_BIT, Chunk, ClippedTriangle, Frame, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, Span, TILE_HEIGHT,
-    TILE_WIDTH, edge, flat_diffuse, pixel_bounds,
-};
-use crate::shade::{Material, Pass, Shading, VARYINGS, Varyings, affine_tolerance, lanes_of, slot};
-use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS, ShadowMap};
-use bevy_math::{Vec2, Vec3, Vec4};
+use crate::pipeline::{Chunk, Frame, PixelBounds, TILE_HEIGHT, TILE_WIDTH};
+use crate::setup::{DEPTH, INV_W, LANES, PACKS, Plane, TriangleSetup, pack_slots};
+use crate::shade::{CompiledPass, Material, Pass, Shading, VARYINGS, lanes_of, slot, with_compiled_pass};
+use crate::shadow::ShadowMap;
+use bevy_math::{Vec2, Vec4};
 use std::ops::{Add, Mul};
 use wide::{f32x4, i32x8, u32x4};
 
@@ -36,10 +27,6 @@ const OCCLUSION_REFRESH: u64 = 1;
 pub(crate) struct TileContext<'a> {
     pub frame: &'a Frame<'a>,
     pub chunks: &'a [Chunk],
-    pub world: &'a [Vec3],
-    pub vertices: &'a [ScreenVertex],
-    pub varyings: &'a [Varyings],
-    pub spans: &'a [Span],
     pub shadow: Option<&'a ShadowMap>,
     pub tiles_x: u32,
 }
@@ -54,69 +41,12 @@ pub(crate) struct DepthBand<'a> {
     pub depth: &'a mut [f32],
 }
 
-/// A triangle as the tile stage sees it.
+/// A binned triangle as a colour tile draws it.
 struct Triangle<'a> {
-    vertices: [&'a ScreenVertex; 3],
-    varyings: [&'a Varyings; 3],
-    flat_diffuse: f32,
+    setup: &'a TriangleSetup,
+    /// Its planes, in pack order, the packs its pass does not read left out.
+    planes: &'a [Plane],
     material: &'a Material,
-}
-
-/// Where the corners of a binned triangle are kept.
-enum Corners<'a> {
-    /// A triangle made by clipping, kept whole in its chunk.
-    Clipped(&'a ClippedTriangle),
-    /// A mesh triangle: its vertices' indices in the frame's vertex arrays.
-    Mesh([usize; 3]),
-}
-
-/// Finds the corners of the triangle `entry` of `chunk`.
-#[inline(always)]
-fn locate<'a>(frame: &Frame, spans: &[Span], chunk: &'a Chunk, entry: BinEntry) -> Corners<'a> {
-    if entry.triangle & CLIPPED_BIT != 0 {
-        return Corners::Clipped(&chunk.clipped[(entry.triangle & !CLIPPED_BIT) as usize]);
-    }
-    let first = spans[entry.instance as usize].first_vertex;
-    let mesh = &frame.instances[entry.instance as usize].mesh;
-    Corners::Mesh(mesh.triangles[entry.triangle as usize].map(|i| first + i as usize))
-}
-
-impl TileContext<'_> {
-    fn resolve<'b>(&'b self, chunk: &'b Chunk, entry: BinEntry, flat: bool) -> Triangle<'b> {
-        let material = &self.frame.instances[entry.instance as usize].material;
-        match locate(self.frame, self.spans, chunk, entry) {
-            Corners::Clipped(clipped) => Triangle {
-                vertices: clipped.vertices.each_ref(),
-                varyings: clipped.varyings.each_ref(),
-                flat_diffuse: clipped.flat_diffuse,
-                material,
-            },
-            Corners::Mesh(indices) => Triangle {
-                vertices: indices.map(|i| &self.vertices[i]),
-                varyings: indices.map(|i| &self.varyings[i]),
-                flat_diffuse: if flat { flat_diffuse(indices.map(|i| self.world[i]), &self.frame.light) } else { 0.0 },
-                material,
-            },
-        }
-    }
-
-    /// Reads the corners of every triangle binned into `tile` before any of them is drawn.
-    ///
-    /// These reads depend on nothing but the bins, so their cache misses overlap; the drawing
-    /// loop that follows then finds the scattered vertices cached instead of stalling on each
-    /// triangle's in turn (about 6% of a frame on the standard scene).
-    fn warm(&self, tile: usize) {
-        let mut sum = 0.0;
-        for chunk in self.chunks {
-            for &entry in &chunk.bins[tile] {
-                let triangle = self.resolve(chunk, entry, false);
-                for (vertex, varyings) in triangle.vertices.iter().zip(triangle.varyings) {
-                    sum += vertex.z + varyings[0];
-                }
-            }
-        }
-        std::hint::black_box(sum);
-    }
 }
 
 /// The pixel rectangle of tile column `tx` in a band.
@@ -134,9 +64,6 @@ fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
 pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u64) {
     band.color.fill(context.frame.background);
     band.depth.fill(FAR_DEPTH);
-    let pass =
-        |textured: bool| Pass { shading: context.frame.settings.shading, textured, shadowed: context.shadow.is_some() };
-    let flat = context.frame.settings.shading == Shading::Flat;
     let (rows, width) = (band.rows(), band.width);
     let mut target = band;
     let (mut fragments, mut occluded) = (0, 0);
@@ -146,17 +73,22 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
         let mut farthest = FAR_DEPTH;
         let mut covered_since_refresh = 0;
         let area = u64::from(rect.max_x - rect.min_x + 1) * u64::from(rows);
-        context.warm(tile);
         for chunk in context.chunks {
-            for &entry in &chunk.bins[tile] {
-                let triangle = context.resolve(chunk, entry, flat);
-                let Some(setup) = Setup::new(triangle.vertices, rect, true) else { continue };
+            for &index in &chunk.bins[tile] {
+                let setup = &chunk.setups[index as usize];
                 if setup.nearest >= farthest {
                     occluded += 1;
                     continue;
                 }
-                let pass = pass(triangle.material.texture.is_some());
-                let covered = fill(pass, &setup, &triangle, context, &mut target);
+                let Some(walk) = Walk::new(setup, rect) else { continue };
+                let material = &context.frame.instances[setup.instance as usize].material;
+                let pass = Pass {
+                    shading: context.frame.settings.shading,
+                    textured: material.texture.is_some(),
+                    shadowed: context.shadow.is_some(),
+                };
+                let triangle = Triangle { setup, planes: &chunk.planes[setup.planes as usize..], material };
+                let covered = fill(pass, &walk, &triangle, context, &mut target);
                 fragments += covered;
                 covered_since_refresh += covered;
                 if covered_since_refresh >= area * OCCLUSION_REFRESH {
@@ -184,79 +116,45 @@ fn farthest_depth(depth: &[f32], width: u32, y0: u32, rect: PixelBounds) -> f32 
 }
 
 /// Clears one band of the shadow map and draws the depths of every triangle binned into its
-/// tiles, pushed back by the slope-scaled bias.
-pub(crate) fn draw_depth_band<'a>(
-    frame: &'a Frame,
-    chunks: &'a [Chunk],
-    vertices: &'a [ScreenVertex],
-    spans: &'a [Span],
-    row: u32,
-    mut band: DepthBand,
-) {
+/// tiles (their planes carry the slope-scaled bias).
+pub(crate) fn draw_depth_band(chunks: &[Chunk], row: u32, mut band: DepthBand) {
     let width = band.width;
     for row in band.depth.chunks_exact_mut(band.stride) {
         row[band.first..band.first + width as usize].fill(FAR_DEPTH);
     }
     let rows = (band.depth.len() / band.stride) as u32;
     let tiles_x = width.div_ceil(TILE_WIDTH);
-    let corners = |chunk: &'a Chunk, entry: BinEntry| match locate(frame, spans, chunk, entry) {
-        Corners::Clipped(clipped) => clipped.vertices.each_ref(),
-        Corners::Mesh(indices) => indices.map(|i| &vertices[i]),
-    };
     for tx in 0..tiles_x {
         let rect = tile_rect(tx, band.y0, width, rows);
         let tile = (row * tiles_x + tx) as usize;
         for chunk in chunks {
-            for &entry in &chunk.bins[tile] {
-                if let Some(setup) = Setup::new(corners(chunk, entry), rect, false) {
-                    fill_depth(&setup, &mut band);
+            for &index in &chunk.bins[tile] {
+                let setup = &chunk.setups[index as usize];
+                if let Some(walk) = Walk::new(setup, rect) {
+                    fill_depth(&walk, setup.bounds, &chunk.planes[setup.planes as usize], &mut band);
                 }
             }
         }
     }
 }
 
-/// A triangle set up for one tile: its vertices reordered to a positive area, its edge
-/// functions at the first pixel, and its depth and `1/w` at the vertices.
-struct Setup {
-    /// Vertex order: setup vertex `k` is input vertex `order[k]`.
-    order: [usize; 3],
+/// A triangle's walk over the pixels of one tile.
+struct Walk {
     /// The pixels to visit: the triangle's bounds within the tile.
     rect: PixelBounds,
-    /// Edge functions at the centre of the rect's first pixel, top-left bias included; edge `k`
-    /// is opposite vertex `k` and weighs it.
+    /// Edge functions at the centre of the rect's first pixel, top-left bias included.
     start: [i64; 3],
-    /// Edge function steps per pixel to the right.
-    step_x: [i64; 3],
-    /// Edge function steps per pixel down.
-    step_y: [i64; 3],
-    /// `1 / (2 * area)` in sub-pixel units squared.
-    inv_area: f32,
-    z: [f32; 3],
-    inv_w: [f32; 3],
-    /// The least depth of the three vertices.
-    nearest: f32,
-    /// Whether the edge functions fit `i32` over the walk (see [`fits_narrow`]).
+    step_x: [i32; 3],
+    step_y: [i32; 3],
+    /// Whether the edge functions fit `i32` (see [`TriangleSetup::narrow`]).
     narrow: bool,
 }
 
-impl Setup {
-    /// Sets the triangle up against `tile`; `None` when it is culled (zero area, or facing
-    /// away when `cull_back_faces`) or covers no pixel centre of the tile.
+impl Walk {
+    /// The walk of `setup` over `tile`; `None` when its bounds miss the tile.
     #[inline(always)]
-    fn new(vertices: [&ScreenVertex; 3], tile: PixelBounds, cull_back_faces: bool) -> Option<Self> {
-        let p = vertices.map(|v| (v.x as i64, v.y as i64));
-        let area = edge(p[0], p[1], p[2]);
-        // Front faces are negative on the y-down screen; swapping two vertices makes the area
-        // positive, as the inside test expects.
-        let order = match area {
-            0 => return None,
-            a if a < 0 => [0, 2, 1],
-            _ if cull_back_faces => return None,
-            _ => [0, 1, 2],
-        };
-        let p = order.map(|k| p[k]);
-        let bounds = pixel_bounds(p, u32::MAX, u32::MAX)?;
+    fn new(setup: &TriangleSetup, tile: PixelBounds) -> Option<Self> {
+        let bounds = setup.bounds;
         let rect = PixelBounds {
             min_x: bounds.min_x.max(tile.min_x),
             max_x: bounds.max_x.min(tile.max_x),
@@ -266,31 +164,12 @@ impl Setup {
         if rect.min_x > rect.max_x || rect.min_y > rect.max_y {
             return None;
         }
-        let sample = (
-            rect.min_x as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
-            rect.min_y as i64 * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
-        );
-        let [a, b, c] = p;
-        // Edge k runs between the two vertices other than k.
-        let edges = [(b, c), (c, a), (a, b)];
-        let start = edges.map(|(from, to)| edge(from, to, sample) + if is_top_left(from, to) { 0 } else { -1 });
-        let z = order.map(|k| vertices[k].z);
-        Some(Self {
-            order,
-            rect,
-            start,
-            step_x: edges.map(|(from, to)| (from.1 - to.1) * SUBPIXEL_STEPS),
-            step_y: edges.map(|(from, to)| (to.0 - from.0) * SUBPIXEL_STEPS),
-            inv_area: 1.0 / area.abs() as f32,
-            z,
-            inv_w: order.map(|k| vertices[k].inv_w),
-            nearest: z[0].min(z[1]).min(z[2]),
-            narrow: fits_narrow(p),
-        })
+        let (dx, dy) = (i64::from(rect.min_x - bounds.min_x), i64::from(rect.min_y - bounds.min_y));
+        let start =
+            std::array::from_fn(|k| setup.start[k] + dx * i64::from(setup.step_x[k]) + dy * i64::from(setup.step_y[k]));
+        Some(Self { rect, start, step_x: setup.step_x, step_y: setup.step_y, narrow: setup.narrow })
     }
-}
 
-impl Setup {
     /// Walks each row's covered span in runs of up to [`LANES`] pixels, calling
     /// `visit(y, x, lanes)` for each: `x` is the run's first pixel and bit `k` of `lanes` is
     /// set when pixel `x + k` is covered. Returns the pixels covered.
@@ -298,10 +177,10 @@ impl Setup {
     fn covered_runs(&self, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
         let mut rows = [0; TILE_HEIGHT as usize];
         if self.narrow {
-            let narrow = |edges: [i64; 3]| edges.map(|e| e as i32);
-            self.coverage(narrow(self.start), narrow(self.step_x), narrow(self.step_y), &mut rows);
+            // The start fits too: it is one of the values the walk computes.
+            self.coverage(self.start.map(|e| e as i32), self.step_x, self.step_y, &mut rows);
         } else {
-            self.coverage(self.start, self.step_x, self.step_y, &mut rows);
+            self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), &mut rows);
         }
         let mut fragments = 0;
         for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(&rows) {
@@ -355,35 +234,11 @@ impl Setup {
     }
 }
 
-/// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
-/// pixels are drawn (the top-left fill rule).
-#[inline(always)]
-fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
-    (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
-}
-
-/// Whether every edge function value a walk over `rect` computes for the triangle `p`
-/// (sub-pixel units) fits an `i32`.
-///
-/// A value at pixel centre `s` is `(b - a) x (s - a)` for two corners `a`, `b`: at most
-/// `w h + h |s.x - a.x|` for the triangle's bounding box `w` by `h`. The walk reads up to two
-/// mask widths past the rect's last pixel (the last mask's lanes, then one more step) and one
-/// row past its last row, all inside the bounding box widened by [`NARROW_MARGIN`] pixels.
-fn fits_narrow(p: [(i64, i64); 3]) -> bool {
-    let extent = |c: [i64; 3]| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]);
-    let margin = NARROW_MARGIN * SUBPIXEL_STEPS;
-    let (w, h) = (extent(p.map(|c| c.0)), extent(p.map(|c| c.1)) + margin);
-    h * (2 * w + margin) + 1 < i64::from(i32::MAX)
-}
-
-/// Pixels past a triangle's bounding box that a narrow walk may evaluate edge functions at.
-const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
-
 /// Pixels one coverage mask holds.
-const MASK_PIXELS: u32 = 8;
+pub(crate) const MASK_PIXELS: u32 = 8;
 
 /// An integer type edge functions are stepped in: `i32` for the triangles whose values fit
-/// (see [`fits_narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
+/// (see [`TriangleSetup::narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
 trait EdgeValue: Copy + Add<Output = Self> + Mul<Output = Self> {
     /// Each edge's steps to the pixels of a mask, prepared once per triangle.
     type MaskSteps;
@@ -443,154 +298,48 @@ fn add<E: EdgeValue>(edges: [E; 3], by: [E; 3]) -> [E; 3] {
     [edges[0] + by[0], edges[1] + by[1], edges[2] + by[2]]
 }
 
-/// Shading mode numbers for the const-generic pixel loops.
-const FLAT: u8 = 0;
-const GOURAUD: u8 = 1;
-const PHONG: u8 = 2;
-
-/// Draws a set-up triangle with the pixel loop compiled for `pass`; returns the fragments.
-fn fill(pass: Pass, setup: &Setup, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
-    macro_rules! dispatch {
-        ($($shading:ident => $mode:ident),*) => {
-            match (pass.shading, pass.textured, pass.shadowed) {
-                $(
-                    (Shading::$shading, false, false) => fill_pass::<$mode, false, false>(setup, triangle, context, band),
-                    (Shading::$shading, true, false) => fill_pass::<$mode, true, false>(setup, triangle, context, band),
-                    (Shading::$shading, false, true) => fill_pass::<$mode, false, true>(setup, triangle, context, band),
-                    (Shading::$shading, true, true) => fill_pass::<$mode, true, true>(setup, triangle, context, band),
-                )*
-            }
-        };
-    }
-    dispatch!(Flat => FLAT, Gouraud => GOURAUD, Phong => PHONG)
+/// Draws a triangle's walk over a tile with the pixel loop compiled for `pass`; returns the
+/// fragments.
+fn fill(pass: Pass, walk: &Walk, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
+    with_compiled_pass!(pass, fill_pass(walk, triangle, context, band))
 }
-
-/// The shading mode number of a [`Shading`].
-const fn shading_of(mode: u8) -> Shading {
-    match mode {
-        FLAT => Shading::Flat,
-        GOURAUD => Shading::Gouraud,
-        _ => Shading::Phong,
-    }
-}
-
-/// Pixels shaded together: a horizontal run of four, one per SIMD lane of a [`Vec4`].
-const LANES: usize = 4;
 
 /// 2^23: added to a float in `[0, 2^23)`, it leaves the rounded whole number in the low bits.
 const ROUNDING_BIAS: f32 = 8_388_608.0;
 
-/// Each lane's offset from the run's first pixel.
-const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
-
 /// The coverage bits of one run.
 const RUN_MASK: u64 = (1 << LANES) - 1;
-
-/// Four-lane packs of interpolated values: the [`Varyings`] four to a pack, then depth and
-/// `1/w`.
-const PACKS: usize = VARYINGS / LANES + 1;
-
-/// Where depth and `1/w` are in the last pack.
-const DEPTH: usize = VARYINGS;
-const INV_W: usize = VARYINGS + 1;
-
-/// A triangle's interpolated values as planes over the pixels of its rect: each value at the
-/// centre of the rect's first pixel and its change per pixel right and down, in packs of four.
-///
-/// Depth and `1/w` are linear in screen space; the other values are too when the triangle is
-/// drawn affinely, and otherwise their planes hold the values divided by `w`, to be
-/// multiplied by the pixel's `w` (the reciprocal of the interpolated `1/w`).
-struct Planes<const N: usize> {
-    origin: [Vec4; N],
-    dx: [Vec4; N],
-    dy: [Vec4; N],
-}
-
-impl<const N: usize> Planes<N> {
-    /// The planes through `values` at the setup's vertices (in its order), for the packs
-    /// `used` accepts (the others stay zero).
-    #[inline(always)]
-    fn new(setup: &Setup, values: [[Vec4; N]; 3], used: impl Fn(usize) -> bool) -> Self {
-        let weight = |edge: i64| edge as f32 * setup.inv_area;
-        // Barycentric weights of vertices 1 and 2 at the rect's first pixel, and their steps.
-        let (o1, o2) = (weight(setup.start[1]), weight(setup.start[2]));
-        let (x1, x2) = (weight(setup.step_x[1]), weight(setup.step_x[2]));
-        let (y1, y2) = (weight(setup.step_y[1]), weight(setup.step_y[2]));
-        let [v0, v1, v2] = values;
-        let to_1: [Vec4; N] = std::array::from_fn(|p| v1[p] - v0[p]);
-        let to_2: [Vec4; N] = std::array::from_fn(|p| v2[p] - v0[p]);
-        let plane = |p: usize, w1: f32, w2: f32, base: Vec4| {
-            if used(p) { base + to_1[p] * w1 + to_2[p] * w2 } else { Vec4::ZERO }
-        };
-        Self {
-            origin: std::array::from_fn(|p| plane(p, o1, o2, v0[p])),
-            dx: std::array::from_fn(|p| plane(p, x1, x2, Vec4::ZERO)),
-            dy: std::array::from_fn(|p| plane(p, y1, y2, Vec4::ZERO)),
-        }
-    }
-
-    /// Every value at pixel offset (`x`, `y`) from the rect's first pixel.
-    #[inline(always)]
-    fn at(&self, x: f32, y: f32) -> [Vec4; N] {
-        std::array::from_fn(|p| self.origin[p] + self.dx[p] * x + self.dy[p] * y)
-    }
-
-    /// Value `k`'s change from a run's first pixel to each lane.
-    #[inline(always)]
-    fn lane_steps(&self, k: usize) -> Vec4 {
-        LANE_OFFSETS * self.dx[k / LANES][k % LANES]
-    }
-}
 
 /// The colour pixel loop for one combination of shading mode, texture and shadows.
 ///
 /// Coverage is decided per pixel, exactly, as one interval per row; depth tests, interpolation
 /// and lighting run on runs of [`LANES`] pixels of that interval at once.
-fn fill_pass<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
-    setup: &Setup,
-    triangle: &Triangle,
-    context: &TileContext,
-    band: &mut Band,
-) -> u64 {
-    let pass = Pass { shading: shading_of(MODE), textured: TEXTURED, shadowed: SHADOWED };
-    let texture = triangle.material.texture.as_deref();
-    let varyings = setup.order.map(|k| triangle.varyings[k]);
-    // Small or distant triangles skip the per-pixel division.
-    let affine = {
-        let [v0, v1, v2] = varyings;
-        let to_1 = std::array::from_fn(|k| v1[k] - v0[k]);
-        let to_2 = std::array::from_fn(|k| v2[k] - v0[k]);
-        affine_is_close(setup.inv_w, &to_1, &to_2, |k| pass.uses(k).then(|| affine_tolerance(k, texture)))
-    };
-    let values: [[Vec4; PACKS]; 3] = std::array::from_fn(|vertex| {
-        let (varyings, z, inv_w) = (varyings[vertex], setup.z[vertex], setup.inv_w[vertex]);
-        let scale = if affine { 1.0 } else { inv_w };
-        std::array::from_fn(|p| match p {
-            _ if p * LANES < VARYINGS => Vec4::from_slice(&varyings[p * LANES..]) * scale,
-            _ => Vec4::new(z, inv_w, 0.0, 0.0),
-        })
-    });
+fn fill_pass<C: CompiledPass>(walk: &Walk, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
+    let pass = C::PASS;
+    // The packs the pass does not read stay zero, and the code reading them folds away.
+    let slots = const { pack_slots(C::PASS) };
+    let planes: [Plane; PACKS] =
+        std::array::from_fn(|p| slots[p].map_or(Plane::default(), |slot| triangle.planes[slot]));
     let uses = |k: usize| k >= VARYINGS || pass.uses(k);
-    let planes = Planes::new(setup, values, |p| (p * LANES..(p + 1) * LANES).any(uses));
     let shading = TriangleShading {
-        lane_steps: std::array::from_fn(|k| if uses(k) { planes.lane_steps(k) } else { Vec4::ZERO }),
+        lane_steps: std::array::from_fn(|k| if uses(k) { planes[k / LANES].lane_steps(k % LANES) } else { Vec4::ZERO }),
         planes,
-        affine,
-        origin: (setup.rect.min_x, setup.rect.min_y),
+        affine: triangle.setup.affine,
+        origin: (triangle.setup.bounds.min_x, triangle.setup.bounds.min_y),
         triangle,
         context,
     };
-    setup.covered_runs(|py, run, lanes| shade_run::<MODE, TEXTURED, SHADOWED>(&shading, band, py, run, lanes))
+    walk.covered_runs(|py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes))
 }
 
 /// What the runs of a triangle share.
 struct TriangleShading<'a> {
-    planes: Planes<PACKS>,
+    planes: [Plane; PACKS],
     /// Each value's change from a run's first pixel to its lanes.
     lane_steps: [Vec4; VARYINGS + 2],
     /// Whether the values are interpolated in screen space.
     affine: bool,
-    /// The first pixel of the planes' rect.
+    /// The first pixel of the triangle's bounds, where its planes start.
     origin: (u32, u32),
     triangle: &'a Triangle<'a>,
     context: &'a TileContext<'a>,
@@ -599,17 +348,13 @@ struct TriangleShading<'a> {
 /// Depth-tests, shades and stores one run of [`LANES`] pixels from `(x, y)`, those of `lanes`'
 /// set bits.
 #[inline(always)]
-fn shade_run<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
-    shading: &TriangleShading,
-    band: &mut Band,
-    y: u32,
-    x: u32,
-    lanes: u32,
-) {
+fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32) {
     let TriangleShading { planes, lane_steps, affine, origin, triangle, context } = shading;
+    let Pass { shading: mode, textured, shadowed } = C::PASS;
     let light = &context.frame.light;
     let material = triangle.material;
-    let at_run = planes.at((x - origin.0) as f32, (y - origin.1) as f32);
+    let (px, py) = ((x - origin.0) as f32, (y - origin.1) as f32);
+    let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at(px, py));
     let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
     let z = lanes_of(lane_value(DEPTH));
     let width = band.width as usize;
@@ -624,11 +369,11 @@ fn shade_run<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
     write_run(band.depth, at, valid, drawn.bitselect(z, depth).to_array());
     let w = if *affine { Vec4::ONE } else { lane_value(INV_W).recip() };
     let value = |k: usize| if *affine { lane_value(k) } else { lane_value(k) * w };
-    let diffuse = match MODE {
-        FLAT => Vec4::splat(triangle.flat_diffuse),
-        GOURAUD if !SHADOWED => Vec4::ZERO,
-        GOURAUD => value(slot::DIFFUSE),
-        _ => {
+    let diffuse = match mode {
+        Shading::Flat => Vec4::splat(triangle.setup.flat_diffuse),
+        Shading::Gouraud if !shadowed => Vec4::ZERO,
+        Shading::Gouraud => value(slot::DIFFUSE),
+        Shading::Phong => {
             let (nx, ny, nz) = (value(slot::NORMAL), value(slot::NORMAL + 1), value(slot::NORMAL + 2));
             let towards = -light.direction;
             let cosine = (nx * towards.x + ny * towards.y + nz * towards.z)
@@ -637,18 +382,18 @@ fn shade_run<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool>(
         }
     };
     let mut visibility = Vec4::ONE;
-    if SHADOWED && let Some(map) = context.shadow {
+    if shadowed && let Some(map) = context.shadow {
         let (sx, sy, depth) = (value(slot::SHADOW), value(slot::SHADOW + 1), value(slot::SHADOW + 2));
         visibility = map.visibility_lanes(sx, sy, depth, context.frame.settings.pcf);
     }
     let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
-    if MODE != GOURAUD || SHADOWED {
+    if mode != Shading::Gouraud || shadowed {
         let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
         for c in &mut rgb {
             *c *= intensity;
         }
     }
-    if TEXTURED && let Some(texture) = material.texture.as_deref() {
+    if textured && let Some(texture) = material.texture.as_deref() {
         let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
         let mut texels = [[0.0; LANES]; 3];
         for lane in 0..LANES {
@@ -715,43 +460,12 @@ fn write_run<T: Copy>(values: &mut [T], at: usize, valid: usize, run: [T; LANES]
     }
 }
 
-/// Whether interpolating in screen space keeps every value within `tolerance` of its
-/// perspective-correct interpolation, for a triangle with `1/w` of `inv_w` at its vertices and
-/// values differing by `to_1` and `to_2` from vertex 0 to vertices 1 and 2.
-///
-/// Write the vertices' `1/w` as `m (1 + s_k)` with `0 <= s_k <= spread`, `spread` the ratio of
-/// the largest to the least less one. At a point with screen-space weights `b_k`, the
-/// perspective-correct weights are `b_k (1 + s_k) / (1 + sum(b_j s_j))`, so a value moves by
-/// the covariance of `s` and the value under the weights `b`, divided by at least one: at
-/// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
-/// Values whose `tolerance` is `None` are not interpolated and not checked.
-#[inline(always)]
-fn affine_is_close(
-    inv_w: [f32; 3],
-    to_1: &Varyings,
-    to_2: &Varyings,
-    tolerance: impl Fn(usize) -> Option<f32>,
-) -> bool {
-    // Plain comparisons: the values are finite, so the NaN handling of `f32::max` is not needed.
-    let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
-    let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
-    (0..VARYINGS).all(|k| {
-        tolerance(k).is_none_or(|tolerance| {
-            let range = max(max(to_1[k], to_2[k]), 0.0) - min(min(to_1[k], to_2[k]), 0.0);
-            spread * range * 0.25 <= tolerance
-        })
-    })
-}
-
-/// The depth-only pixel loop of the shadow map, with the slope-scaled bias.
-fn fill_depth(setup: &Setup, band: &mut DepthBand) {
-    let planes = Planes::new(setup, setup.z.map(|z| [Vec4::new(z, 0.0, 0.0, 0.0)]), |_| true);
-    let (dx, dy) = (planes.dx[0].x, planes.dy[0].x);
-    let bias = CONSTANT_BIAS + SLOPE_BIAS * dx.abs().max(dy.abs());
-    let lane_steps = planes.lane_steps(0);
-    let (min_x, min_y) = (setup.rect.min_x, setup.rect.min_y);
-    setup.covered_runs(|py, run, lanes| {
-        let z = planes.at((run - min_x) as f32, (py - min_y) as f32)[0].x + bias;
+/// The depth-only pixel loop of the shadow map; `plane` starts at the first pixel of
+/// `bounds` and holds the biased depth in its first lane.
+fn fill_depth(walk: &Walk, bounds: PixelBounds, plane: &Plane, band: &mut DepthBand) {
+    let lane_steps = plane.lane_steps(0);
+    walk.covered_runs(|py, run, lanes| {
+        let z = plane.at((run - bounds.min_x) as f32, (py - bounds.min_y) as f32).x;
         let z = lanes_of(Vec4::splat(z) + lane_steps);
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
         let valid = (band.width - run).min(LANES as u32) as usize;
@@ -763,21 +477,40 @@ fn fill_depth(setup: &Setup, band: &mut DepthBand) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::{SUBPIXEL_STEPS, ScreenVertex, edge};
+    use crate::setup::{BiasedDepth, Surface, Viewport, is_top_left};
     use proptest::prelude::*;
 
-    /// A screen vertex at whole sub-pixel position `(x, y)`.
-    fn vertex((x, y): (i32, i32)) -> ScreenVertex {
-        ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 }
+    const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
+
+    /// The setup of the triangle with corners at whole sub-pixel positions, if it is not culled.
+    fn setup(corners: [(i32, i32); 3]) -> Option<TriangleSetup> {
+        let vertices = corners.map(|(x, y)| ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 });
+        let viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
+        let surface = Surface { instance: 0, tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
+        let varyings = [&[0.0; VARYINGS]; 3];
+        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, viewport, surface, &mut Vec::new())
+    }
+
+    /// Whether the pixel centre `(x, y)` is inside the triangle `corners` under the top-left
+    /// rule, straight from the definition.
+    fn inside(corners: [(i32, i32); 3], (x, y): (u32, u32)) -> bool {
+        let [a, b, c] = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
+        let [a, b, c] = if edge(a, b, c) < 0 { [a, c, b] } else { [a, b, c] };
+        let centre =
+            (i64::from(x) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2, i64::from(y) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2);
+        [(b, c), (c, a), (a, b)].into_iter().all(|(from, to)| {
+            let e = edge(from, to, centre);
+            e > 0 || (e == 0 && is_top_left(from, to))
+        })
     }
 
     /// Every run a walk visits: row, first pixel and coverage bits.
-    fn runs(setup: &Setup) -> Vec<(u32, u32, u32)> {
+    fn runs(walk: &Walk) -> Vec<(u32, u32, u32)> {
         let mut runs = Vec::new();
-        setup.covered_runs(|y, x, lanes| runs.push((y, x, lanes)));
+        walk.covered_runs(|y, x, lanes| runs.push((y, x, lanes)));
         runs
     }
-
-    const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
 
     #[test]
     fn the_farthest_depth_is_found_in_whole_runs_and_in_the_rest_of_a_row() {
@@ -798,90 +531,41 @@ mod tests {
         assert_eq!(farthest_depth(&depth, width, y0, rect), 0.75, "in the rest of a row");
     }
 
-    #[test]
-    fn small_triangles_walk_narrow_and_large_ones_wide() {
-        let steps = SUBPIXEL_STEPS as i32;
-        let small = [(70, 35), (90, 40), (75, 60)].map(|(x, y)| vertex((x * steps, y * steps)));
-        let large = [(0, 0), (900, 40), (100, 600)].map(|(x, y)| vertex((x * steps, y * steps)));
-        assert!(Setup::new(small.each_ref(), TILE, false).unwrap().narrow);
-        assert!(!Setup::new(large.each_ref(), TILE, false).unwrap().narrow);
-    }
-
     proptest! {
         /// The `i32` walk visits exactly the pixels of the `i64` one.
         #[test]
         fn narrow_walks_match_wide_ones(
             corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
         ) {
-            let vertices = corners.map(vertex);
-            let Some(narrow) = Setup::new(vertices.each_ref(), TILE, false) else { return Ok(()) };
+            let Some(narrow) = setup(corners).and_then(|setup| Walk::new(&setup, TILE)) else { return Ok(()) };
             prop_assume!(narrow.narrow);
-            let wide = Setup { narrow: false, ..narrow };
-            prop_assert_eq!(runs(&narrow), runs(&wide));
+            let wide = Walk { narrow: false, ..narrow };
+            prop_assert_eq!(runs(&Walk { ..narrow }), runs(&wide));
         }
 
-        /// The runs hold exactly the pixels of the rect whose edge functions are all
-        /// non-negative, each once.
+        /// Over the tiles a triangle's bounds meet, its walks visit exactly the pixels inside
+        /// it, each once.
         #[test]
-        fn runs_cover_exactly_the_inside_pixels(
-            corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
+        fn walks_cover_exactly_the_inside_pixels(
+            corners in prop::array::uniform3((-20 * 256..300 * 256i32, -20 * 256..150 * 256i32)),
         ) {
-            let vertices = corners.map(vertex);
-            let Some(setup) = Setup::new(vertices.each_ref(), TILE, false) else { return Ok(()) };
+            let Some(setup) = setup(corners) else { return Ok(()) };
             let mut visited = Vec::new();
-            for (y, x, lanes) in runs(&setup) {
-                visited.extend((0..LANES as u32).filter(|k| lanes & 1 << k != 0).map(|k| (x + k, y)));
+            for ty in 0..=150 / TILE_HEIGHT {
+                for tx in 0..=300 / TILE_WIDTH {
+                    let Some(walk) = Walk::new(&setup, tile_rect(tx, ty * TILE_HEIGHT, 4096, TILE_HEIGHT)) else { continue };
+                    for (y, x, lanes) in runs(&walk) {
+                        visited.extend((0..LANES as u32).filter(|k| lanes & 1 << k != 0).map(|k| (x + k, y)));
+                    }
+                }
             }
-            let rect = setup.rect;
-            let inside: Vec<(u32, u32)> = (rect.min_y..=rect.max_y)
-                .flat_map(|y| (rect.min_x..=rect.max_x).map(move |x| (x, y)))
-                .filter(|&(x, y)| {
-                    let (dx, dy) = (i64::from(x - rect.min_x), i64::from(y - rect.min_y));
-                    (0..3).all(|k| setup.start[k] + dx * setup.step_x[k] + dy * setup.step_y[k] >= 0)
-                })
+            visited.sort_unstable_by_key(|&(x, y)| (y, x));
+            let bounds = setup.bounds;
+            let expected: Vec<(u32, u32)> = (bounds.min_y..=bounds.max_y)
+                .flat_map(|y| (bounds.min_x..=bounds.max_x).map(move |x| (x, y)))
+                .filter(|&pixel| inside(corners, pixel))
                 .collect();
-            prop_assert_eq!(visited, inside);
+            prop_assert_eq!(visited, expected);
         }
-
-        /// When a triangle is judged close enough to affine, every value at every point inside
-        /// it is within its tolerance of the perspective-correct value.
-        #[test]
-        fn affine_interpolation_stays_within_tolerance(
-            inv_w in 0.2f32..5.0,
-            spread in prop::array::uniform3(0.0f32..0.01),
-            to_1 in prop::array::uniform12(-1.0f32..1.0),
-            to_2 in prop::array::uniform12(-1.0f32..1.0),
-            weights in (0.0f32..1.0, 0.0f32..1.0),
-        ) {
-            let inv_w = spread.map(|s| inv_w * (1.0 + s));
-            let tolerance = [0.002; VARYINGS];
-            prop_assume!(affine_is_close(inv_w, &to_1, &to_2, |k| Some(tolerance[k])));
-            let (b1, b2) = if weights.0 + weights.1 > 1.0 { (1.0 - weights.0, 1.0 - weights.1) } else { weights };
-            let error = affine_error(inv_w, [1.0 - b1 - b2, b1, b2]);
-            for k in 0..VARYINGS {
-                let error = error.0 * to_1[k] + error.1 * to_2[k];
-                prop_assert!(error.abs() <= tolerance[k] * (1.0 + 1e-3) + 1e-7, "slot {k}: {error}");
-            }
-        }
-    }
-
-    /// How far the perspective-correct weights of vertices 1 and 2 are from the screen-space
-    /// weights `b`.
-    fn affine_error(inv_w: [f32; 3], b: [f32; 3]) -> (f32, f32) {
-        let total = b[0] * inv_w[0] + b[1] * inv_w[1] + b[2] * inv_w[2];
-        (b[1] * inv_w[1] / total - b[1], b[2] * inv_w[2] / total - b[2])
-    }
-
-    #[test]
-    fn the_affine_bound_is_nearly_reached_midway_along_an_edge() {
-        // One vertex 1% nearer; a value changing by one along that edge: at the edge's middle
-        // the error is 0.01 / 4 / 1.005, and the criterion accepts exactly up to 0.01 / 4.
-        let inv_w = [1.0, 1.01, 1.0];
-        let mut to_1 = [0.0; VARYINGS];
-        to_1[0] = 1.0;
-        let error = affine_error(inv_w, [0.5, 0.5, 0.0]).0;
-        assert!((error - 0.0025 / 1.005).abs() < 1e-6, "{error}");
-        assert!(affine_is_close(inv_w, &to_1, &[0.0; VARYINGS], |_| Some(0.0026)));
-        assert!(!affine_is_close(inv_w, &to_1, &[0.0; VARYINGS], |_| Some(0.0024)));
     }
 }

@@ -1,0 +1,436 @@
+//! Triangle setup: everything the tiles need to draw a triangle, worked out once, while the
+//! triangle is binned.
+//!
+//! A setup holds the triangle's pixel bounds, its exact integer edge functions at the first
+//! pixel of those bounds with their steps per pixel, and the planes of the values its pixels
+//! interpolate. Binning walks the triangles in mesh order, so the vertices it reads are
+//! neighbours in memory; the tiles then read setups in the order they were made and never
+//! touch a vertex, and a triangle spanning several tiles is set up only once.
+//!
+//! Coverage uses exact integer edge functions on screen coordinates snapped to
+//! 1/[`SUBPIXEL_STEPS`] of a pixel, sampled at pixel centres, with the top-left fill rule: a
+//! pixel whose centre lies on an edge shared by two triangles is drawn by exactly one of them.
+//! Depth is interpolated linearly in screen space (as the projection demands); every other
+//! value perspective-correctly, as the screen-space plane of the value divided by `w` over the
+//! plane of `1/w`. A triangle whose `w` varies too little for that to move any value beyond its
+//! tolerance (a sixteenth of what a pixel shows of it) is interpolated in screen space.
+
+use crate::pipeline::{MAX_TARGET_SIZE, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, edge, pixel_bounds};
+use crate::shade::{Compiled, CompiledPass, Pass, VARYINGS, Varyings};
+use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS};
+use crate::tile::MASK_PIXELS;
+use bevy_math::Vec4;
+
+/// Values interpolated together, one per SIMD lane; also the pixels of a run.
+pub(crate) const LANES: usize = 4;
+
+/// Four-value packs of interpolated values: the [`Varyings`] four to a pack, then depth and
+/// `1/w`.
+pub(crate) const PACKS: usize = VARYINGS / LANES + 1;
+
+/// Where depth and `1/w` are, counted over all packs.
+pub(crate) const DEPTH: usize = VARYINGS;
+pub(crate) const INV_W: usize = VARYINGS + 1;
+
+/// Each lane's offset from a run's first pixel.
+const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
+
+/// A target triangles are set up for.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Viewport {
+    pub width: u32,
+    pub height: u32,
+    /// Whether triangles facing away are dropped.
+    pub cull_back_faces: bool,
+}
+
+/// What a triangle's pixels interpolate, fixed at compile time: `None` for depth alone, pushed
+/// back by the shadow map's slope-scaled bias; otherwise the packs the pass reads of the
+/// vertices' varyings, then depth and `1/w`.
+pub(crate) trait Interpolated {
+    const PASS: Option<Pass>;
+}
+
+/// The [`Interpolated`] values of the shadow map: depth alone.
+pub(crate) struct BiasedDepth;
+
+impl Interpolated for BiasedDepth {
+    const PASS: Option<Pass> = None;
+}
+
+impl<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool> Interpolated for Compiled<MODE, TEXTURED, SHADOWED> {
+    const PASS: Option<Pass> = Some(<Self as CompiledPass>::PASS);
+}
+
+/// What a triangle is drawn with.
+#[derive(Clone, Copy)]
+pub(crate) struct Surface<'a> {
+    /// The instance it belongs to.
+    pub instance: u32,
+    /// How far each value may be off when interpolated in screen space (see
+    /// [`affine_tolerances`](crate::shade::affine_tolerances)).
+    pub tolerance: &'a Varyings,
+    /// The flat-shading diffuse term of the triangle (or of the one it was clipped from).
+    pub flat_diffuse: f32,
+}
+
+/// Four values' plane over the screen: their values at the centre of the first pixel of a
+/// triangle's bounds and their change per pixel right and down.
+///
+/// Depth and `1/w` are linear in screen space; the other values are too when the triangle is
+/// drawn affinely, and otherwise their planes hold the values divided by `w`, to be multiplied
+/// by the pixel's `w` (the reciprocal of the interpolated `1/w`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Plane {
+    pub origin: Vec4,
+    pub dx: Vec4,
+    pub dy: Vec4,
+}
+
+impl Plane {
+    /// The plane through `values` at the three vertices, given each vertex's barycentric
+    /// weight at the origin and its steps (vertex 0's weight is what the other two leave).
+    #[inline(always)]
+    fn through(values: [Vec4; 3], weights: &Weights) -> Self {
+        let [v0, v1, v2] = values;
+        let (to_1, to_2) = (v1 - v0, v2 - v0);
+        let [o, x, y] = weights.0;
+        Self { origin: v0 + to_1 * o[0] + to_2 * o[1], dx: to_1 * x[0] + to_2 * x[1], dy: to_1 * y[0] + to_2 * y[1] }
+    }
+
+    /// The values at pixel offset (`x`, `y`) from the first pixel of the triangle's bounds.
+    #[inline(always)]
+    pub fn at(&self, x: f32, y: f32) -> Vec4 {
+        self.origin + self.dx * x + self.dy * y
+    }
+
+    /// Value `lane`'s change from a run's first pixel to each of its pixels.
+    #[inline(always)]
+    pub fn lane_steps(&self, lane: usize) -> Vec4 {
+        LANE_OFFSETS * self.dx[lane]
+    }
+}
+
+/// The barycentric weights of vertices 1 and 2 at the origin, and their steps per pixel right
+/// and down.
+struct Weights([[f32; 2]; 3]);
+
+/// Where each pack is among the packs `pass` reads, the packs a setup stores: `None` for the
+/// packs it does not read (the depth pack it always reads).
+pub(crate) const fn pack_slots(pass: Pass) -> [Option<usize>; PACKS] {
+    let mut slots = [None; PACKS];
+    let (mut pack, mut stored) = (0, 0);
+    while pack < PACKS {
+        let mut read = pack * LANES >= VARYINGS;
+        let mut k = pack * LANES;
+        while k < (pack + 1) * LANES && k < VARYINGS {
+            read |= pass.uses(k);
+            k += 1;
+        }
+        if read {
+            slots[pack] = Some(stored);
+            stored += 1;
+        }
+        pack += 1;
+    }
+    slots
+}
+
+/// A triangle ready for every tile it touches.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TriangleSetup {
+    /// The pixels whose centres its bounding box holds, within the target.
+    pub bounds: PixelBounds,
+    /// Edge functions at the centre of the first pixel of `bounds`, top-left bias included;
+    /// edge `k` is opposite vertex `k` (in the positive-area order) and weighs it.
+    pub start: [i64; 3],
+    /// Edge function steps per pixel to the right (they fit `i32`, see [`TriangleSetup::new`]).
+    pub step_x: [i32; 3],
+    /// Edge function steps per pixel down.
+    pub step_y: [i32; 3],
+    /// The least depth of its vertices.
+    pub nearest: f32,
+    /// The flat-shading diffuse term of the triangle (or of the one it was clipped from).
+    pub flat_diffuse: f32,
+    /// Its first plane in the planes it was set up with, in pack order, packs the pass does
+    /// not read left out.
+    pub planes: u32,
+    /// The instance it belongs to.
+    pub instance: u32,
+    /// Whether the edge functions fit `i32` over any walk inside `bounds` (see
+    /// [`fits_narrow`]).
+    pub narrow: bool,
+    /// Whether its values are interpolated in screen space.
+    pub affine: bool,
+}
+
+/// The largest edge function step: coordinates stay within three target sizes of the origin,
+/// so two of them differ by at most six, times [`SUBPIXEL_STEPS`] for a pixel's step.
+const MAX_STEP: i64 = 6 * MAX_TARGET_SIZE as i64 * SUBPIXEL_STEPS * SUBPIXEL_STEPS;
+const _: () = assert!(MAX_STEP <= i32::MAX as i64, "edge steps must fit i32");
+
+impl TriangleSetup {
+    /// Sets a projected triangle with vertex `varyings` up for `viewport`, appending the planes
+    /// of the values `I` interpolates to `planes`; `None` when it is culled (zero area, or facing
+    /// away when the viewport culls back faces) or covers no pixel centre of the target.
+    #[inline(always)]
+    pub fn new<I: Interpolated>(
+        vertices: [&ScreenVertex; 3],
+        varyings: [&Varyings; 3],
+        viewport: Viewport,
+        surface: Surface,
+        planes: &mut Vec<Plane>,
+    ) -> Option<Self> {
+        let p = vertices.map(|v| (i64::from(v.x), i64::from(v.y)));
+        let area = edge(p[0], p[1], p[2]);
+        // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the
+        // screen. Swapping two vertices makes the area positive, as the inside test expects.
+        let order = match area {
+            0 => return None,
+            a if a < 0 => [0, 2, 1],
+            _ if viewport.cull_back_faces => return None,
+            _ => [0, 1, 2],
+        };
+        let p = order.map(|k| p[k]);
+        let bounds = pixel_bounds(p, viewport.width, viewport.height)?;
+        let sample = (
+            i64::from(bounds.min_x) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+            i64::from(bounds.min_y) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+        );
+        let [a, b, c] = p;
+        // Edge k runs between the two vertices other than k.
+        let edges = [(b, c), (c, a), (a, b)];
+        let start = edges.map(|(from, to)| edge(from, to, sample) - i64::from(!is_top_left(from, to)));
+        let step_x = edges.map(|(from, to)| ((from.1 - to.1) * SUBPIXEL_STEPS) as i32);
+        let step_y = edges.map(|(from, to)| ((to.0 - from.0) * SUBPIXEL_STEPS) as i32);
+
+        let inv_area = 1.0 / area.abs() as f32;
+        let weight = |e: i64| e as f32 * inv_area;
+        let weights = Weights([
+            [weight(start[1]), weight(start[2])],
+            [weight(step_x[1].into()), weight(step_x[2].into())],
+            [weight(step_y[1].into()), weight(step_y[2].into())],
+        ]);
+        let z = order.map(|k| vertices[k].z);
+        let inv_w = order.map(|k| vertices[k].inv_w);
+        let first_plane = planes.len() as u32;
+        let affine = match I::PASS {
+            None => {
+                let mut plane = Plane::through(z.map(|z| Vec4::new(z, 0.0, 0.0, 0.0)), &weights);
+                plane.origin.x += CONSTANT_BIAS + SLOPE_BIAS * plane.dx.x.abs().max(plane.dy.x.abs());
+                planes.push(plane);
+                true
+            }
+            Some(_) => {
+                let slots = const {
+                    match I::PASS {
+                        Some(pass) => pack_slots(pass),
+                        None => [None; PACKS],
+                    }
+                };
+                let varyings = order.map(|k| varyings[k]);
+                // Small or distant triangles skip the per-pixel division.
+                let affine = affine_is_close(inv_w, varyings, surface.tolerance);
+                for (pack, slot) in slots.iter().enumerate() {
+                    if slot.is_none() {
+                        continue;
+                    }
+                    let values = std::array::from_fn(|vertex| match pack * LANES {
+                        first if first < VARYINGS => {
+                            let scale = if affine { 1.0 } else { inv_w[vertex] };
+                            Vec4::from_slice(&varyings[vertex][first..]) * scale
+                        }
+                        _ => Vec4::new(z[vertex], inv_w[vertex], 0.0, 0.0),
+                    });
+                    planes.push(Plane::through(values, &weights));
+                }
+                affine
+            }
+        };
+        Some(Self {
+            bounds,
+            start,
+            step_x,
+            step_y,
+            nearest: z[0].min(z[1]).min(z[2]),
+            flat_diffuse: surface.flat_diffuse,
+            planes: first_plane,
+            instance: surface.instance,
+            narrow: fits_narrow(p),
+            affine,
+        })
+    }
+}
+
+/// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
+/// pixels are drawn (the top-left fill rule).
+#[inline(always)]
+pub(crate) fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
+    (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
+}
+
+/// Whether every edge function value a walk inside the bounds of the triangle `p` (sub-pixel
+/// units) computes fits an `i32`.
+///
+/// A value at pixel centre `s` is `(b - a) x (s - a)` for two corners `a`, `b`: at most
+/// `w h + h |s.x - a.x|` for the triangle's bounding box `w` by `h`. A walk reads up to two
+/// mask widths past its last pixel (the last mask's lanes, then one more step) and one row
+/// past its last row, all inside the bounding box widened by [`NARROW_MARGIN`] pixels.
+fn fits_narrow(p: [(i64, i64); 3]) -> bool {
+    let extent = |c: [i64; 3]| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]);
+    let margin = NARROW_MARGIN * SUBPIXEL_STEPS;
+    let (w, h) = (extent(p.map(|c| c.0)), extent(p.map(|c| c.1)) + margin);
+    h * (2 * w + margin) + 1 < i64::from(i32::MAX)
+}
+
+/// Pixels past a triangle's bounding box that a narrow walk may evaluate edge functions at.
+const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
+
+/// Whether interpolating in screen space keeps every value within `tolerance` of its
+/// perspective-correct interpolation, for a triangle with `1/w` of `inv_w` and values
+/// `varyings` at its vertices.
+///
+/// Write the vertices' `1/w` as `m (1 + s_k)` with `0 <= s_k <= spread`, `spread` the ratio of
+/// the largest to the least less one. At a point with screen-space weights `b_k`, the
+/// perspective-correct weights are `b_k (1 + s_k) / (1 + sum(b_j s_j))`, so a value moves by
+/// the covariance of `s` and the value under the weights `b`, divided by at least one: at
+/// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
+#[inline(always)]
+fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyings) -> bool {
+    let spread = inv_w[0].max(inv_w[1]).max(inv_w[2]) / inv_w[0].min(inv_w[1]).min(inv_w[2]) - 1.0;
+    let quarter_spread = Vec4::splat(spread * 0.25);
+    (0..VARYINGS).step_by(LANES).all(|k| {
+        let [v0, v1, v2] = varyings.map(|v| Vec4::from_slice(&v[k..]));
+        let range = v0.max(v1).max(v2) - v0.min(v1).min(v2);
+        (quarter_spread * range).cmple(Vec4::from_slice(&tolerance[k..])).all()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shade::{Shading, mode};
+    use proptest::prelude::*;
+
+    /// A screen vertex at whole sub-pixel position `(x, y)` with depth `z`.
+    fn vertex((x, y): (i32, i32), z: f32) -> ScreenVertex {
+        ScreenVertex { code: 0, x, y, z, inv_w: 1.0 }
+    }
+
+    const TARGET: Viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
+
+    const SURFACE: Surface = Surface { instance: 3, tolerance: &[0.001; VARYINGS], flat_diffuse: 0.25 };
+
+    const NO_VARYINGS: Varyings = [0.0; VARYINGS];
+
+    fn depth_setup(corners: [(i32, i32); 3], z: [f32; 3]) -> (TriangleSetup, Vec<Plane>) {
+        let vertices = [0, 1, 2].map(|k| vertex(corners[k], z[k]));
+        let mut planes = Vec::new();
+        let varyings = [&NO_VARYINGS; 3];
+        let setup = TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, TARGET, SURFACE, &mut planes)
+            .expect("a visible triangle");
+        (setup, planes)
+    }
+
+    #[test]
+    fn small_triangles_walk_narrow_and_large_ones_wide() {
+        let steps = SUBPIXEL_STEPS as i32;
+        let small = [(70, 35), (90, 40), (75, 60)].map(|(x, y)| (x * steps, y * steps));
+        let large = [(0, 0), (900, 40), (100, 600)].map(|(x, y)| (x * steps, y * steps));
+        assert!(depth_setup(small, [0.5; 3]).0.narrow);
+        assert!(!depth_setup(large, [0.5; 3]).0.narrow);
+    }
+
+    #[test]
+    fn shadow_depths_are_pushed_back_by_the_slope_scaled_bias() {
+        let steps = SUBPIXEL_STEPS as i32;
+        // Depth grows by 0.01 per pixel to the right, not at all downwards.
+        let corners = [(0, 0), (0, 100 * steps), (100 * steps, 0)];
+        let (setup, planes) = depth_setup(corners, [0.2, 0.2, 1.2]);
+        let plane = planes[setup.planes as usize];
+        assert!((plane.dx.x - 0.01).abs() < 1e-6 && plane.dy.x.abs() < 1e-6, "{plane:?}");
+        // At the centre of pixel (0, 0) the plane's depth is 0.2 + 0.005, plus the bias.
+        let bias = CONSTANT_BIAS + SLOPE_BIAS * 0.01;
+        assert!((plane.origin.x - (0.205 + bias)).abs() < 1e-6, "{}", plane.origin.x);
+    }
+
+    #[test]
+    fn a_setup_stores_only_the_packs_its_pass_reads() {
+        let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
+        let stored = |pass: Pass| pack_slots(pass).iter().flatten().count();
+        // Colour and depth; then normals and u; then v and the shadow position too.
+        assert_eq!(stored(pass(Shading::Gouraud, false, false)), 2);
+        assert_eq!(stored(pass(Shading::Phong, false, false)), 3);
+        assert_eq!(stored(pass(Shading::Phong, true, true)), 4);
+        let plain = pass(Shading::Gouraud, false, false);
+        assert_eq!(pack_slots(plain), [Some(0), None, None, Some(1)]);
+
+        let varyings: [Varyings; 3] =
+            std::array::from_fn(|k| std::array::from_fn(|i| (k * VARYINGS + i) as f32 * 0.01));
+        let steps = SUBPIXEL_STEPS as i32;
+        let vertices = [(0, 0), (0, 40 * steps), (40 * steps, 0)].map(|c| vertex(c, 0.5));
+        let mut planes = Vec::new();
+        let setup = TriangleSetup::new::<Compiled<{ mode::GOURAUD }, false, false>>(
+            vertices.each_ref(),
+            varyings.each_ref(),
+            TARGET,
+            SURFACE,
+            &mut planes,
+        )
+        .unwrap();
+        assert_eq!((planes.len(), setup.instance, setup.flat_diffuse), (2, 3, 0.25));
+        // The colour plane reproduces vertex 0's colour at its corner, the pixel offset
+        // (-1/2, -1/2) from the first pixel's centre.
+        let colour = planes[0].at(-0.5, -0.5);
+        assert!((colour.x - varyings[0][0]).abs() < 1e-5 && (colour.z - varyings[0][2]).abs() < 1e-5, "{colour}");
+        assert_eq!(planes[1].at(3.0, 7.0).x, 0.5, "constant depth");
+    }
+
+    proptest! {
+        /// When a triangle is judged close enough to affine, every value at every point inside
+        /// it is within its tolerance of the perspective-correct value.
+        #[test]
+        fn affine_interpolation_stays_within_tolerance(
+            inv_w in 0.2f32..5.0,
+            spread in prop::array::uniform3(0.0f32..0.01),
+            v1 in prop::array::uniform12(-1.0f32..1.0),
+            v2 in prop::array::uniform12(-1.0f32..1.0),
+            weights in (0.0f32..1.0, 0.0f32..1.0),
+        ) {
+            let inv_w = spread.map(|s| inv_w * (1.0 + s));
+            let tolerance = [0.002; VARYINGS];
+            prop_assume!(affine_is_close(inv_w, [&[0.0; VARYINGS], &v1, &v2], &tolerance));
+            let (b1, b2) = if weights.0 + weights.1 > 1.0 { (1.0 - weights.0, 1.0 - weights.1) } else { weights };
+            let error = affine_error(inv_w, [1.0 - b1 - b2, b1, b2]);
+            for k in 0..VARYINGS {
+                let error = error.0 * v1[k] + error.1 * v2[k];
+                prop_assert!(error.abs() <= tolerance[k] * (1.0 + 1e-3) + 1e-7, "slot {k}: {error}");
+            }
+        }
+    }
+
+    /// How far the perspective-correct weights of vertices 1 and 2 are from the screen-space
+    /// weights `b`.
+    fn affine_error(inv_w: [f32; 3], b: [f32; 3]) -> (f32, f32) {
+        let total = b[0] * inv_w[0] + b[1] * inv_w[1] + b[2] * inv_w[2];
+        (b[1] * inv_w[1] / total - b[1], b[2] * inv_w[2] / total - b[2])
+    }
+
+    #[test]
+    fn the_affine_bound_is_nearly_reached_midway_along_an_edge() {
+        // One vertex 1% nearer; a value changing by one along that edge: at the edge's middle
+        // the error is 0.01 / 4 / 1.005, and the criterion accepts exactly up to 0.01 / 4.
+        let inv_w = [1.0, 1.01, 1.0];
+        let mut v1 = [0.0; VARYINGS];
+        v1[0] = 1.0;
+        let error = affine_error(inv_w, [0.5, 0.5, 0.0]).0;
+        assert!((error - 0.0025 / 1.005).abs() < 1e-6, "{error}");
+        let zero = [0.0; VARYINGS];
+        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0026; VARYINGS]));
+        assert!(!affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0024; VARYINGS]));
+        // Values not interpolated are not checked.
+        let mut tolerance = [0.0024; VARYINGS];
+        tolerance[0] = f32::INFINITY;
+        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &tolerance));
+    }
+}
