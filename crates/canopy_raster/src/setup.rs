@@ -297,7 +297,9 @@ const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
 /// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
 #[inline(always)]
 fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyings) -> bool {
-    let spread = inv_w[0].max(inv_w[1]).max(inv_w[2]) / inv_w[0].min(inv_w[1]).min(inv_w[2]) - 1.0;
+    // Plain comparisons: `1/w` is finite, so the NaN handling of `f32::max` is not needed.
+    let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
+    let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
     let quarter_spread = Vec4::splat(spread * 0.25);
     (0..VARYINGS).step_by(LANES).all(|k| {
         let [v0, v1, v2] = varyings.map(|v| Vec4::from_slice(&v[k..]));

@@ -41,6 +41,10 @@ pub(crate) struct DepthBand<'a> {
     pub depth: &'a mut [f32],
 }
 
+/// Which pixels of each row of a walk are covered: bit `k` of word `r` for pixel `k` of the
+/// walk's row `r`. Kept by the band and reused by every walk, so that it is not cleared for each.
+type RowMasks = [u64; TILE_HEIGHT as usize];
+
 /// A binned triangle as a colour tile draws it.
 struct Triangle<'a> {
     setup: &'a TriangleSetup,
@@ -67,6 +71,7 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
     let (rows, width) = (band.rows(), band.width);
     let mut target = band;
     let (mut fragments, mut occluded) = (0, 0);
+    let mut masks = [0; TILE_HEIGHT as usize];
     for tx in 0..context.tiles_x {
         let rect = tile_rect(tx, target.y0, width, rows);
         let tile = (row * context.tiles_x + tx) as usize;
@@ -88,7 +93,7 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
                     shadowed: context.shadow.is_some(),
                 };
                 let triangle = Triangle { setup, planes: &chunk.planes[setup.planes as usize..], material };
-                let covered = fill(pass, &walk, &triangle, context, &mut target);
+                let covered = fill(pass, &walk, &mut masks, &triangle, context, &mut target);
                 fragments += covered;
                 covered_since_refresh += covered;
                 if covered_since_refresh >= area * OCCLUSION_REFRESH {
@@ -124,6 +129,7 @@ pub(crate) fn draw_depth_band(chunks: &[Chunk], row: u32, mut band: DepthBand) {
     }
     let rows = (band.depth.len() / band.stride) as u32;
     let tiles_x = width.div_ceil(TILE_WIDTH);
+    let mut masks = [0; TILE_HEIGHT as usize];
     for tx in 0..tiles_x {
         let rect = tile_rect(tx, band.y0, width, rows);
         let tile = (row * tiles_x + tx) as usize;
@@ -131,7 +137,7 @@ pub(crate) fn draw_depth_band(chunks: &[Chunk], row: u32, mut band: DepthBand) {
             for &index in &chunk.bins[tile] {
                 let setup = &chunk.setups[index as usize];
                 if let Some(walk) = Walk::new(setup, rect) {
-                    fill_depth(&walk, setup.bounds, &chunk.planes[setup.planes as usize], &mut band);
+                    fill_depth(&walk, &mut masks, setup.bounds, &chunk.planes[setup.planes as usize], &mut band);
                 }
             }
         }
@@ -174,16 +180,15 @@ impl Walk {
     /// `visit(y, x, lanes)` for each: `x` is the run's first pixel and bit `k` of `lanes` is
     /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
-    fn covered_runs(&self, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
-        let mut rows = [0; TILE_HEIGHT as usize];
+    fn covered_runs(&self, rows: &mut RowMasks, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
         if self.narrow {
             // The start fits too: it is one of the values the walk computes.
-            self.coverage(self.start.map(|e| e as i32), self.step_x, self.step_y, &mut rows);
+            self.coverage(self.start.map(|e| e as i32), self.step_x, self.step_y, rows);
         } else {
-            self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), &mut rows);
+            self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), rows);
         }
         let mut fragments = 0;
-        for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(&rows) {
+        for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(rows.iter()) {
             if coverage == 0 {
                 continue;
             }
@@ -199,7 +204,8 @@ impl Walk {
         fragments
     }
 
-    /// Writes which pixels of the rect the triangle covers into `rows`, with edge functions
+    /// Writes which pixels of the rect the triangle covers into the first rows of `rows`, with
+    /// edge functions
     /// stepped in `E`: one bit per pixel (at most [`TILE_WIDTH`] of them) and a word per row
     /// (at most [`TILE_HEIGHT`]), found [`MASK_PIXELS`] pixels at a time without a branch per
     /// pixel.
@@ -207,13 +213,7 @@ impl Walk {
     /// The triangle is convex, so each row's covered pixels run from its lowest set bit to its
     /// highest.
     #[inline(always)]
-    fn coverage<E: EdgeValue>(
-        &self,
-        start: [E; 3],
-        step_x: [E; 3],
-        step_y: [E; 3],
-        rows: &mut [u64; TILE_HEIGHT as usize],
-    ) {
+    fn coverage<E: EdgeValue>(&self, start: [E; 3], step_x: [E; 3], step_y: [E; 3], rows: &mut RowMasks) {
         const { assert!(TILE_WIDTH <= u64::BITS) };
         let mask_steps = E::mask_steps(step_x);
         let group_step = step_x.map(|s| s * E::from_u32(MASK_PIXELS));
@@ -300,8 +300,15 @@ fn add<E: EdgeValue>(edges: [E; 3], by: [E; 3]) -> [E; 3] {
 
 /// Draws a triangle's walk over a tile with the pixel loop compiled for `pass`; returns the
 /// fragments.
-fn fill(pass: Pass, walk: &Walk, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
-    with_compiled_pass!(pass, fill_pass(walk, triangle, context, band))
+fn fill(
+    pass: Pass,
+    walk: &Walk,
+    rows: &mut RowMasks,
+    triangle: &Triangle,
+    context: &TileContext,
+    band: &mut Band,
+) -> u64 {
+    with_compiled_pass!(pass, fill_pass(walk, rows, triangle, context, band))
 }
 
 /// 2^23: added to a float in `[0, 2^23)`, it leaves the rounded whole number in the low bits.
@@ -314,7 +321,13 @@ const RUN_MASK: u64 = (1 << LANES) - 1;
 ///
 /// Coverage is decided per pixel, exactly, as one interval per row; depth tests, interpolation
 /// and lighting run on runs of [`LANES`] pixels of that interval at once.
-fn fill_pass<C: CompiledPass>(walk: &Walk, triangle: &Triangle, context: &TileContext, band: &mut Band) -> u64 {
+fn fill_pass<C: CompiledPass>(
+    walk: &Walk,
+    rows: &mut RowMasks,
+    triangle: &Triangle,
+    context: &TileContext,
+    band: &mut Band,
+) -> u64 {
     let pass = C::PASS;
     // The packs the pass does not read stay zero, and the code reading them folds away.
     let slots = const { pack_slots(C::PASS) };
@@ -329,7 +342,7 @@ fn fill_pass<C: CompiledPass>(walk: &Walk, triangle: &Triangle, context: &TileCo
         triangle,
         context,
     };
-    walk.covered_runs(|py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes))
+    walk.covered_runs(rows, |py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes))
 }
 
 /// What the runs of a triangle share.
@@ -462,9 +475,9 @@ fn write_run<T: Copy>(values: &mut [T], at: usize, valid: usize, run: [T; LANES]
 
 /// The depth-only pixel loop of the shadow map; `plane` starts at the first pixel of
 /// `bounds` and holds the biased depth in its first lane.
-fn fill_depth(walk: &Walk, bounds: PixelBounds, plane: &Plane, band: &mut DepthBand) {
+fn fill_depth(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plane, band: &mut DepthBand) {
     let lane_steps = plane.lane_steps(0);
-    walk.covered_runs(|py, run, lanes| {
+    walk.covered_runs(rows, |py, run, lanes| {
         let z = plane.at((run - bounds.min_x) as f32, (py - bounds.min_y) as f32).x;
         let z = lanes_of(Vec4::splat(z) + lane_steps);
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
@@ -508,7 +521,7 @@ mod tests {
     /// Every run a walk visits: row, first pixel and coverage bits.
     fn runs(walk: &Walk) -> Vec<(u32, u32, u32)> {
         let mut runs = Vec::new();
-        walk.covered_runs(|y, x, lanes| runs.push((y, x, lanes)));
+        walk.covered_runs(&mut [0; TILE_HEIGHT as usize], |y, x, lanes| runs.push((y, x, lanes)));
         runs
     }
 
