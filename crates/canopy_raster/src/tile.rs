@@ -74,36 +74,90 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u6
     let mut masks = [0; TILE_HEIGHT as usize];
     for tx in 0..context.tiles_x {
         let rect = tile_rect(tx, target.y0, width, rows);
-        let tile = (row * context.tiles_x + tx) as usize;
-        let mut farthest = FAR_DEPTH;
-        let mut covered_since_refresh = 0;
-        let area = u64::from(rect.max_x - rect.min_x + 1) * u64::from(rows);
+        let mut tile = TileState {
+            rect,
+            area: u64::from(rect.max_x - rect.min_x + 1) * u64::from(rows),
+            farthest: FAR_DEPTH,
+            covered_since_refresh: 0,
+            fragments: 0,
+            occluded: 0,
+        };
+        let index = (row * context.tiles_x + tx) as usize;
         for chunk in context.chunks {
-            for &index in &chunk.bins[tile] {
-                let setup = &chunk.setups[index as usize];
-                if setup.nearest >= farthest {
-                    occluded += 1;
-                    continue;
-                }
-                let Some(walk) = Walk::new(setup, rect) else { continue };
-                let material = &context.frame.instances[setup.instance as usize].material;
+            let mut entries = chunk.bins[index].as_slice();
+            // Runs of one instance's triangles, each drawn by the loop compiled for its pass.
+            while let Some(&first) = entries.first() {
+                let instance = chunk.setups[first as usize].instance;
+                let material = &context.frame.instances[instance as usize].material;
                 let pass = Pass {
                     shading: context.frame.settings.shading,
                     textured: material.texture.is_some(),
                     shadowed: context.shadow.is_some(),
                 };
-                let triangle = Triangle { setup, planes: &chunk.planes[setup.planes as usize..], material };
-                let covered = fill(pass, &walk, &mut masks, &triangle, context, &mut target);
-                fragments += covered;
-                covered_since_refresh += covered;
-                if covered_since_refresh >= area * OCCLUSION_REFRESH {
-                    covered_since_refresh = 0;
-                    farthest = farthest_depth(target.depth, width, target.y0, rect);
-                }
+                let draw = Draw { chunk, instance, material, context };
+                let done =
+                    with_compiled_pass!(pass, draw_triangles(entries, &draw, &mut tile, &mut masks, &mut target));
+                entries = &entries[done..];
             }
         }
+        fragments += tile.fragments;
+        occluded += tile.occluded;
     }
     (fragments, occluded)
+}
+
+/// What drawing a tile keeps from one triangle to the next.
+struct TileState {
+    rect: PixelBounds,
+    /// Pixels in the rect.
+    area: u64,
+    /// A conservative farthest depth of what the rect holds.
+    farthest: f32,
+    /// Pixels covered since `farthest` was last read.
+    covered_since_refresh: u64,
+    fragments: u64,
+    occluded: u64,
+}
+
+/// The triangles of one instance in a chunk, and what they are drawn with.
+struct Draw<'a> {
+    chunk: &'a Chunk,
+    instance: u32,
+    material: &'a Material,
+    context: &'a TileContext<'a>,
+}
+
+/// Draws the triangles of `entries` (setups of `draw`'s chunk) into `tile` in order, for as
+/// long as they belong to `draw`'s instance, with the pixel loop compiled for its pass;
+/// returns how many entries it took.
+fn draw_triangles<C: CompiledPass>(
+    entries: &[u32],
+    draw: &Draw,
+    tile: &mut TileState,
+    masks: &mut RowMasks,
+    band: &mut Band,
+) -> usize {
+    let chunk = draw.chunk;
+    for (taken, &index) in entries.iter().enumerate() {
+        let setup = &chunk.setups[index as usize];
+        if setup.instance != draw.instance {
+            return taken;
+        }
+        if setup.nearest >= tile.farthest {
+            tile.occluded += 1;
+            continue;
+        }
+        let Some(walk) = Walk::new(setup, tile.rect) else { continue };
+        let triangle = Triangle { setup, planes: &chunk.planes[setup.planes as usize..], material: draw.material };
+        let covered = fill_pass::<C>(&walk, masks, &triangle, draw.context, band);
+        tile.fragments += covered;
+        tile.covered_since_refresh += covered;
+        if tile.covered_since_refresh >= tile.area * OCCLUSION_REFRESH {
+            tile.covered_since_refresh = 0;
+            tile.farthest = farthest_depth(band.depth, band.width, band.y0, tile.rect);
+        }
+    }
+    entries.len()
 }
 
 /// The farthest depth held in `rect` of a band, four depths at a time.
@@ -298,19 +352,6 @@ fn add<E: EdgeValue>(edges: [E; 3], by: [E; 3]) -> [E; 3] {
     [edges[0] + by[0], edges[1] + by[1], edges[2] + by[2]]
 }
 
-/// Draws a triangle's walk over a tile with the pixel loop compiled for `pass`; returns the
-/// fragments.
-fn fill(
-    pass: Pass,
-    walk: &Walk,
-    rows: &mut RowMasks,
-    triangle: &Triangle,
-    context: &TileContext,
-    band: &mut Band,
-) -> u64 {
-    with_compiled_pass!(pass, fill_pass(walk, rows, triangle, context, band))
-}
-
 /// 2^23: added to a float in `[0, 2^23)`, it leaves the rounded whole number in the low bits.
 const ROUNDING_BIAS: f32 = 8_388_608.0;
 
@@ -321,6 +362,7 @@ const RUN_MASK: u64 = (1 << LANES) - 1;
 ///
 /// Coverage is decided per pixel, exactly, as one interval per row; depth tests, interpolation
 /// and lighting run on runs of [`LANES`] pixels of that interval at once.
+#[inline(always)]
 fn fill_pass<C: CompiledPass>(
     walk: &Walk,
     rows: &mut RowMasks,
