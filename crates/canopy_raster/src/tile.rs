@@ -415,13 +415,14 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
     let width = band.width as usize;
     let at = (y - band.y0) as usize * width + x as usize;
     let valid = (width - x as usize).min(LANES);
-    let depth = f32x4::new(read_run(band.depth, at, valid, 0.0));
+    let (depths, colors) = (&mut band.depth[at..at + valid], &mut band.color[at..at + valid]);
+    let depth = f32x4::new(read_run(depths, 0.0));
     let drawn = z.simd_lt(depth) & covered(lanes);
     let drawn_lanes = drawn.to_bitmask();
     if drawn_lanes == 0 {
         return;
     }
-    write_run(band.depth, at, valid, drawn.bitselect(z, depth).to_array());
+    write_run(depths, drawn.bitselect(z, depth).to_array());
     let w = if *affine { Vec4::ONE } else { lane_value(INV_W).recip() };
     let value = |k: usize| if *affine { lane_value(k) } else { lane_value(k) * w };
     let diffuse = match mode {
@@ -468,9 +469,9 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
     let [r, g, b] = rgb.map(|c| lanes_of(c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits());
     let byte = u32x4::splat(0xff);
     let pixels = (r & byte) | (g & byte) << 8 | (b & byte) << 16 | byte << 24;
-    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(read_run(band.color, at, valid, [0; 4])).map(u32::from_le));
+    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(read_run(colors, [0; 4])).map(u32::from_le));
     let blended = drawn.to_bits().bitselect(pixels, old);
-    write_run(band.color, at, valid, bytemuck::cast(blended.to_array().map(u32::to_le)));
+    write_run(colors, bytemuck::cast(blended.to_array().map(u32::to_le)));
 }
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
@@ -494,25 +495,39 @@ fn covered(lanes: u32) -> f32x4 {
     f32x4::from_bits(u32x4::new(MASKS[lanes as usize & (MASKS.len() - 1)]))
 }
 
-/// The [`LANES`] values of a run starting at `at`, of which the first `valid` lie in the row
-/// (the rest, past the row's end, read as `fill`).
+/// The [`LANES`] values of a run whose pixels in the row are `run`: all of them unless the run
+/// reaches past the row's end, where the missing ones read as `fill`.
 #[inline(always)]
-fn read_run<T: Copy>(values: &[T], at: usize, valid: usize, fill: T) -> [T; LANES] {
-    if valid == LANES {
-        values[at..at + LANES].try_into().expect("a run is LANES long")
-    } else {
-        std::array::from_fn(|k| if k < valid { values[at + k] } else { fill })
+fn read_run<T: Copy>(run: &[T], fill: T) -> [T; LANES] {
+    match <[T; LANES]>::try_from(run) {
+        Ok(values) => values,
+        Err(_) => read_row_end(run, fill),
     }
 }
 
-/// Stores a run read by [`read_run`]: its first `valid` values.
+/// [`read_run`] of a run reaching past the row's end: apart, so that the whole runs are read in
+/// one load.
+#[cold]
+#[inline(never)]
+fn read_row_end<T: Copy>(run: &[T], fill: T) -> [T; LANES] {
+    std::array::from_fn(|k| run.get(k).copied().unwrap_or(fill))
+}
+
+/// Stores a run read by [`read_run`] back into its pixels in the row.
 #[inline(always)]
-fn write_run<T: Copy>(values: &mut [T], at: usize, valid: usize, run: [T; LANES]) {
-    if valid == LANES {
-        values[at..at + LANES].copy_from_slice(&run);
-    } else {
-        values[at..at + valid].copy_from_slice(&run[..valid]);
+fn write_run<T: Copy>(run: &mut [T], values: [T; LANES]) {
+    match <&mut [T; LANES]>::try_from(&mut *run) {
+        Ok(whole) => *whole = values,
+        Err(_) => write_row_end(run, values),
     }
+}
+
+/// [`write_run`] of a run reaching past the row's end.
+#[cold]
+#[inline(never)]
+fn write_row_end<T: Copy>(run: &mut [T], values: [T; LANES]) {
+    let valid = run.len();
+    run.copy_from_slice(&values[..valid]);
 }
 
 /// The depth-only pixel loop of the shadow map; `plane` starts at the first pixel of
@@ -524,8 +539,9 @@ fn fill_depth(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Pla
         let z = lanes_of(Vec4::splat(z) + lane_steps);
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
         let valid = (band.width - run).min(LANES as u32) as usize;
-        let depth = f32x4::new(read_run(band.depth, at, valid, 0.0));
-        write_run(band.depth, at, valid, covered(lanes).bitselect(depth.min(z), depth).to_array());
+        let depths = &mut band.depth[at..at + valid];
+        let depth = f32x4::new(read_run(depths, 0.0));
+        write_run(depths, covered(lanes).bitselect(depth.min(z), depth).to_array());
     });
 }
 
