@@ -138,22 +138,19 @@ pub(crate) mod mode {
 
 /// Calls `function::<C>(arguments)` with `C` the [`Compiled`] pass equal to `pass`.
 macro_rules! with_compiled_pass {
-    ($pass:expr, $function:ident($($argument:expr),* $(,)?)) => {{
-        use $crate::shade::{Compiled, Shading, mode::{FLAT, GOURAUD, PHONG}};
+    ($pass:expr, $function:ident $arguments:tt) => {
+        $crate::shade::with_compiled_pass!(@modes $pass, $function $arguments, Flat => FLAT, Gouraud => GOURAUD, Phong => PHONG)
+    };
+    (@modes $pass:expr, $function:ident $arguments:tt, $($shading:ident => $mode:ident),*) => {{
+        use $crate::shade::{Compiled, Shading, mode};
         let pass: $crate::shade::Pass = $pass;
         match (pass.shading, pass.textured, pass.shadowed) {
-            (Shading::Flat, false, false) => $function::<Compiled<FLAT, false, false>>($($argument),*),
-            (Shading::Flat, true, false) => $function::<Compiled<FLAT, true, false>>($($argument),*),
-            (Shading::Flat, false, true) => $function::<Compiled<FLAT, false, true>>($($argument),*),
-            (Shading::Flat, true, true) => $function::<Compiled<FLAT, true, true>>($($argument),*),
-            (Shading::Gouraud, false, false) => $function::<Compiled<GOURAUD, false, false>>($($argument),*),
-            (Shading::Gouraud, true, false) => $function::<Compiled<GOURAUD, true, false>>($($argument),*),
-            (Shading::Gouraud, false, true) => $function::<Compiled<GOURAUD, false, true>>($($argument),*),
-            (Shading::Gouraud, true, true) => $function::<Compiled<GOURAUD, true, true>>($($argument),*),
-            (Shading::Phong, false, false) => $function::<Compiled<PHONG, false, false>>($($argument),*),
-            (Shading::Phong, true, false) => $function::<Compiled<PHONG, true, false>>($($argument),*),
-            (Shading::Phong, false, true) => $function::<Compiled<PHONG, false, true>>($($argument),*),
-            (Shading::Phong, true, true) => $function::<Compiled<PHONG, true, true>>($($argument),*),
+            $(
+                (Shading::$shading, false, false) => $function::<Compiled<{ mode::$mode }, false, false>> $arguments,
+                (Shading::$shading, true, false) => $function::<Compiled<{ mode::$mode }, true, false>> $arguments,
+                (Shading::$shading, false, true) => $function::<Compiled<{ mode::$mode }, false, true>> $arguments,
+                (Shading::$shading, true, true) => $function::<Compiled<{ mode::$mode }, true, true>> $arguments,
+            )*
         }
     }};
 }
