@@ -21,6 +21,7 @@
 
 pub mod camera;
 pub mod clip;
+mod depth;
 pub mod framebuffer;
 pub mod mesh;
 pub mod pipeline;

@@ -1,6 +1,6 @@
-//! The frame pipeline: a parallel vertex stage, parallel triangle binning into screen tiles,
-//! then parallel rasterization of the tiles, for the shadow map first (when on) and then for
-//! the image.
+//! The frame pipeline: a parallel vertex stage, then (when shadows are on) the shadow map's
+//! depth pass (see [`depth`](crate::depth)), then parallel triangle binning into screen tiles
+//! and parallel rasterization of the tiles.
 //!
 //! Binning rejects triangles outside the view volume, clips those crossing the near plane or
 //! the guard band, and sets each remaining triangle up once (see [`setup`](crate::setup)):
@@ -14,6 +14,7 @@
 
 use crate::camera::{Camera, Light};
 use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
+use crate::depth::{DepthPass, DepthScene};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
 use crate::setup::{BiasedDepth, Interpolated, Plane, Surface, TriangleSetup, Viewport};
@@ -21,7 +22,7 @@ use crate::shade::{
     Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
 };
 use crate::shadow::{ShadowMap, fit_light};
-use crate::tile::{self, DepthBand, TileContext};
+use crate::tile::{self, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
@@ -101,7 +102,7 @@ pub struct RenderStats {
     pub fragments: u64,
     /// Triangle-tile pairs skipped because the tile was already nearer everywhere.
     pub occluded: u64,
-    /// Triangles binned into the shadow map.
+    /// Triangles reaching the shadow map (before culling those of zero area).
     pub shadow_triangles: usize,
 }
 
@@ -211,13 +212,36 @@ struct ColourValues<'a> {
 
 /// A view being binned: its projection, its projected vertices and its viewport.
 #[derive(Clone, Copy)]
-struct BinTarget<'a> {
-    clip_from_world: Mat4,
-    vertices: &'a [ScreenVertex],
-    viewport: Viewport,
+pub(crate) struct BinTarget<'a> {
+    pub clip_from_world: Mat4,
+    pub vertices: &'a [ScreenVertex],
+    pub viewport: Viewport,
 }
 
 impl BinTarget<'_> {
+    /// Clips the triangle of global vertices `indices` against the near plane and the guard
+    /// band, and hands each triangle of the clipped polygon's fan, projected, to `draw` with
+    /// its varyings.
+    pub(crate) fn clip<'v>(
+        &self,
+        world: &[Vec3],
+        indices: [usize; 3],
+        varyings: impl Fn(usize) -> &'v Varyings,
+        mut draw: impl FnMut([&ScreenVertex; 3], [&Varyings; 3]),
+    ) {
+        let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
+            position: self.clip_from_world * world[indices[k]].extend(1.0),
+            varyings: *varyings(indices[k]),
+        }));
+        let polygon = clip.vertices();
+        let (width, height) = (self.viewport.width, self.viewport.height);
+        for i in 1..polygon.len().saturating_sub(1) {
+            let fan = [polygon[0], polygon[i], polygon[i + 1]];
+            let vertices = fan.map(|v| ScreenVertex::projected(v.position, width, height));
+            draw(vertices.each_ref(), fan.each_ref().map(|v| &v.varyings));
+        }
+    }
+
     fn tiles_x(&self) -> u32 {
         self.viewport.width.div_ceil(TILE_WIDTH)
     }
@@ -237,7 +261,7 @@ pub struct Renderer {
     light_vertices: Vec<ScreenVertex>,
     varyings: Vec<Varyings>,
     chunks: Vec<Chunk>,
-    shadow_chunks: Vec<Chunk>,
+    depth_pass: DepthPass,
     shadow: ShadowMap,
 }
 
@@ -280,9 +304,8 @@ impl Renderer {
                 vertices: &self.light_vertices,
                 viewport: Viewport { width: size, height: size, cull_back_faces: false },
             };
-            let geometry = Geometry { spans: &self.spans, world: &self.world, colour: None };
-            stats.shadow_triangles = bin(pool, threads, &mut self.shadow_chunks, geometry, frame, view);
-            self.draw_shadow_map(pool);
+            let scene = DepthScene { spans: &self.spans, instances: frame.instances, world: &self.world, view };
+            stats.shadow_triangles = self.depth_pass.draw(pool, scene, &mut self.shadow);
         }
         let view = BinTarget {
             clip_from_world: view_projection,
@@ -359,19 +382,6 @@ impl Renderer {
                 let outputs = VertexOutputs { world, screen, varyings, light: light_runs.next().unwrap_or_default() };
                 let stage = &stage;
                 scope.spawn(async move { stage.run(index * run, outputs) });
-            }
-        });
-    }
-
-    /// Clears the shadow map and draws the binned light-view triangles into it, depth only.
-    fn draw_shadow_map(&mut self, pool: &TaskPool) {
-        let size = self.shadow.size();
-        let (stride, first) = self.shadow.row_layout();
-        let chunks = &self.shadow_chunks;
-        pool.scope(|scope| {
-            for (row, depth) in self.shadow.rows_mut().chunks_mut(stride * TILE_HEIGHT as usize).enumerate() {
-                let band = DepthBand { y0: row as u32 * TILE_HEIGHT, width: size, stride, first, depth };
-                scope.spawn(async move { tile::draw_depth_band(chunks, row as u32, band) });
             }
         });
     }
@@ -538,8 +548,13 @@ fn scene_bounds(instances: &[Instance]) -> Option<(Vec3, Vec3)> {
         .reduce(|(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)))
 }
 
+/// The triangles of all `instances`, whose spans are `spans`.
+pub(crate) fn triangle_count(spans: &[Span], instances: &[Instance]) -> usize {
+    spans.last().zip(instances.last()).map_or(0, |(s, i)| s.first_triangle + i.mesh.triangle_count())
+}
+
 /// Splits `0..total` into at most `parts` contiguous, nearly equal runs.
-fn runs(total: usize, parts: usize) -> impl Iterator<Item = Range<usize>> {
+pub(crate) fn runs(total: usize, parts: usize) -> impl Iterator<Item = Range<usize>> {
     let size = total.div_ceil(parts.max(1)).max(1);
     (0..total).step_by(size).map(move |start| start..(start + size).min(total))
 }
@@ -554,8 +569,7 @@ fn bin(
     frame: &Frame,
     view: BinTarget,
 ) -> usize {
-    let spans = geometry.spans;
-    let total = spans.last().zip(frame.instances.last()).map_or(0, |(s, i)| s.first_triangle + i.mesh.triangle_count());
+    let total = triangle_count(geometry.spans, frame.instances);
     let parts = threads * CHUNKS_PER_THREAD;
     chunks.resize_with(parts, Chunk::default);
     let tiles = view.tiles();
@@ -576,39 +590,49 @@ fn bin(
 /// Sets up and bins the global triangles `range` into `chunk`, instance by instance, each with
 /// the setup compiled for its pass.
 fn bin_run(chunk: &mut Chunk, range: Range<usize>, geometry: Geometry, frame: &Frame, view: BinTarget) {
-    let spans = geometry.spans;
-    let mut span_index = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
-    let mut global = range.start;
-    while global < range.end {
-        let span = &spans[span_index];
-        let instance = &frame.instances[span_index];
-        let triangles =
-            global - span.first_triangle..instance.mesh.triangle_count().min(range.end - span.first_triangle);
-        global += triangles.len();
-        let run = InstanceRun { index: span_index, span, instance, triangles };
+    for run in instance_runs(geometry.spans, frame.instances, range) {
         match geometry.colour {
             None => bin_instance::<BiasedDepth>(chunk, run, geometry, frame, view),
             Some(colour) => {
                 let pass = Pass {
                     shading: colour.shading,
-                    textured: instance.material.texture.is_some(),
+                    textured: run.instance.material.texture.is_some(),
                     shadowed: colour.shadowed,
                 };
                 with_compiled_pass!(pass, bin_instance(chunk, run, geometry, frame, view));
             }
         }
-        span_index += 1;
     }
 }
 
+/// The instances the global triangles `range` belong to, each with the part of `range` among
+/// its triangles, in order.
+pub(crate) fn instance_runs<'a>(
+    spans: &'a [Span],
+    instances: &'a [Instance],
+    range: Range<usize>,
+) -> impl Iterator<Item = InstanceRun<'a>> {
+    let first = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
+    spans.iter().zip(instances).enumerate().skip(first).map_while(move |(index, (span, instance))| {
+        let start = range.start.max(span.first_triangle);
+        let end = range.end.min(span.first_triangle + instance.mesh.triangle_count());
+        (start < range.end).then(|| InstanceRun {
+            index,
+            span,
+            instance,
+            triangles: start - span.first_triangle..end - span.first_triangle,
+        })
+    })
+}
+
 /// Some of the triangles of one instance.
-struct InstanceRun<'a> {
+pub(crate) struct InstanceRun<'a> {
     /// The instance's place in the frame.
-    index: usize,
-    span: &'a Span,
-    instance: &'a Instance,
+    pub index: usize,
+    pub span: &'a Span,
+    pub instance: &'a Instance,
     /// Which of its triangles.
-    triangles: Range<usize>,
+    pub triangles: Range<usize>,
 }
 
 /// Sets up and bins the triangles of `run` into `chunk`, interpolating what `I` says.
@@ -639,22 +663,12 @@ fn bin_instance<I: Interpolated>(
             }
             continue;
         }
-        let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
-            position: view.clip_from_world * geometry.world[indices[k]].extend(1.0),
-            varyings: *varyings(indices[k]),
-        }));
-        let polygon = clip.vertices();
-        for i in 1..polygon.len().saturating_sub(1) {
-            let fan = [polygon[0], polygon[i], polygon[i + 1]];
-            let (width, height) = (view.viewport.width, view.viewport.height);
-            let vertices = fan.map(|v| ScreenVertex::projected(v.position, width, height));
-            let varyings = fan.each_ref().map(|v| &v.varyings);
-            if let Some(setup) =
-                TriangleSetup::new::<I>(vertices.each_ref(), varyings, view.viewport, surface, &mut chunk.planes)
+        view.clip(geometry.world, indices, varyings, |vertices, varyings| {
+            if let Some(setup) = TriangleSetup::new::<I>(vertices, varyings, view.viewport, surface, &mut chunk.planes)
             {
                 chunk.push(setup, view);
             }
-        }
+        });
     }
 }
 

@@ -8,6 +8,7 @@
 //! (bilinear percentage-closer filtering).
 
 use crate::camera::{Camera, Light};
+use crate::depth::WINDOW;
 use crate::shade::lanes_of;
 use bevy_math::{Mat4, Vec3, Vec4};
 use wide::i32x4;
@@ -22,7 +23,7 @@ pub const SLOPE_BIAS: f32 = 1.5;
 
 /// The light's depth image and the projection it was drawn with.
 ///
-/// Texels are stored row by row inside a border (one texel before each row and column, two
+/// Texels are stored row by row inside a border (one texel before each row and column, several
 /// after) that always holds an infinite depth: a lookup clamped into the border reads "lit",
 /// so filtered and unfiltered lookups need no bounds test per texel.
 #[derive(Debug, Clone, Default)]
@@ -36,8 +37,13 @@ pub struct ShadowMap {
 /// Border texels before each row and above the first row.
 const BORDER_BEFORE: usize = 1;
 
+/// Border texels after each row (and below the map): a filtered lookup reads up to two past
+/// the last texel, and the depth pass reads and writes back windows of [`WINDOW`] texels from
+/// any texel of a row.
+const BORDER_AFTER: usize = WINDOW - 1;
+
 /// Border texels before plus after each row (and above plus below the map).
-const BORDER: usize = 3;
+const BORDER: usize = BORDER_BEFORE + BORDER_AFTER;
 
 impl ShadowMap {
     /// Edge length of the square map in texels.

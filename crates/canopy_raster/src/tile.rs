@@ -31,19 +31,9 @@ pub(crate) struct TileContext<'a> {
     pub tiles_x: u32,
 }
 
-/// A horizontal band of the shadow map: rows `stride` apart, each with its `width` texels from
-/// `first` on.
-pub(crate) struct DepthBand<'a> {
-    pub y0: u32,
-    pub width: u32,
-    pub stride: usize,
-    pub first: usize,
-    pub depth: &'a mut [f32],
-}
-
 /// Which pixels of each row of a walk are covered: bit `k` of word `r` for pixel `k` of the
 /// walk's row `r`. Kept by the band and reused by every walk, so that it is not cleared for each.
-type RowMasks = [u64; TILE_HEIGHT as usize];
+pub(crate) type RowMasks = [u64; TILE_HEIGHT as usize];
 
 /// A binned triangle as a colour tile draws it.
 struct Triangle<'a> {
@@ -174,32 +164,8 @@ fn farthest_depth(depth: &[f32], width: u32, y0: u32, rect: PixelBounds) -> f32 
     farthest.max_element().max(rest)
 }
 
-/// Clears one band of the shadow map and draws the depths of every triangle binned into its
-/// tiles (their planes carry the slope-scaled bias).
-pub(crate) fn draw_depth_band(chunks: &[Chunk], row: u32, mut band: DepthBand) {
-    let width = band.width;
-    for row in band.depth.chunks_exact_mut(band.stride) {
-        row[band.first..band.first + width as usize].fill(FAR_DEPTH);
-    }
-    let rows = (band.depth.len() / band.stride) as u32;
-    let tiles_x = width.div_ceil(TILE_WIDTH);
-    let mut masks = [0; TILE_HEIGHT as usize];
-    for tx in 0..tiles_x {
-        let rect = tile_rect(tx, band.y0, width, rows);
-        let tile = (row * tiles_x + tx) as usize;
-        for chunk in chunks {
-            for &index in &chunk.bins[tile] {
-                let setup = &chunk.setups[index as usize];
-                if let Some(walk) = Walk::new(setup, rect) {
-                    fill_depth(&walk, &mut masks, setup.bounds, &chunk.planes[setup.planes as usize], &mut band);
-                }
-            }
-        }
-    }
-}
-
 /// A triangle's walk over the pixels of one tile.
-struct Walk {
+pub(crate) struct Walk {
     /// The pixels to visit: the triangle's bounds within the tile.
     rect: PixelBounds,
     /// Edge functions at the centre of the rect's first pixel, top-left bias included.
@@ -213,7 +179,7 @@ struct Walk {
 impl Walk {
     /// The walk of `setup` over `tile`; `None` when its bounds miss the tile.
     #[inline(always)]
-    fn new(setup: &TriangleSetup, tile: PixelBounds) -> Option<Self> {
+    pub(crate) fn new(setup: &TriangleSetup, tile: PixelBounds) -> Option<Self> {
         let bounds = setup.bounds;
         let rect = PixelBounds {
             min_x: bounds.min_x.max(tile.min_x),
@@ -234,7 +200,7 @@ impl Walk {
     /// `visit(y, x, lanes)` for each: `x` is the run's first pixel and bit `k` of `lanes` is
     /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
-    fn covered_runs(&self, rows: &mut RowMasks, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
+    pub(crate) fn covered_runs(&self, rows: &mut RowMasks, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
         if self.narrow {
             // The start fits too: it is one of the values the walk computes.
             self.coverage(self.start.map(|e| e as i32), self.step_x, self.step_y, rows);
@@ -476,7 +442,7 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
 #[inline(always)]
-fn covered(lanes: u32) -> f32x4 {
+pub(crate) fn covered(lanes: u32) -> f32x4 {
     const MASKS: [[u32; LANES]; 1 << LANES] = {
         let mut masks = [[0; LANES]; 1 << LANES];
         let mut bits = 0;
@@ -528,21 +494,6 @@ fn write_run<T: Copy>(run: &mut [T], values: [T; LANES]) {
 fn write_row_end<T: Copy>(run: &mut [T], values: [T; LANES]) {
     let valid = run.len();
     run.copy_from_slice(&values[..valid]);
-}
-
-/// The depth-only pixel loop of the shadow map; `plane` starts at the first pixel of
-/// `bounds` and holds the biased depth in its first lane.
-fn fill_depth(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plane, band: &mut DepthBand) {
-    let lane_steps = plane.lane_steps(0);
-    walk.covered_runs(rows, |py, run, lanes| {
-        let z = plane.at((run - bounds.min_x) as f32, (py - bounds.min_y) as f32).x;
-        let z = lanes_of(Vec4::splat(z) + lane_steps);
-        let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
-        let valid = (band.width - run).min(LANES as u32) as usize;
-        let depths = &mut band.depth[at..at + valid];
-        let depth = f32x4::new(read_run(depths, 0.0));
-        write_run(depths, covered(lanes).bitselect(depth.min(z), depth).to_array());
-    });
 }
 
 #[cfg(test)]
