@@ -139,16 +139,16 @@ impl ShadowMap {
         let first = (row * i32x4::splat(stride as i32) + column).to_array().map(|i| i as usize);
         let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());
         let (column, row) = (whole(column), whole(row));
-        let lit = |offset: usize| {
-            let texels = Vec4::from_array(std::array::from_fn(|lane| self.depth[first[lane] + offset]));
-            Vec4::select(depth.cmple(texels), Vec4::ONE, Vec4::ZERO)
-        };
+        let lit = |texels: [f32; 4]| Vec4::select(depth.cmple(Vec4::from_array(texels)), Vec4::ONE, Vec4::ZERO);
         if !filtered {
-            return lit(0);
+            return lit(std::array::from_fn(|lane| self.depth[first[lane]]));
         }
+        // Each lane's two-by-two texels, from one slice of the stored depths.
+        let quads: [&[f32]; 4] = std::array::from_fn(|lane| &self.depth[first[lane]..][..stride + 2]);
+        let corner = |k: usize| lit(std::array::from_fn(|lane| quads[lane][k]));
         let (tx, ty) = (x - column, y - row);
-        let top = lit(0) * (Vec4::ONE - tx) + lit(1) * tx;
-        let bottom = lit(stride) * (Vec4::ONE - tx) + lit(stride + 1) * tx;
+        let top = corner(0) * (Vec4::ONE - tx) + corner(1) * tx;
+        let bottom = corner(stride) * (Vec4::ONE - tx) + corner(stride + 1) * tx;
         top * (Vec4::ONE - ty) + bottom * ty
     }
 }
