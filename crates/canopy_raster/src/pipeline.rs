@@ -826,8 +826,12 @@ mod tests {
         {
             let camera = camera_at(Vec3::Z, Vec3::ZERO);
             let mesh = fan(centre, 37);
-            let (_, stats) = draw(camera, &[instance(mesh, Mat4::IDENTITY, Vec3::ONE)], size);
+            let (target, stats) = draw(camera, &[instance(mesh, Mat4::IDENTITY, Vec3::ONE)], size);
             assert_eq!(stats.fragments, size.0 as u64 * size.1 as u64, "centre {centre}");
+            // Every pixel is stored too, up to the last of each band (where a run of pixels
+            // reaches past the band's end when the width is not a multiple of the run).
+            let background = target.color().chunks_exact(4).filter(|pixel| *pixel == SKY).count();
+            assert_eq!(background, 0, "centre {centre}");
         }
     }
 

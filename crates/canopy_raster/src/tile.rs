@@ -368,8 +368,44 @@ struct TriangleShading<'a> {
 
 /// Depth-tests, shades and stores one run of [`LANES`] pixels from `(x, y)`, those of `lanes`'
 /// set bits.
+///
+/// A run reaching past the end of its row covers the first pixels of the next row too, which
+/// its clear lanes leave as they are; only in the band's last row may fewer than [`LANES`]
+/// pixels be left.
 #[inline(always)]
 fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32) {
+    let at = (y - band.y0) as usize * band.width as usize + x as usize;
+    match (band.depth.get_mut(at..at + LANES), band.color.get_mut(at..at + LANES)) {
+        (Some(depths), Some(colors)) => {
+            let run = Run { depths: depths.try_into().expect("a run"), colors: colors.try_into().expect("a run") };
+            shade_pixels::<C>(shading, y, x, lanes, run);
+        }
+        _ => shade_band_end::<C>(shading, band, y, x, lanes, at),
+    }
+}
+
+/// [`shade_run`] of a run reaching past the end of the band, through a copy of its pixels.
+#[cold]
+#[inline(never)]
+fn shade_band_end<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32, at: usize) {
+    let (mut depths, mut colors) = ([FAR_DEPTH; LANES], [[0; 4]; LANES]);
+    let valid = band.depth.len() - at;
+    depths[..valid].copy_from_slice(&band.depth[at..]);
+    colors[..valid].copy_from_slice(&band.color[at..]);
+    shade_pixels::<C>(shading, y, x, lanes, Run { depths: &mut depths, colors: &mut colors });
+    band.depth[at..].copy_from_slice(&depths[..valid]);
+    band.color[at..].copy_from_slice(&colors[..valid]);
+}
+
+/// The depths and colours of the [`LANES`] pixels of a run.
+struct Run<'a> {
+    depths: &'a mut [f32; LANES],
+    colors: &'a mut [[u8; 4]; LANES],
+}
+
+/// Depth-tests, shades and stores the pixels of `run`, from `(x, y)`, of `lanes`' set bits.
+#[inline(always)]
+fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lanes: u32, run: Run) {
     let TriangleShading { planes, lane_steps, affine, origin, triangle, context } = shading;
     let Pass { shading: mode, textured, shadowed } = C::PASS;
     let light = &context.frame.light;
@@ -378,17 +414,13 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
     let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at(px, py));
     let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
     let z = lanes_of(lane_value(DEPTH));
-    let width = band.width as usize;
-    let at = (y - band.y0) as usize * width + x as usize;
-    let valid = (width - x as usize).min(LANES);
-    let (depths, colors) = (&mut band.depth[at..at + valid], &mut band.color[at..at + valid]);
-    let depth = f32x4::new(read_run(depths, 0.0));
+    let depth = f32x4::new(*run.depths);
     let drawn = z.simd_lt(depth) & covered(lanes);
     let drawn_lanes = drawn.to_bitmask();
     if drawn_lanes == 0 {
         return;
     }
-    write_run(depths, drawn.bitselect(z, depth).to_array());
+    *run.depths = drawn.bitselect(z, depth).to_array();
     let w = if *affine { Vec4::ONE } else { lane_value(INV_W).recip() };
     let value = |k: usize| if *affine { lane_value(k) } else { lane_value(k) * w };
     let diffuse = match mode {
@@ -435,9 +467,9 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
     let [r, g, b] = rgb.map(|c| lanes_of(c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits());
     let byte = u32x4::splat(0xff);
     let pixels = (r & byte) | (g & byte) << 8 | (b & byte) << 16 | byte << 24;
-    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(read_run(colors, [0; 4])).map(u32::from_le));
+    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(*run.colors).map(u32::from_le));
     let blended = drawn.to_bits().bitselect(pixels, old);
-    write_run(colors, bytemuck::cast(blended.to_array().map(u32::to_le)));
+    *run.colors = bytemuck::cast(blended.to_array().map(u32::to_le));
 }
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
@@ -459,41 +491,6 @@ pub(crate) fn covered(lanes: u32) -> f32x4 {
         masks
     };
     f32x4::from_bits(u32x4::new(MASKS[lanes as usize & (MASKS.len() - 1)]))
-}
-
-/// The [`LANES`] values of a run whose pixels in the row are `run`: all of them unless the run
-/// reaches past the row's end, where the missing ones read as `fill`.
-#[inline(always)]
-fn read_run<T: Copy>(run: &[T], fill: T) -> [T; LANES] {
-    match <[T; LANES]>::try_from(run) {
-        Ok(values) => values,
-        Err(_) => read_row_end(run, fill),
-    }
-}
-
-/// [`read_run`] of a run reaching past the row's end: apart, so that the whole runs are read in
-/// one load.
-#[cold]
-#[inline(never)]
-fn read_row_end<T: Copy>(run: &[T], fill: T) -> [T; LANES] {
-    std::array::from_fn(|k| run.get(k).copied().unwrap_or(fill))
-}
-
-/// Stores a run read by [`read_run`] back into its pixels in the row.
-#[inline(always)]
-fn write_run<T: Copy>(run: &mut [T], values: [T; LANES]) {
-    match <&mut [T; LANES]>::try_from(&mut *run) {
-        Ok(whole) => *whole = values,
-        Err(_) => write_row_end(run, values),
-    }
-}
-
-/// [`write_run`] of a run reaching past the row's end.
-#[cold]
-#[inline(never)]
-fn write_row_end<T: Copy>(run: &mut [T], values: [T; LANES]) {
-    let valid = run.len();
-    run.copy_from_slice(&values[..valid]);
 }
 
 #[cfg(test)]
