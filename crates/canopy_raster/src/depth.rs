@@ -1,23 +1,20 @@
 //! The shadow map's depth pass.
 //!
-//! A texel keeps the least depth drawn into it, whatever the order the triangles come in, so
-//! this pass needs neither the draw order nor the setups kept from binning to drawing that the
-//! colour image needs. Triangles are first sorted, in parallel runs, into strips of
-//! [`STRIP_ROWS`] map rows by the rows they cover, as their three vertex indices alone. Each
-//! strip then sets its triangles up and draws them at once, with the same fixed-point edge
-//! functions, fill rule and slope-scaled bias as the colour image, a window of [`WINDOW`]
-//! texels of a row at a time: the map's triangles are a few texels across, so one window
-//! usually holds a row of one.
+//! Triangles are sorted into strips of [`STRIP_ROWS`] map rows (see [`sort`](crate::sort)),
+//! and each strip sets its triangles up and draws them at once, with the same fixed-point edge
+//! functions and fill rule as the colour image and the slope-scaled bias. A texel keeps the
+//! least depth drawn into it, whatever the order, and only depth is drawn, so the map does not
+//! need the colour image's tiles: a strip draws a triangle a window of [`WINDOW`] texels of a
+//! row at a time. The map's triangles are a few texels across, so one window usually holds a
+//! row of one.
 
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
-use crate::pipeline::{
-    BinTarget, Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, instance_runs, pixel_bounds, runs,
-    triangle_count,
-};
+use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View};
 use crate::setup::{BiasedDepth, LANES, Plane, Surface, TriangleSetup};
 use crate::shade::{VARYINGS, Varyings, lanes_of};
 use crate::shadow::ShadowMap;
+use crate::sort::{Corners, Sorted};
 use crate::tile::{RowMasks, Walk, covered};
 use bevy_math::{Vec3, Vec4};
 use bevy_tasks::TaskPool;
@@ -29,18 +26,12 @@ const STRIP_ROWS: u32 = 64;
 /// Texels of a row one step of the depth pass covers.
 pub(crate) const WINDOW: usize = 8;
 
-/// Contiguous runs of triangles sorted into strips in parallel, per worker thread.
-const RUNS_PER_THREAD: usize = 4;
-
-/// The vertex indices of one triangle, in the frame's global numbering.
-type Corners = [u32; 3];
-
 /// The depth pass's buffers, kept between frames so that a scene of steady size does not
 /// allocate.
 #[derive(Debug, Default)]
 pub(crate) struct DepthPass {
-    /// Per run of sorted triangles, per strip, the triangles reaching the strip, in order.
-    sorted: Vec<Vec<Vec<Corners>>>,
+    /// The triangles reaching each strip.
+    sorted: Sorted,
     /// Per strip, room for the plane of the triangle it is drawing.
     planes: Vec<Vec<Plane>>,
 }
@@ -53,70 +44,27 @@ pub(crate) struct DepthScene<'a> {
     /// World positions, for the triangles that need clipping.
     pub world: &'a [Vec3],
     /// The light's view: its projection, the projected vertices and the map as viewport.
-    pub view: BinTarget<'a>,
+    pub view: View<'a>,
 }
 
 impl DepthPass {
     /// Clears `map` and draws the depths of every triangle of `scene` into it, spreading the
-    /// work over `pool`. Returns how many triangles reached the map.
+    /// work over `pool`. Returns how many triangles were drawn (after clipping and culling).
     pub fn draw(&mut self, pool: &TaskPool, scene: DepthScene, map: &mut ShadowMap) -> usize {
         let size = map.size();
-        let strips = size.div_ceil(STRIP_ROWS) as usize;
-        let total = triangle_count(scene.spans, scene.instances);
-        let parts = pool.thread_num().max(1) * RUNS_PER_THREAD;
-        self.sorted.resize_with(parts, Vec::new);
-        for sorted in &mut self.sorted {
-            sorted.resize_with(strips, Vec::new);
-            sorted.iter_mut().for_each(Vec::clear);
-        }
-        self.planes.resize_with(strips, Vec::new);
-
-        let reached = pool.scope(|scope| {
-            for (range, sorted) in runs(total, parts).zip(self.sorted.iter_mut()) {
-                scope.spawn(async move {
-                    let mut reached = 0;
-                    for run in instance_runs(scene.spans, scene.instances, range) {
-                        for triangle in &run.instance.mesh.triangles[run.triangles] {
-                            let corners = triangle.map(|i| (run.span.first_vertex + i as usize) as u32);
-                            reached += usize::from(sort(corners, scene.view, sorted));
-                        }
-                    }
-                    reached
-                });
-            }
-        });
-
+        self.sorted.sort(pool, scene.spans, scene.instances, scene.view, STRIP_ROWS);
+        self.planes.resize_with(size.div_ceil(STRIP_ROWS) as usize, Vec::new);
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
-        pool.scope(|scope| {
+        let triangles = pool.scope(|scope| {
             let strips = map.rows_mut().chunks_mut(stride * STRIP_ROWS as usize).zip(self.planes.iter_mut());
             for (index, (depth, planes)) in strips.enumerate() {
                 let band = DepthBand { y0: index as u32 * STRIP_ROWS, width: size, stride, first, depth };
-                scope.spawn(async move { draw_strip(scene, sorted.iter().map(|s| s[index].as_slice()), band, planes) });
+                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band, planes) });
             }
         });
-        reached.into_iter().sum()
+        triangles.into_iter().sum()
     }
-}
-
-/// Adds the triangle `corners` to the strips its pixel rows reach; returns whether it reached
-/// any. A triangle that needs clipping goes to every strip, which clips it again.
-fn sort(corners: Corners, view: BinTarget, sorted: &mut [Vec<Corners>]) -> bool {
-    let [a, b, c] = corners.map(|i| &view.vertices[i as usize]);
-    if a.code & b.code & c.code & outside::VIEW != 0 {
-        return false;
-    }
-    let strips = if (a.code | b.code | c.code) & outside::CLIPPED != 0 {
-        0..sorted.len()
-    } else {
-        let p = [a, b, c].map(|v| (i64::from(v.x), i64::from(v.y)));
-        let Some(bounds) = pixel_bounds(p, view.viewport.width, view.viewport.height) else { return false };
-        (bounds.min_y / STRIP_ROWS) as usize..(bounds.max_y / STRIP_ROWS) as usize + 1
-    };
-    for strip in &mut sorted[strips] {
-        strip.push(corners);
-    }
-    true
 }
 
 /// A horizontal band of the shadow map: rows `stride` apart, each with its `width` texels from
@@ -135,28 +83,31 @@ impl DepthBand<'_> {
     }
 }
 
-/// Clears one strip of the map and draws into it the triangles of every run of `sorted`.
+/// Clears one strip of the map and draws into it the triangles of `sorted`; returns how many
+/// were set up with their first row in the strip.
 fn draw_strip<'a>(
     scene: DepthScene,
-    sorted: impl Iterator<Item = &'a [Corners]>,
+    sorted: impl Iterator<Item = &'a Corners>,
     mut band: DepthBand,
     planes: &mut Vec<Plane>,
-) {
+) -> usize {
     for row in band.depth.chunks_exact_mut(band.stride) {
         row[band.first..band.first + band.width as usize].fill(FAR_DEPTH);
     }
     let mut masks = [0; TILE_HEIGHT as usize];
     let view = scene.view;
+    let mut triangles = 0;
     let mut draw = |vertices: [&ScreenVertex; 3], band: &mut DepthBand| {
         const NO_VARYINGS: Varyings = [0.0; VARYINGS];
-        let surface = Surface { instance: 0, tolerance: &NO_VARYINGS, flat_diffuse: 0.0 };
+        let surface = Surface { tolerance: &NO_VARYINGS, flat_diffuse: 0.0 };
         planes.clear();
         let varyings = [&NO_VARYINGS; 3];
         if let Some(setup) = TriangleSetup::new::<BiasedDepth>(vertices, varyings, view.viewport, surface, planes) {
             fill_triangle(&setup, &planes[0], &mut masks, band);
+            triangles += usize::from((band.y0..band.y0 + band.rows()).contains(&setup.bounds.min_y));
         }
     };
-    for corners in sorted.flatten() {
+    for corners in sorted {
         let indices = corners.map(|i| i as usize);
         let vertices = indices.map(|i| &view.vertices[i]);
         if (vertices[0].code | vertices[1].code | vertices[2].code) & outside::CLIPPED == 0 {
@@ -166,6 +117,7 @@ fn draw_strip<'a>(
             view.clip(scene.world, indices, no_varyings, |vertices, _| draw(vertices, &mut band));
         }
     }
+    triangles
 }
 
 /// Draws the depths of `setup`, whose biased depth is the first lane of `plane`, into the rows
@@ -304,7 +256,7 @@ mod tests {
         let vertices =
             [0, 1, 2].map(|k| ScreenVertex { code: 0, x: corners[k].0, y: corners[k].1, z: z[k], inv_w: 1.0 });
         let viewport = Viewport { width: SIZE, height: SIZE, cull_back_faces: false };
-        let surface = Surface { instance: 0, tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
+        let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
         let mut planes = Vec::new();
         let setup = TriangleSetup::new::<BiasedDepth>(
             vertices.each_ref(),

@@ -6,9 +6,11 @@
 //! | [`mesh`] | indexed triangle meshes and the primitive shapes |
 //! | [`camera`] | the perspective camera and the directional light |
 //! | [`clip`] | near-plane and guard-band clipping in clip space |
-//! | [`pipeline`] | the frame: vertex stage, tile binning, parallel tile rasterization |
+//! | [`pipeline`] | the frame: vertex stage, shadow map, sorting, parallel bands |
+//! | `sort` | sorting triangles into strips of rows |
 //! | `setup` | triangle setup: bounds, edge functions, interpolation planes |
-//! | `tile` | coverage walks and the pixel loops of one tile |
+//! | `tile` | the colour bands: coverage walks and the pixel loops of a tile |
+//! | `depth` | the shadow map's depth pass |
 //! | [`shade`] | materials, shading modes, interpolated values |
 //! | [`texture`] | PNG/BMP textures, nearest and bilinear sampling, repeat and clamp |
 //! | [`shadow`] | the light's fitted orthographic shadow map and its lookup |
@@ -28,6 +30,7 @@ pub mod pipeline;
 mod setup;
 pub mod shade;
 pub mod shadow;
+mod sort;
 pub mod standard;
 pub mod texture;
 mod tile;

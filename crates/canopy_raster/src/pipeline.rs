@@ -1,28 +1,24 @@
 //! The frame pipeline: a parallel vertex stage, then (when shadows are on) the shadow map's
-//! depth pass (see [`depth`](crate::depth)), then parallel triangle binning into screen tiles
-//! and parallel rasterization of the tiles.
+//! depth pass (module `depth`), then the image: its triangles sorted into bands of tile rows
+//! (module `sort`), then the bands drawn in parallel (module `tile`).
 //!
-//! Binning rejects triangles outside the view volume, clips those crossing the near plane or
-//! the guard band, and sets each remaining triangle up once (see [`setup`](crate::setup)):
-//! culling, pixel bounds, edge functions and the planes of its values. It then lists the
-//! setup's index in the bin of every tile its bounds meet. The tiles read nothing else.
-//!
-//! Draw order is kept: chunks are contiguous runs of triangles and each tile walks the chunks
-//! in order, so earlier triangles win depth ties exactly as in a sequential renderer. Every
-//! buffer lives in the [`Renderer`] and is reused, so a frame of steady size allocates nothing
-//! of its own.
+//! A band takes the triangles reaching it in draw order, clips those crossing the near plane
+//! or the guard band, sets each up (module `setup`: culling, pixel bounds, edge functions and
+//! the planes of its values) and draws it at once into the band's tiles it touches, so that
+//! earlier triangles win depth ties exactly as in a sequential renderer. A triangle reaching
+//! two bands is set up in each. Every buffer lives in the [`Renderer`] and is reused, so a
+//! frame of steady size allocates nothing of its own.
 
 use crate::camera::{Camera, Light};
 use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
 use crate::depth::{DepthPass, DepthScene};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
-use crate::setup::{BiasedDepth, Interpolated, Plane, Surface, TriangleSetup, Viewport};
-use crate::shade::{
-    Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
-};
+use crate::setup::Viewport;
+use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
 use crate::shadow::{ShadowMap, fit_light};
-use crate::tile::{self, TileContext};
+use crate::sort::Sorted;
+use crate::tile::{self, BandScratch, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
@@ -42,7 +38,7 @@ pub const SUBPIXEL_STEPS: i64 = 256;
 /// functions are exact.
 pub const MAX_TARGET_SIZE: u32 = 4096;
 
-/// Contiguous runs of triangles binned in parallel, per worker thread.
+/// Contiguous runs of vertices transformed in parallel, per worker thread.
 const CHUNKS_PER_THREAD: usize = 4;
 
 /// One mesh placed in the world.
@@ -95,14 +91,14 @@ pub struct Frame<'a> {
 pub struct RenderStats {
     /// Triangles handed to the pipeline.
     pub triangles_submitted: usize,
-    /// Triangles (after clipping) that survived culling and were binned.
+    /// Triangles (after clipping) that survived culling and were drawn.
     pub triangles_rasterized: usize,
     /// Pixels covered by some rasterized triangle, counted once per triangle covering them
     /// (before the depth test).
     pub fragments: u64,
     /// Triangle-tile pairs skipped because the tile was already nearer everywhere.
     pub occluded: u64,
-    /// Triangles reaching the shadow map (before culling those of zero area).
+    /// Triangles (after clipping) drawn into the shadow map.
     pub shadow_triangles: usize,
 }
 
@@ -171,17 +167,6 @@ fn floor_lanes(v: Vec4) -> [i32; 4] {
     (truncated + moved_up).to_array()
 }
 
-/// The binning output of one run of triangles.
-#[derive(Debug, Default)]
-pub(crate) struct Chunk {
-    /// Per tile, the indices in `setups` of the triangles touching it, in draw order.
-    pub bins: Vec<Vec<u32>>,
-    /// The run's visible triangles, set up.
-    pub setups: Vec<TriangleSetup>,
-    /// The planes of the setups.
-    pub planes: Vec<Plane>,
-}
-
 /// Where an instance's vertices and triangles start in the frame's global numbering, and its
 /// transforms.
 #[derive(Debug, Clone, Copy)]
@@ -192,33 +177,15 @@ pub(crate) struct Span {
     normal_matrix: Mat3,
 }
 
-/// The vertex stage's output that binning reads besides the projected vertices.
+/// A view triangles are drawn in: its projection, its projected vertices and its viewport.
 #[derive(Clone, Copy)]
-struct Geometry<'a> {
-    spans: &'a [Span],
-    world: &'a [Vec3],
-    /// What the colour pixels interpolate; `None` for depth-only views.
-    colour: Option<ColourValues<'a>>,
-}
-
-/// What binning needs to set up triangles for the colour image.
-#[derive(Clone, Copy)]
-struct ColourValues<'a> {
-    varyings: &'a [Varyings],
-    shading: Shading,
-    /// Whether the shadow map is read.
-    shadowed: bool,
-}
-
-/// A view being binned: its projection, its projected vertices and its viewport.
-#[derive(Clone, Copy)]
-pub(crate) struct BinTarget<'a> {
+pub(crate) struct View<'a> {
     pub clip_from_world: Mat4,
     pub vertices: &'a [ScreenVertex],
     pub viewport: Viewport,
 }
 
-impl BinTarget<'_> {
+impl View<'_> {
     /// Clips the triangle of global vertices `indices` against the near plane and the guard
     /// band, and hands each triangle of the clipped polygon's fan, projected, to `draw` with
     /// its varyings.
@@ -241,14 +208,6 @@ impl BinTarget<'_> {
             draw(vertices.each_ref(), fan.each_ref().map(|v| &v.varyings));
         }
     }
-
-    fn tiles_x(&self) -> u32 {
-        self.viewport.width.div_ceil(TILE_WIDTH)
-    }
-
-    fn tiles(&self) -> usize {
-        (self.tiles_x() * self.viewport.height.div_ceil(TILE_HEIGHT)) as usize
-    }
 }
 
 /// The CPU rasterizer. Keeps its working buffers between frames so that drawing a scene of
@@ -260,7 +219,9 @@ pub struct Renderer {
     vertices: Vec<ScreenVertex>,
     light_vertices: Vec<ScreenVertex>,
     varyings: Vec<Varyings>,
-    chunks: Vec<Chunk>,
+    /// The triangles reaching each band of the image.
+    sorted: Sorted,
+    bands: Vec<BandScratch>,
     depth_pass: DepthPass,
     shadow: ShadowMap,
 }
@@ -296,10 +257,9 @@ impl Renderer {
 
         let view_projection = frame.camera.view_projection(aspect);
         self.vertex_stage(pool, frame, view_projection, width, height, light_clip);
-        let threads = pool.thread_num().max(1);
         if let Some(light_clip) = light_clip {
             let size = settings.shadow_map_size;
-            let view = BinTarget {
+            let view = View {
                 clip_from_world: light_clip,
                 vertices: &self.light_vertices,
                 viewport: Viewport { width: size, height: size, cull_back_faces: false },
@@ -307,26 +267,33 @@ impl Renderer {
             let scene = DepthScene { spans: &self.spans, instances: frame.instances, world: &self.world, view };
             stats.shadow_triangles = self.depth_pass.draw(pool, scene, &mut self.shadow);
         }
-        let view = BinTarget {
+        let view = View {
             clip_from_world: view_projection,
             vertices: &self.vertices,
             viewport: Viewport { width, height, cull_back_faces: true },
         };
         let shadow = self.shadow.is_active().then_some(&self.shadow);
-        let colour = ColourValues { varyings: &self.varyings, shading: settings.shading, shadowed: shadow.is_some() };
-        let geometry = Geometry { spans: &self.spans, world: &self.world, colour: Some(colour) };
-        stats.triangles_rasterized = bin(pool, threads, &mut self.chunks, geometry, frame, view);
-
-        let context = TileContext { frame, chunks: &self.chunks, shadow, tiles_x: width.div_ceil(TILE_WIDTH) };
+        self.sorted.sort(pool, &self.spans, frame.instances, view, TILE_HEIGHT);
+        let context = TileContext {
+            frame,
+            spans: &self.spans,
+            world: &self.world,
+            varyings: &self.varyings,
+            view,
+            sorted: &self.sorted,
+            shadow,
+        };
+        self.bands.resize_with(height.div_ceil(TILE_HEIGHT) as usize, BandScratch::default);
         let counts = pool.scope(|scope| {
-            for (row, band) in target.bands_mut(TILE_HEIGHT).enumerate() {
+            for (row, (band, scratch)) in target.bands_mut(TILE_HEIGHT).zip(&mut self.bands).enumerate() {
                 let context = &context;
-                scope.spawn(async move { tile::draw_band(context, row as u32, band) });
+                scope.spawn(async move { tile::draw_band(context, row as u32, band, scratch) });
             }
         });
-        for (fragments, occluded) in counts {
-            stats.fragments += fragments;
-            stats.occluded += occluded;
+        for counts in counts {
+            stats.fragments += counts.fragments;
+            stats.occluded += counts.occluded;
+            stats.triangles_rasterized += counts.triangles;
         }
         stats
     }
@@ -559,52 +526,6 @@ pub(crate) fn runs(total: usize, parts: usize) -> impl Iterator<Item = Range<usi
     (0..total).step_by(size).map(move |start| start..(start + size).min(total))
 }
 
-/// Bins every triangle of `frame` for `view` into `chunks`, in parallel runs. Returns how many
-/// triangles were binned.
-fn bin(
-    pool: &TaskPool,
-    threads: usize,
-    chunks: &mut Vec<Chunk>,
-    geometry: Geometry,
-    frame: &Frame,
-    view: BinTarget,
-) -> usize {
-    let total = triangle_count(geometry.spans, frame.instances);
-    let parts = threads * CHUNKS_PER_THREAD;
-    chunks.resize_with(parts, Chunk::default);
-    let tiles = view.tiles();
-    for chunk in chunks.iter_mut() {
-        chunk.bins.resize_with(tiles, Vec::new);
-        chunk.bins.iter_mut().for_each(Vec::clear);
-        chunk.setups.clear();
-        chunk.planes.clear();
-    }
-    pool.scope(|scope| {
-        for (range, chunk) in runs(total, parts).zip(chunks.iter_mut()) {
-            scope.spawn(async move { bin_run(chunk, range, geometry, frame, view) });
-        }
-    });
-    chunks.iter().map(|c| c.setups.len()).sum()
-}
-
-/// Sets up and bins the global triangles `range` into `chunk`, instance by instance, each with
-/// the setup compiled for its pass.
-fn bin_run(chunk: &mut Chunk, range: Range<usize>, geometry: Geometry, frame: &Frame, view: BinTarget) {
-    for run in instance_runs(geometry.spans, frame.instances, range) {
-        match geometry.colour {
-            None => bin_instance::<BiasedDepth>(chunk, run, geometry, frame, view),
-            Some(colour) => {
-                let pass = Pass {
-                    shading: colour.shading,
-                    textured: run.instance.material.texture.is_some(),
-                    shadowed: colour.shadowed,
-                };
-                with_compiled_pass!(pass, bin_instance(chunk, run, geometry, frame, view));
-            }
-        }
-    }
-}
-
 /// The instances the global triangles `range` belong to, each with the part of `range` among
 /// its triangles, in order.
 pub(crate) fn instance_runs<'a>(
@@ -613,11 +534,10 @@ pub(crate) fn instance_runs<'a>(
     range: Range<usize>,
 ) -> impl Iterator<Item = InstanceRun<'a>> {
     let first = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
-    spans.iter().zip(instances).enumerate().skip(first).map_while(move |(index, (span, instance))| {
+    spans.iter().zip(instances).skip(first).map_while(move |(span, instance)| {
         let start = range.start.max(span.first_triangle);
         let end = range.end.min(span.first_triangle + instance.mesh.triangle_count());
         (start < range.end).then(|| InstanceRun {
-            index,
             span,
             instance,
             triangles: start - span.first_triangle..end - span.first_triangle,
@@ -627,71 +547,10 @@ pub(crate) fn instance_runs<'a>(
 
 /// Some of the triangles of one instance.
 pub(crate) struct InstanceRun<'a> {
-    /// The instance's place in the frame.
-    pub index: usize,
     pub span: &'a Span,
     pub instance: &'a Instance,
     /// Which of its triangles.
     pub triangles: Range<usize>,
-}
-
-/// Sets up and bins the triangles of `run` into `chunk`, interpolating what `I` says.
-fn bin_instance<I: Interpolated>(
-    chunk: &mut Chunk,
-    run: InstanceRun,
-    geometry: Geometry,
-    frame: &Frame,
-    view: BinTarget,
-) {
-    const NO_VARYINGS: Varyings = [0.0; VARYINGS];
-    let flat = I::PASS.is_some_and(|pass| pass.shading == Shading::Flat);
-    let tolerance =
-        I::PASS.map_or([0.0; VARYINGS], |pass| affine_tolerances(pass, run.instance.material.texture.as_deref()));
-    for triangle in &run.instance.mesh.triangles[run.triangles] {
-        let indices = triangle.map(|i| run.span.first_vertex + i as usize);
-        let corners = indices.map(|i| &view.vertices[i]);
-        if corners[0].code & corners[1].code & corners[2].code & outside::VIEW != 0 {
-            continue;
-        }
-        let flat_diffuse = if flat { flat_diffuse(indices.map(|i| geometry.world[i]), &frame.light) } else { 0.0 };
-        let surface = Surface { instance: run.index as u32, tolerance: &tolerance, flat_diffuse };
-        let varyings = |i: usize| geometry.colour.map_or(&NO_VARYINGS, |colour| &colour.varyings[i]);
-        if (corners[0].code | corners[1].code | corners[2].code) & outside::CLIPPED == 0 {
-            let varyings = indices.map(varyings);
-            if let Some(setup) = TriangleSetup::new::<I>(corners, varyings, view.viewport, surface, &mut chunk.planes) {
-                chunk.push(setup, view);
-            }
-            continue;
-        }
-        view.clip(geometry.world, indices, varyings, |vertices, varyings| {
-            if let Some(setup) = TriangleSetup::new::<I>(vertices, varyings, view.viewport, surface, &mut chunk.planes)
-            {
-                chunk.push(setup, view);
-            }
-        });
-    }
-}
-
-impl Chunk {
-    /// Adds `setup` to the bins of every tile its bounds touch.
-    #[inline(always)]
-    fn push(&mut self, setup: TriangleSetup, view: BinTarget) {
-        let index = self.setups.len() as u32;
-        let (bounds, tiles_x) = (setup.bounds, view.tiles_x());
-        self.setups.push(setup);
-        let (first_x, last_x) = (bounds.min_x / TILE_WIDTH, bounds.max_x / TILE_WIDTH);
-        let (first_y, last_y) = (bounds.min_y / TILE_HEIGHT, bounds.max_y / TILE_HEIGHT);
-        if first_x == last_x && first_y == last_y {
-            // Most triangles are much smaller than a tile.
-            self.bins[(first_y * tiles_x + first_x) as usize].push(index);
-            return;
-        }
-        for ty in first_y..=last_y {
-            for tx in first_x..=last_x {
-                self.bins[(ty * tiles_x + tx) as usize].push(index);
-            }
-        }
-    }
 }
 
 /// Inclusive pixel bounds of a triangle, within its target.

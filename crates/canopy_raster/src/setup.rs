@@ -1,11 +1,10 @@
-//! Triangle setup: everything the tiles need to draw a triangle, worked out once, while the
-//! triangle is binned.
+//! Triangle setup: everything needed to draw a triangle, worked out once per strip of rows it
+//! reaches, right before it is drawn there.
 //!
 //! A setup holds the triangle's pixel bounds, its exact integer edge functions at the first
 //! pixel of those bounds with their steps per pixel, and the planes of the values its pixels
-//! interpolate. Binning walks the triangles in mesh order, so the vertices it reads are
-//! neighbours in memory; the tiles then read setups in the order they were made and never
-//! touch a vertex, and a triangle spanning several tiles is set up only once.
+//! interpolate. The strips take their triangles in mesh order, so the vertices a setup reads
+//! are mostly neighbours in memory.
 //!
 //! Coverage uses exact integer edge functions on screen coordinates snapped to
 //! 1/[`SUBPIXEL_STEPS`] of a pixel, sampled at pixel centres, with the top-left fill rule: a
@@ -65,8 +64,6 @@ impl<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool> Interpolated fo
 /// What a triangle is drawn with.
 #[derive(Clone, Copy)]
 pub(crate) struct Surface<'a> {
-    /// The instance it belongs to.
-    pub instance: u32,
     /// How far each value may be off when interpolated in screen space (see
     /// [`affine_tolerances`](crate::shade::affine_tolerances)).
     pub tolerance: &'a Varyings,
@@ -152,11 +149,6 @@ pub(crate) struct TriangleSetup {
     pub nearest: f32,
     /// The flat-shading diffuse term of the triangle (or of the one it was clipped from).
     pub flat_diffuse: f32,
-    /// Its first plane in the planes it was set up with, in pack order, packs the pass does
-    /// not read left out.
-    pub planes: u32,
-    /// The instance it belongs to.
-    pub instance: u32,
     /// Whether the edge functions fit `i32` over any walk inside `bounds` (see
     /// [`fits_narrow`]).
     pub narrow: bool,
@@ -213,7 +205,6 @@ impl TriangleSetup {
         ]);
         let z = order.map(|k| vertices[k].z);
         let inv_w = order.map(|k| vertices[k].inv_w);
-        let first_plane = planes.len() as u32;
         let affine = match I::PASS {
             None => {
                 let mut plane = Plane::through(z.map(|z| Vec4::new(z, 0.0, 0.0, 0.0)), &weights);
@@ -254,8 +245,6 @@ impl TriangleSetup {
             step_y,
             nearest: z[0].min(z[1]).min(z[2]),
             flat_diffuse: surface.flat_diffuse,
-            planes: first_plane,
-            instance: surface.instance,
             narrow: fits_narrow(p),
             affine,
         })
@@ -321,7 +310,7 @@ mod tests {
 
     const TARGET: Viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
 
-    const SURFACE: Surface = Surface { instance: 3, tolerance: &[0.001; VARYINGS], flat_diffuse: 0.25 };
+    const SURFACE: Surface = Surface { tolerance: &[0.001; VARYINGS], flat_diffuse: 0.25 };
 
     const NO_VARYINGS: Varyings = [0.0; VARYINGS];
 
@@ -348,8 +337,8 @@ mod tests {
         let steps = SUBPIXEL_STEPS as i32;
         // Depth grows by 0.01 per pixel to the right, not at all downwards.
         let corners = [(0, 0), (0, 100 * steps), (100 * steps, 0)];
-        let (setup, planes) = depth_setup(corners, [0.2, 0.2, 1.2]);
-        let plane = planes[setup.planes as usize];
+        let (_, planes) = depth_setup(corners, [0.2, 0.2, 1.2]);
+        let plane = planes[0];
         assert!((plane.dx.x - 0.01).abs() < 1e-6 && plane.dy.x.abs() < 1e-6, "{plane:?}");
         // At the centre of pixel (0, 0) the plane's depth is 0.2 + 0.005, plus the bias.
         let bias = CONSTANT_BIAS + SLOPE_BIAS * 0.01;
@@ -380,7 +369,7 @@ mod tests {
             &mut planes,
         )
         .unwrap();
-        assert_eq!((planes.len(), setup.instance, setup.flat_diffuse), (2, 3, 0.25));
+        assert_eq!((planes.len(), setup.flat_diffuse), (2, 0.25));
         // The colour plane reproduces vertex 0's colour at its corner, the pixel offset
         // (-1/2, -1/2) from the first pixel's centre.
         let colour = planes[0].at(-0.5, -0.5);

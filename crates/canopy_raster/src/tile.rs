@@ -1,20 +1,24 @@
-//! The tile stage: each tile draws the triangles binned into it, in draw order, from their
-//! setups.
+//! The colour bands: each band of tile rows sets up the triangles reaching it, in draw order,
+//! and draws each into the band's tiles it touches.
 //!
 //! A triangle's walk over a tile finds its covered pixels row by row with its exact edge
 //! functions, [`MASK_PIXELS`] pixels at a time. Pixels are then depth-tested, shaded and stored
-//! in runs of [`LANES`] along a row, with lane masks instead of a branch per pixel; a run is
-//! read and written whole unless it reaches past the end of its row.
+//! in runs of [`LANES`] along a row, with lane masks instead of a branch per pixel.
 //!
 //! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
 //! it is skipped before any of its pixels is visited.
 
+use crate::clip::outside;
 use crate::framebuffer::{Band, FAR_DEPTH};
-use crate::pipeline::{Chunk, Frame, PixelBounds, TILE_HEIGHT, TILE_WIDTH};
-use crate::setup::{DEPTH, INV_W, LANES, PACKS, Plane, TriangleSetup, pack_slots};
-use crate::shade::{CompiledPass, Material, Pass, Shading, VARYINGS, lanes_of, slot, with_compiled_pass};
+use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
+use crate::setup::{DEPTH, INV_W, Interpolated, LANES, PACKS, Plane, Surface, TriangleSetup, pack_slots};
+use crate::shade::{
+    CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
+};
 use crate::shadow::ShadowMap;
-use bevy_math::{Vec2, Vec4};
+use crate::sort::{Corners, Sorted};
+use bevy_math::{Vec2, Vec3, Vec4};
+use std::iter::Peekable;
 use std::ops::{Add, Mul};
 use wide::{f32x4, i32x8, u32x4};
 
@@ -23,19 +27,46 @@ use wide::{f32x4, i32x8, u32x4};
 /// covered pixel.
 const OCCLUSION_REFRESH: u64 = 1;
 
-/// What the colour tiles read, shared by every band.
+/// What the colour bands read, shared by every band.
 pub(crate) struct TileContext<'a> {
     pub frame: &'a Frame<'a>,
-    pub chunks: &'a [Chunk],
+    pub spans: &'a [Span],
+    /// World positions, for clipping and flat shading.
+    pub world: &'a [Vec3],
+    pub varyings: &'a [Varyings],
+    /// The camera's projection, its projected vertices and the target.
+    pub view: View<'a>,
+    /// The triangles reaching each band.
+    pub sorted: &'a Sorted,
     pub shadow: Option<&'a ShadowMap>,
-    pub tiles_x: u32,
+}
+
+/// A band's working buffers, kept between frames so that a frame of steady size does not
+/// allocate.
+#[derive(Debug, Default)]
+pub(crate) struct BandScratch {
+    /// The planes of the triangle being drawn.
+    planes: Vec<Plane>,
+    /// The band's tiles, left to right.
+    tiles: Vec<TileState>,
+}
+
+/// What drawing a band counted.
+#[derive(Debug, Default)]
+pub(crate) struct BandCounts {
+    /// Pixels covered, counted once per triangle covering them.
+    pub fragments: u64,
+    /// Triangle-tile pairs skipped as occluded.
+    pub occluded: u64,
+    /// Triangles set up whose first row is in the band.
+    pub triangles: usize,
 }
 
 /// Which pixels of each row of a walk are covered: bit `k` of word `r` for pixel `k` of the
 /// walk's row `r`. Kept by the band and reused by every walk, so that it is not cleared for each.
 pub(crate) type RowMasks = [u64; TILE_HEIGHT as usize];
 
-/// A binned triangle as a colour tile draws it.
+/// A set-up triangle as a colour tile draws it.
 struct Triangle<'a> {
     setup: &'a TriangleSetup,
     /// Its planes, in pack order, the packs its pass does not read left out.
@@ -53,50 +84,47 @@ fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
     }
 }
 
-/// Clears one band of the framebuffer and draws every triangle binned into its tiles.
-/// Returns the fragments covered and the triangle-tile pairs skipped as occluded.
-pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band) -> (u64, u64) {
+/// Clears one band of the framebuffer and draws every triangle reaching it, in order: each is
+/// set up, then drawn into the band's tiles it touches.
+pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &mut BandScratch) -> BandCounts {
     band.color.fill(context.frame.background);
     band.depth.fill(FAR_DEPTH);
     let (rows, width) = (band.rows(), band.width);
     let mut target = band;
-    let (mut fragments, mut occluded) = (0, 0);
+    scratch.tiles.clear();
+    scratch
+        .tiles
+        .extend((0..width.div_ceil(TILE_WIDTH)).map(|tx| TileState::new(tile_rect(tx, target.y0, width, rows))));
     let mut masks = [0; TILE_HEIGHT as usize];
-    for tx in 0..context.tiles_x {
-        let rect = tile_rect(tx, target.y0, width, rows);
-        let mut tile = TileState {
-            rect,
-            area: u64::from(rect.max_x - rect.min_x + 1) * u64::from(rows),
-            farthest: FAR_DEPTH,
-            covered_since_refresh: 0,
-            fragments: 0,
-            occluded: 0,
-        };
-        let index = (row * context.tiles_x + tx) as usize;
-        for chunk in context.chunks {
-            let mut entries = chunk.bins[index].as_slice();
-            // Runs of one instance's triangles, each drawn by the loop compiled for its pass.
-            while let Some(&first) = entries.first() {
-                let instance = chunk.setups[first as usize].instance;
-                let material = &context.frame.instances[instance as usize].material;
-                let pass = Pass {
-                    shading: context.frame.settings.shading,
-                    textured: material.texture.is_some(),
-                    shadowed: context.shadow.is_some(),
-                };
-                let draw = Draw { chunk, instance, material, context };
-                let done =
-                    with_compiled_pass!(pass, draw_triangles(entries, &draw, &mut tile, &mut masks, &mut target));
-                entries = &entries[done..];
-            }
+    let mut counts = BandCounts::default();
+    let mut entries = context.sorted.strip(row as usize).peekable();
+    let spans = context.spans;
+    let mut instance = 0;
+    // Runs of one instance's triangles, each drawn by the loop compiled for its pass.
+    while let Some(first) = entries.peek() {
+        // Instances' vertices follow one another in the global numbering.
+        while instance + 1 < spans.len() && first[0] as usize >= spans[instance + 1].first_vertex {
+            instance += 1;
         }
-        fragments += tile.fragments;
-        occluded += tile.occluded;
+        let material = &context.frame.instances[instance].material;
+        let pass = Pass {
+            shading: context.frame.settings.shading,
+            textured: material.texture.is_some(),
+            shadowed: context.shadow.is_some(),
+        };
+        let draw = Draw { instance, material, context };
+        counts.triangles +=
+            with_compiled_pass!(pass, draw_instance(&mut entries, &draw, scratch, &mut masks, &mut target));
     }
-    (fragments, occluded)
+    for tile in &scratch.tiles {
+        counts.fragments += tile.fragments;
+        counts.occluded += tile.occluded;
+    }
+    counts
 }
 
 /// What drawing a tile keeps from one triangle to the next.
+#[derive(Debug)]
 struct TileState {
     rect: PixelBounds,
     /// Pixels in the rect.
@@ -109,36 +137,85 @@ struct TileState {
     occluded: u64,
 }
 
-/// The triangles of one instance in a chunk, and what they are drawn with.
+impl TileState {
+    /// An empty tile covering `rect`.
+    fn new(rect: PixelBounds) -> Self {
+        let area = u64::from(rect.max_x - rect.min_x + 1) * u64::from(rect.max_y - rect.min_y + 1);
+        Self { rect, area, farthest: FAR_DEPTH, covered_since_refresh: 0, fragments: 0, occluded: 0 }
+    }
+}
+
+/// One instance, and what its triangles are drawn with.
 struct Draw<'a> {
-    chunk: &'a Chunk,
-    instance: u32,
+    instance: usize,
     material: &'a Material,
     context: &'a TileContext<'a>,
 }
 
-/// Draws the triangles of `entries` (setups of `draw`'s chunk) into `tile` in order, for as
-/// long as they belong to `draw`'s instance, with the pixel loop compiled for its pass;
-/// returns how many entries it took.
-fn draw_triangles<C: CompiledPass>(
-    entries: &[u32],
+/// Draws the triangles of `entries` into `band` in order, for as long as they belong to
+/// `draw`'s instance, with the setup and pixel loop compiled for its pass; returns how many
+/// triangles were set up with their first row in the band.
+fn draw_instance<'a, C: CompiledPass + Interpolated>(
+    entries: &mut Peekable<impl Iterator<Item = &'a Corners>>,
     draw: &Draw,
-    tile: &mut TileState,
+    scratch: &mut BandScratch,
     masks: &mut RowMasks,
     band: &mut Band,
 ) -> usize {
-    let chunk = draw.chunk;
-    for (taken, &index) in entries.iter().enumerate() {
-        let setup = &chunk.setups[index as usize];
-        if setup.instance != draw.instance {
-            return taken;
+    let context = draw.context;
+    let (view, world) = (context.view, context.world);
+    let next_instance = context.spans.get(draw.instance + 1).map_or(usize::MAX, |span| span.first_vertex);
+    let pass = <C as CompiledPass>::PASS;
+    let tolerance = affine_tolerances(pass, draw.material.texture.as_deref());
+    let flat = pass.shading == Shading::Flat;
+    let mut triangles = 0;
+    while let Some(corners) = entries.next_if(|corners| (corners[0] as usize) < next_instance) {
+        let indices = corners.map(|i| i as usize);
+        let vertices = indices.map(|i| &view.vertices[i]);
+        let flat_diffuse = if flat { flat_diffuse(indices.map(|i| world[i]), &context.frame.light) } else { 0.0 };
+        let surface = Surface { tolerance: &tolerance, flat_diffuse };
+        let varyings = |i: usize| &context.varyings[i];
+        if (vertices[0].code | vertices[1].code | vertices[2].code) & outside::CLIPPED == 0 {
+            triangles += draw_triangle::<C>(vertices, indices.map(varyings), surface, draw, scratch, masks, band);
+        } else {
+            view.clip(world, indices, varyings, |vertices, varyings| {
+                triangles += draw_triangle::<C>(vertices, varyings, surface, draw, scratch, masks, band);
+            });
         }
+    }
+    triangles
+}
+
+/// Sets a triangle up and draws it into the tiles of `band` it touches, skipping those whose
+/// farthest depth is nearer than all of it; returns 1 when it was set up and its first row is
+/// in the band (so that each triangle is counted once), 0 otherwise.
+#[inline(always)]
+fn draw_triangle<C: CompiledPass + Interpolated>(
+    vertices: [&ScreenVertex; 3],
+    varyings: [&Varyings; 3],
+    surface: Surface,
+    draw: &Draw,
+    scratch: &mut BandScratch,
+    masks: &mut RowMasks,
+    band: &mut Band,
+) -> usize {
+    let BandScratch { planes, tiles } = scratch;
+    planes.clear();
+    let viewport = draw.context.view.viewport;
+    let Some(setup) = TriangleSetup::new::<C>(vertices, varyings, viewport, surface, planes) else { return 0 };
+    let bounds = setup.bounds;
+    let last_row = band.y0 + band.rows() - 1;
+    if bounds.max_y < band.y0 || bounds.min_y > last_row {
+        // Part of a clipped triangle that reaches other bands.
+        return 0;
+    }
+    let triangle = Triangle { setup: &setup, planes, material: draw.material };
+    for tile in &mut tiles[(bounds.min_x / TILE_WIDTH) as usize..=(bounds.max_x / TILE_WIDTH) as usize] {
         if setup.nearest >= tile.farthest {
             tile.occluded += 1;
             continue;
         }
-        let Some(walk) = Walk::new(setup, tile.rect) else { continue };
-        let triangle = Triangle { setup, planes: &chunk.planes[setup.planes as usize..], material: draw.material };
+        let Some(walk) = Walk::new(&setup, tile.rect) else { continue };
         let covered = fill_pass::<C>(&walk, masks, &triangle, draw.context, band);
         tile.fragments += covered;
         tile.covered_since_refresh += covered;
@@ -147,7 +224,7 @@ fn draw_triangles<C: CompiledPass>(
             tile.farthest = farthest_depth(band.depth, band.width, band.y0, tile.rect);
         }
     }
-    entries.len()
+    usize::from(bounds.min_y >= band.y0)
 }
 
 /// The farthest depth held in `rect` of a band, four depths at a time.
@@ -506,7 +583,7 @@ mod tests {
     fn setup(corners: [(i32, i32); 3]) -> Option<TriangleSetup> {
         let vertices = corners.map(|(x, y)| ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 });
         let viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
-        let surface = Surface { instance: 0, tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
+        let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
         let varyings = [&[0.0; VARYINGS]; 3];
         TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, viewport, surface, &mut Vec::new())
     }

@@ -1,0 +1,76 @@
+//! Sorting triangles into horizontal strips of a target, for passes that then set each strip's
+//! triangles up and draw them at once.
+//!
+//! Sorting reads only the projected vertices: it drops triangles wholly outside the view
+//! volume or covering no pixel centre, and lists each other triangle, as its three vertex
+//! indices, in every strip its pixel rows reach. Runs of triangles are sorted in parallel, and
+//! a strip reads the runs in order, so it sees its triangles in draw order. Keeping indices
+//! instead of set-up triangles keeps the data between the two stages small: a strip sets its
+//! triangles up right before drawing them, while they are in the core's cache.
+
+use crate::clip::outside;
+use crate::pipeline::{Instance, Span, View, instance_runs, pixel_bounds, runs, triangle_count};
+use bevy_tasks::TaskPool;
+
+/// The vertex indices of one triangle, in the frame's global numbering.
+pub(crate) type Corners = [u32; 3];
+
+/// Contiguous runs of triangles sorted in parallel, per worker thread.
+const RUNS_PER_THREAD: usize = 4;
+
+/// The triangles reaching each strip, kept between frames so that a scene of steady size does
+/// not allocate.
+#[derive(Debug, Default)]
+pub(crate) struct Sorted {
+    /// Per run of triangles, per strip, the triangles reaching the strip, in order.
+    runs: Vec<Vec<Vec<Corners>>>,
+}
+
+impl Sorted {
+    /// Sorts every triangle of `instances` (whose vertex and triangle numbering `spans` give)
+    /// into strips of `rows` rows of `view`'s target, spreading the work over `pool`.
+    pub fn sort(&mut self, pool: &TaskPool, spans: &[Span], instances: &[Instance], view: View, rows: u32) {
+        let strips = view.viewport.height.div_ceil(rows) as usize;
+        let parts = pool.thread_num().max(1) * RUNS_PER_THREAD;
+        self.runs.resize_with(parts, Vec::new);
+        for run in &mut self.runs {
+            run.resize_with(strips, Vec::new);
+            run.iter_mut().for_each(Vec::clear);
+        }
+        pool.scope(|scope| {
+            for (range, sorted) in runs(triangle_count(spans, instances), parts).zip(self.runs.iter_mut()) {
+                scope.spawn(async move {
+                    for run in instance_runs(spans, instances, range) {
+                        for triangle in &run.instance.mesh.triangles[run.triangles] {
+                            sort(triangle.map(|i| (run.span.first_vertex + i as usize) as u32), view, rows, sorted);
+                        }
+                    }
+                });
+            }
+        });
+    }
+
+    /// The triangles reaching strip `index`, in draw order.
+    pub fn strip(&self, index: usize) -> impl Iterator<Item = &Corners> {
+        self.runs.iter().flat_map(move |run| &run[index])
+    }
+}
+
+/// Adds the triangle `corners` to the strips of `rows` rows its pixel rows reach. A triangle
+/// that needs clipping goes to every strip, which clips it again.
+fn sort(corners: Corners, view: View, rows: u32, sorted: &mut [Vec<Corners>]) {
+    let [a, b, c] = corners.map(|i| &view.vertices[i as usize]);
+    if a.code & b.code & c.code & outside::VIEW != 0 {
+        return;
+    }
+    let strips = if (a.code | b.code | c.code) & outside::CLIPPED != 0 {
+        0..sorted.len()
+    } else {
+        let p = [a, b, c].map(|v| (i64::from(v.x), i64::from(v.y)));
+        let Some(bounds) = pixel_bounds(p, view.viewport.width, view.viewport.height) else { return };
+        (bounds.min_y / rows) as usize..(bounds.max_y / rows) as usize + 1
+    };
+    for strip in &mut sorted[strips] {
+        strip.push(corners);
+    }
+}
