@@ -11,7 +11,7 @@
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
 use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View};
-use crate::setup::{BiasedDepth, LANES, Plane, Surface, TriangleSetup};
+use crate::setup::{BiasedDepth, DEPTH, LANES, Plane, Surface, TriangleSetup};
 use crate::shade::{VARYINGS, Varyings, lanes_of};
 use crate::shadow::ShadowMap;
 use crate::sort::{Corners, Sorted};
@@ -32,8 +32,6 @@ pub(crate) const WINDOW: usize = 8;
 pub(crate) struct DepthPass {
     /// The triangles reaching each strip.
     sorted: Sorted,
-    /// Per strip, room for the plane of the triangle it is drawing.
-    planes: Vec<Vec<Plane>>,
 }
 
 /// What the depth pass draws: the frame's instances and their vertices as the light sees them.
@@ -53,14 +51,12 @@ impl DepthPass {
     pub fn draw(&mut self, pool: &TaskPool, scene: DepthScene, map: &mut ShadowMap) -> usize {
         let size = map.size();
         self.sorted.sort(pool, scene.spans, scene.instances, scene.view, STRIP_ROWS);
-        self.planes.resize_with(size.div_ceil(STRIP_ROWS) as usize, Vec::new);
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
         let triangles = pool.scope(|scope| {
-            let strips = map.rows_mut().chunks_mut(stride * STRIP_ROWS as usize).zip(self.planes.iter_mut());
-            for (index, (depth, planes)) in strips.enumerate() {
+            for (index, depth) in map.rows_mut().chunks_mut(stride * STRIP_ROWS as usize).enumerate() {
                 let band = DepthBand { y0: index as u32 * STRIP_ROWS, width: size, stride, first, depth };
-                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band, planes) });
+                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band) });
             }
         });
         triangles.into_iter().sum()
@@ -85,12 +81,7 @@ impl DepthBand<'_> {
 
 /// Clears one strip of the map and draws into it the triangles of `sorted`; returns how many
 /// were set up with their first row in the strip.
-fn draw_strip<'a>(
-    scene: DepthScene,
-    sorted: impl Iterator<Item = &'a Corners>,
-    mut band: DepthBand,
-    planes: &mut Vec<Plane>,
-) -> usize {
+fn draw_strip<'a>(scene: DepthScene, sorted: impl Iterator<Item = &'a Corners>, mut band: DepthBand) -> usize {
     for row in band.depth.chunks_exact_mut(band.stride) {
         row[band.first..band.first + band.width as usize].fill(FAR_DEPTH);
     }
@@ -100,10 +91,9 @@ fn draw_strip<'a>(
     let mut draw = |vertices: [&ScreenVertex; 3], band: &mut DepthBand| {
         const NO_VARYINGS: Varyings = [0.0; VARYINGS];
         let surface = Surface { tolerance: &NO_VARYINGS, flat_diffuse: 0.0 };
-        planes.clear();
         let varyings = [&NO_VARYINGS; 3];
-        if let Some(setup) = TriangleSetup::new::<BiasedDepth>(vertices, varyings, view.viewport, surface, planes) {
-            fill_triangle(&setup, &planes[0], &mut masks, band);
+        if let Some((setup, planes)) = TriangleSetup::new::<BiasedDepth>(vertices, varyings, view.viewport, surface) {
+            fill_triangle(&setup, &planes[DEPTH / LANES], &mut masks, band);
             triangles += usize::from((band.y0..band.y0 + band.rows()).contains(&setup.bounds.min_y));
         }
     };
@@ -257,20 +247,19 @@ mod tests {
             [0, 1, 2].map(|k| ScreenVertex { code: 0, x: corners[k].0, y: corners[k].1, z: z[k], inv_w: 1.0 });
         let viewport = Viewport { width: SIZE, height: SIZE, cull_back_faces: false };
         let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
-        let mut planes = Vec::new();
-        let setup = TriangleSetup::new::<BiasedDepth>(
-            vertices.each_ref(),
-            [&[0.0; VARYINGS]; 3],
-            viewport,
-            surface,
-            &mut planes,
-        )?;
+        let (setup, planes) =
+            TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), [&[0.0; VARYINGS]; 3], viewport, surface)?;
         if !setup.narrow {
             return None;
         }
         let (stride, mut depth) = empty_band();
         let mut band = DepthBand { y0: BAND.0, width: SIZE, stride, first: 1, depth: &mut depth };
-        fill_triangle(&TriangleSetup { narrow, ..setup }, &planes[0], &mut [0; TILE_HEIGHT as usize], &mut band);
+        fill_triangle(
+            &TriangleSetup { narrow, ..setup },
+            &planes[DEPTH / LANES],
+            &mut [0; TILE_HEIGHT as usize],
+            &mut band,
+        );
         Some(depth)
     }
 

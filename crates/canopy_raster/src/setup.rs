@@ -112,26 +112,25 @@ impl Plane {
 /// and down.
 struct Weights([[f32; 2]; 3]);
 
-/// Where each pack is among the packs `pass` reads, the packs a setup stores: `None` for the
-/// packs it does not read (the depth pack it always reads).
-pub(crate) const fn pack_slots(pass: Pass) -> [Option<usize>; PACKS] {
-    let mut slots = [None; PACKS];
-    let (mut pack, mut stored) = (0, 0);
+/// Which packs `pass` reads (the depth pack always).
+pub(crate) const fn packs_read(pass: Pass) -> [bool; PACKS] {
+    let mut read = [false; PACKS];
+    let mut pack = 0;
     while pack < PACKS {
-        let mut read = pack * LANES >= VARYINGS;
+        read[pack] = pack * LANES >= VARYINGS;
         let mut k = pack * LANES;
         while k < (pack + 1) * LANES && k < VARYINGS {
-            read |= pass.uses(k);
+            read[pack] |= pass.uses(k);
             k += 1;
-        }
-        if read {
-            slots[pack] = Some(stored);
-            stored += 1;
         }
         pack += 1;
     }
-    slots
+    read
 }
+
+/// The planes of a triangle's values, one per pack; those of the packs its pass does not read
+/// are zero.
+pub(crate) type Planes = [Plane; PACKS];
 
 /// A triangle ready for every tile it touches.
 #[derive(Debug, Clone, Copy)]
@@ -162,17 +161,16 @@ const MAX_STEP: i64 = 6 * MAX_TARGET_SIZE as i64 * SUBPIXEL_STEPS * SUBPIXEL_STE
 const _: () = assert!(MAX_STEP <= i32::MAX as i64, "edge steps must fit i32");
 
 impl TriangleSetup {
-    /// Sets a projected triangle with vertex `varyings` up for `viewport`, appending the planes
-    /// of the values `I` interpolates to `planes`; `None` when it is culled (zero area, or facing
-    /// away when the viewport culls back faces) or covers no pixel centre of the target.
+    /// Sets a projected triangle with vertex `varyings` up for `viewport`, with the planes of
+    /// the values `I` interpolates; `None` when it is culled (zero area, or facing away when the
+    /// viewport culls back faces) or covers no pixel centre of the target.
     #[inline(always)]
     pub fn new<I: Interpolated>(
         vertices: [&ScreenVertex; 3],
         varyings: [&Varyings; 3],
         viewport: Viewport,
         surface: Surface,
-        planes: &mut Vec<Plane>,
-    ) -> Option<Self> {
+    ) -> Option<(Self, Planes)> {
         let p = vertices.map(|v| (i64::from(v.x), i64::from(v.y)));
         let area = edge(p[0], p[1], p[2]);
         // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the
@@ -205,25 +203,26 @@ impl TriangleSetup {
         ]);
         let z = order.map(|k| vertices[k].z);
         let inv_w = order.map(|k| vertices[k].inv_w);
+        let mut planes = Planes::default();
         let affine = match I::PASS {
             None => {
-                let mut plane = Plane::through(z.map(|z| Vec4::new(z, 0.0, 0.0, 0.0)), &weights);
+                let plane = &mut planes[DEPTH / LANES];
+                *plane = Plane::through(z.map(|z| Vec4::new(z, 0.0, 0.0, 0.0)), &weights);
                 plane.origin.x += CONSTANT_BIAS + SLOPE_BIAS * plane.dx.x.abs().max(plane.dy.x.abs());
-                planes.push(plane);
                 true
             }
             Some(_) => {
-                let slots = const {
+                let read = const {
                     match I::PASS {
-                        Some(pass) => pack_slots(pass),
-                        None => [None; PACKS],
+                        Some(pass) => packs_read(pass),
+                        None => [false; PACKS],
                     }
                 };
                 let varyings = order.map(|k| varyings[k]);
                 // Small or distant triangles skip the per-pixel division.
                 let affine = affine_is_close(inv_w, varyings, surface.tolerance);
-                for (pack, slot) in slots.iter().enumerate() {
-                    if slot.is_none() {
+                for (pack, plane) in planes.iter_mut().enumerate() {
+                    if !read[pack] {
                         continue;
                     }
                     let values = std::array::from_fn(|vertex| match pack * LANES {
@@ -233,12 +232,12 @@ impl TriangleSetup {
                         }
                         _ => Vec4::new(z[vertex], inv_w[vertex], 0.0, 0.0),
                     });
-                    planes.push(Plane::through(values, &weights));
+                    *plane = Plane::through(values, &weights);
                 }
                 affine
             }
         };
-        Some(Self {
+        let setup = Self {
             bounds,
             start,
             step_x,
@@ -247,7 +246,8 @@ impl TriangleSetup {
             flat_diffuse: surface.flat_diffuse,
             narrow: fits_narrow(p),
             affine,
-        })
+        };
+        Some((setup, planes))
     }
 }
 
@@ -314,13 +314,10 @@ mod tests {
 
     const NO_VARYINGS: Varyings = [0.0; VARYINGS];
 
-    fn depth_setup(corners: [(i32, i32); 3], z: [f32; 3]) -> (TriangleSetup, Vec<Plane>) {
+    fn depth_setup(corners: [(i32, i32); 3], z: [f32; 3]) -> (TriangleSetup, Planes) {
         let vertices = [0, 1, 2].map(|k| vertex(corners[k], z[k]));
-        let mut planes = Vec::new();
         let varyings = [&NO_VARYINGS; 3];
-        let setup = TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, TARGET, SURFACE, &mut planes)
-            .expect("a visible triangle");
-        (setup, planes)
+        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, TARGET, SURFACE).expect("a visible triangle")
     }
 
     #[test]
@@ -338,7 +335,7 @@ mod tests {
         // Depth grows by 0.01 per pixel to the right, not at all downwards.
         let corners = [(0, 0), (0, 100 * steps), (100 * steps, 0)];
         let (_, planes) = depth_setup(corners, [0.2, 0.2, 1.2]);
-        let plane = planes[0];
+        let plane = planes[DEPTH / LANES];
         assert!((plane.dx.x - 0.01).abs() < 1e-6 && plane.dy.x.abs() < 1e-6, "{plane:?}");
         // At the centre of pixel (0, 0) the plane's depth is 0.2 + 0.005, plus the bias.
         let bias = CONSTANT_BIAS + SLOPE_BIAS * 0.01;
@@ -346,35 +343,35 @@ mod tests {
     }
 
     #[test]
-    fn a_setup_stores_only_the_packs_its_pass_reads() {
+    fn a_setup_computes_only_the_packs_its_pass_reads() {
         let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
-        let stored = |pass: Pass| pack_slots(pass).iter().flatten().count();
+        let read = |pass: Pass| packs_read(pass).iter().filter(|&&read| read).count();
         // Colour and depth; then normals and u; then v and the shadow position too.
-        assert_eq!(stored(pass(Shading::Gouraud, false, false)), 2);
-        assert_eq!(stored(pass(Shading::Phong, false, false)), 3);
-        assert_eq!(stored(pass(Shading::Phong, true, true)), 4);
+        assert_eq!(read(pass(Shading::Gouraud, false, false)), 2);
+        assert_eq!(read(pass(Shading::Phong, false, false)), 3);
+        assert_eq!(read(pass(Shading::Phong, true, true)), 4);
         let plain = pass(Shading::Gouraud, false, false);
-        assert_eq!(pack_slots(plain), [Some(0), None, None, Some(1)]);
+        assert_eq!(packs_read(plain), [true, false, false, true]);
 
         let varyings: [Varyings; 3] =
             std::array::from_fn(|k| std::array::from_fn(|i| (k * VARYINGS + i) as f32 * 0.01));
         let steps = SUBPIXEL_STEPS as i32;
         let vertices = [(0, 0), (0, 40 * steps), (40 * steps, 0)].map(|c| vertex(c, 0.5));
-        let mut planes = Vec::new();
-        let setup = TriangleSetup::new::<Compiled<{ mode::GOURAUD }, false, false>>(
+        let (setup, planes) = TriangleSetup::new::<Compiled<{ mode::GOURAUD }, false, false>>(
             vertices.each_ref(),
             varyings.each_ref(),
             TARGET,
             SURFACE,
-            &mut planes,
         )
         .unwrap();
-        assert_eq!((planes.len(), setup.flat_diffuse), (2, 0.25));
+        assert_eq!(setup.flat_diffuse, 0.25);
+        // The packs of values the pass does not read (non-zero at the vertices) stay zero.
+        assert_eq!((planes[1], planes[2]), (Plane::default(), Plane::default()));
         // The colour plane reproduces vertex 0's colour at its corner, the pixel offset
         // (-1/2, -1/2) from the first pixel's centre.
         let colour = planes[0].at(-0.5, -0.5);
         assert!((colour.x - varyings[0][0]).abs() < 1e-5 && (colour.z - varyings[0][2]).abs() < 1e-5, "{colour}");
-        assert_eq!(planes[1].at(3.0, 7.0).x, 0.5, "constant depth");
+        assert_eq!(planes[DEPTH / LANES].at(3.0, 7.0).x, 0.5, "constant depth");
     }
 
     proptest! {

@@ -11,7 +11,7 @@
 use crate::clip::outside;
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
-use crate::setup::{DEPTH, INV_W, Interpolated, LANES, PACKS, Plane, Surface, TriangleSetup, pack_slots};
+use crate::setup::{DEPTH, INV_W, Interpolated, LANES, PACKS, Planes, Surface, TriangleSetup};
 use crate::shade::{
     CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
 };
@@ -45,8 +45,6 @@ pub(crate) struct TileContext<'a> {
 /// allocate.
 #[derive(Debug, Default)]
 pub(crate) struct BandScratch {
-    /// The planes of the triangle being drawn.
-    planes: Vec<Plane>,
     /// The band's tiles, left to right.
     tiles: Vec<TileState>,
 }
@@ -69,8 +67,7 @@ pub(crate) type RowMasks = [u64; TILE_HEIGHT as usize];
 /// A set-up triangle as a colour tile draws it.
 struct Triangle<'a> {
     setup: &'a TriangleSetup,
-    /// Its planes, in pack order, the packs its pass does not read left out.
-    planes: &'a [Plane],
+    planes: &'a Planes,
     material: &'a Material,
 }
 
@@ -199,18 +196,16 @@ fn draw_triangle<C: CompiledPass + Interpolated>(
     masks: &mut RowMasks,
     band: &mut Band,
 ) -> usize {
-    let BandScratch { planes, tiles } = scratch;
-    planes.clear();
     let viewport = draw.context.view.viewport;
-    let Some(setup) = TriangleSetup::new::<C>(vertices, varyings, viewport, surface, planes) else { return 0 };
+    let Some((setup, planes)) = TriangleSetup::new::<C>(vertices, varyings, viewport, surface) else { return 0 };
     let bounds = setup.bounds;
     let last_row = band.y0 + band.rows() - 1;
     if bounds.max_y < band.y0 || bounds.min_y > last_row {
         // Part of a clipped triangle that reaches other bands.
         return 0;
     }
-    let triangle = Triangle { setup: &setup, planes, material: draw.material };
-    for tile in &mut tiles[(bounds.min_x / TILE_WIDTH) as usize..=(bounds.max_x / TILE_WIDTH) as usize] {
+    let triangle = Triangle { setup: &setup, planes: &planes, material: draw.material };
+    for tile in &mut scratch.tiles[(bounds.min_x / TILE_WIDTH) as usize..=(bounds.max_x / TILE_WIDTH) as usize] {
         if setup.nearest >= tile.farthest {
             tile.occluded += 1;
             continue;
@@ -414,10 +409,8 @@ fn fill_pass<C: CompiledPass>(
     band: &mut Band,
 ) -> u64 {
     let pass = C::PASS;
-    // The packs the pass does not read stay zero, and the code reading them folds away.
-    let slots = const { pack_slots(C::PASS) };
-    let planes: [Plane; PACKS] =
-        std::array::from_fn(|p| slots[p].map_or(Plane::default(), |slot| triangle.planes[slot]));
+    // The packs the pass does not read are zero, and the code reading them folds away.
+    let planes = triangle.planes;
     let uses = |k: usize| k >= VARYINGS || pass.uses(k);
     let shading = TriangleShading {
         lane_steps: std::array::from_fn(|k| if uses(k) { planes[k / LANES].lane_steps(k % LANES) } else { Vec4::ZERO }),
@@ -432,7 +425,7 @@ fn fill_pass<C: CompiledPass>(
 
 /// What the runs of a triangle share.
 struct TriangleShading<'a> {
-    planes: [Plane; PACKS],
+    planes: &'a Planes,
     /// Each value's change from a run's first pixel to its lanes.
     lane_steps: [Vec4; VARYINGS + 2],
     /// Whether the values are interpolated in screen space.
@@ -585,7 +578,7 @@ mod tests {
         let viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
         let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
         let varyings = [&[0.0; VARYINGS]; 3];
-        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, viewport, surface, &mut Vec::new())
+        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, viewport, surface).map(|(setup, _)| setup)
     }
 
     /// Whether the pixel centre `(x, y)` is inside the triangle `corners` under the top-left
