@@ -55,7 +55,8 @@ impl DepthPass {
         let sorted = &self.sorted;
         let triangles = pool.scope(|scope| {
             for (index, depth) in map.rows_mut().chunks_mut(stride * STRIP_ROWS as usize).enumerate() {
-                let band = DepthBand { y0: index as u32 * STRIP_ROWS, width: size, stride, first, depth };
+                let rows = (depth.len() / stride) as u32;
+                let band = DepthBand { y0: index as u32 * STRIP_ROWS, rows, width: size, stride, first, depth };
                 scope.spawn(async move { draw_strip(scene, sorted.strip(index), band) });
             }
         });
@@ -67,16 +68,12 @@ impl DepthPass {
 /// `first` on and at least [`WINDOW`] - 1 border texels after them.
 struct DepthBand<'a> {
     y0: u32,
+    /// Rows in the band (the last strip may be shorter).
+    rows: u32,
     width: u32,
     stride: usize,
     first: usize,
     depth: &'a mut [f32],
-}
-
-impl DepthBand<'_> {
-    fn rows(&self) -> u32 {
-        (self.depth.len() / self.stride) as u32
-    }
 }
 
 /// Clears one strip of the map and draws into it the triangles of `sorted`; returns how many
@@ -94,7 +91,7 @@ fn draw_strip<'a>(scene: DepthScene, sorted: impl Iterator<Item = &'a Corners>, 
         let varyings = [&NO_VARYINGS; 3];
         if let Some((setup, planes)) = TriangleSetup::new::<BiasedDepth>(vertices, varyings, view.viewport, surface) {
             fill_triangle(&setup, &planes[DEPTH / LANES], &mut masks, band);
-            triangles += usize::from((band.y0..band.y0 + band.rows()).contains(&setup.bounds.min_y));
+            triangles += usize::from((band.y0..band.y0 + band.rows).contains(&setup.bounds.min_y));
         }
     };
     for corners in sorted {
@@ -115,7 +112,7 @@ fn draw_strip<'a>(scene: DepthScene, sorted: impl Iterator<Item = &'a Corners>, 
 fn fill_triangle(setup: &TriangleSetup, plane: &Plane, masks: &mut RowMasks, band: &mut DepthBand) {
     let bounds = setup.bounds;
     let rect =
-        PixelBounds { min_y: bounds.min_y.max(band.y0), max_y: bounds.max_y.min(band.y0 + band.rows() - 1), ..bounds };
+        PixelBounds { min_y: bounds.min_y.max(band.y0), max_y: bounds.max_y.min(band.y0 + band.rows - 1), ..bounds };
     if rect.min_y > rect.max_y {
         return;
     }
@@ -253,7 +250,7 @@ mod tests {
             return None;
         }
         let (stride, mut depth) = empty_band();
-        let mut band = DepthBand { y0: BAND.0, width: SIZE, stride, first: 1, depth: &mut depth };
+        let mut band = DepthBand { y0: BAND.0, rows: BAND.1, width: SIZE, stride, first: 1, depth: &mut depth };
         fill_triangle(
             &TriangleSetup { narrow, ..setup },
             &planes[DEPTH / LANES],

@@ -91,7 +91,13 @@ impl Framebuffer {
             .chunks_mut(band_pixels)
             .zip(self.depth.chunks_mut(band_pixels))
             .enumerate()
-            .map(move |(index, (color, depth))| Band { y0: index as u32 * rows, width, color, depth })
+            .map(move |(index, (color, depth))| Band {
+                y0: index as u32 * rows,
+                rows: (depth.len() / row_pixels.max(1)) as u32,
+                width,
+                color,
+                depth,
+            })
     }
 
     /// Writes the colour buffer to a PNG file.
@@ -104,19 +110,15 @@ impl Framebuffer {
 pub(crate) struct Band<'a> {
     /// First row of the band in framebuffer coordinates.
     pub y0: u32,
+    /// Number of rows in the band (kept, not divided out of the buffer lengths for each
+    /// triangle).
+    pub rows: u32,
     /// Row length in pixels.
     pub width: u32,
     /// RGBA8 pixels of the band's rows.
     pub color: &'a mut [[u8; 4]],
     /// Depth of the band's rows.
     pub depth: &'a mut [f32],
-}
-
-impl Band<'_> {
-    /// Number of rows in the band.
-    pub fn rows(&self) -> u32 {
-        (self.depth.len() / self.width.max(1) as usize) as u32
-    }
 }
 
 #[cfg(test)]
@@ -135,7 +137,7 @@ mod tests {
     #[test]
     fn bands_cover_every_row_once() {
         let mut fb = Framebuffer::new(5, 37);
-        let bands: Vec<(u32, u32)> = fb.bands_mut(16).map(|b| (b.y0, b.rows())).collect();
+        let bands: Vec<(u32, u32)> = fb.bands_mut(16).map(|b| (b.y0, b.rows)).collect();
         assert_eq!(bands, vec![(0, 16), (16, 16), (32, 5)]);
     }
 }
