@@ -220,7 +220,7 @@ impl TriangleSetup {
                 };
                 let varyings = order.map(|k| varyings[k]);
                 // Small or distant triangles skip the per-pixel division.
-                let affine = affine_is_close(inv_w, varyings, surface.tolerance);
+                let affine = affine_is_close(inv_w, varyings, surface.tolerance, read);
                 for (pack, plane) in planes.iter_mut().enumerate() {
                     if !read[pack] {
                         continue;
@@ -277,7 +277,8 @@ const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
 
 /// Whether interpolating in screen space keeps every value within `tolerance` of its
 /// perspective-correct interpolation, for a triangle with `1/w` of `inv_w` and values
-/// `varyings` at its vertices.
+/// `varyings` at its vertices. Only the packs of `read` are checked (the others' tolerances
+/// are infinite).
 ///
 /// Write the vertices' `1/w` as `m (1 + s_k)` with `0 <= s_k <= spread`, `spread` the ratio of
 /// the largest to the least less one. At a point with screen-space weights `b_k`, the
@@ -285,12 +286,12 @@ const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
 /// the covariance of `s` and the value under the weights `b`, divided by at least one: at
 /// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
 #[inline(always)]
-fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyings) -> bool {
+fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyings, read: [bool; PACKS]) -> bool {
     // Plain comparisons: `1/w` is finite, so the NaN handling of `f32::max` is not needed.
     let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
     let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
     let quarter_spread = Vec4::splat(spread * 0.25);
-    (0..VARYINGS).step_by(LANES).all(|k| {
+    (0..VARYINGS).step_by(LANES).filter(|k| read[k / LANES]).all(|k| {
         let [v0, v1, v2] = varyings.map(|v| Vec4::from_slice(&v[k..]));
         let range = v0.max(v1).max(v2) - v0.min(v1).min(v2);
         (quarter_spread * range).cmple(Vec4::from_slice(&tolerance[k..])).all()
@@ -387,7 +388,7 @@ mod tests {
         ) {
             let inv_w = spread.map(|s| inv_w * (1.0 + s));
             let tolerance = [0.002; VARYINGS];
-            prop_assume!(affine_is_close(inv_w, [&[0.0; VARYINGS], &v1, &v2], &tolerance));
+            prop_assume!(affine_is_close(inv_w, [&[0.0; VARYINGS], &v1, &v2], &tolerance, [true; PACKS]));
             let (b1, b2) = if weights.0 + weights.1 > 1.0 { (1.0 - weights.0, 1.0 - weights.1) } else { weights };
             let error = affine_error(inv_w, [1.0 - b1 - b2, b1, b2]);
             for k in 0..VARYINGS {
@@ -414,11 +415,15 @@ mod tests {
         let error = affine_error(inv_w, [0.5, 0.5, 0.0]).0;
         assert!((error - 0.0025 / 1.005).abs() < 1e-6, "{error}");
         let zero = [0.0; VARYINGS];
-        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0026; VARYINGS]));
-        assert!(!affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0024; VARYINGS]));
+        let all = [true; PACKS];
+        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0026; VARYINGS], all));
+        assert!(!affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0024; VARYINGS], all));
         // Values not interpolated are not checked.
         let mut tolerance = [0.0024; VARYINGS];
         tolerance[0] = f32::INFINITY;
-        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &tolerance));
+        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &tolerance, all));
+        let mut read = all;
+        read[0] = false;
+        assert!(affine_is_close(inv_w, [&zero, &v1, &zero], &[0.0024; VARYINGS], read));
     }
 }

@@ -86,7 +86,7 @@ fn tile_rect(tx: u32, y0: u32, width: u32, rows: u32) -> PixelBounds {
 pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &mut BandScratch) -> BandCounts {
     band.color.fill(context.frame.background);
     band.depth.fill(FAR_DEPTH);
-    let (rows, width) = (band.rows(), band.width);
+    let (rows, width) = (band.rows, band.width);
     let mut target = band;
     scratch.tiles.clear();
     scratch
@@ -199,7 +199,7 @@ fn draw_triangle<C: CompiledPass + Interpolated>(
     let viewport = draw.context.view.viewport;
     let Some((setup, planes)) = TriangleSetup::new::<C>(vertices, varyings, viewport, surface) else { return 0 };
     let bounds = setup.bounds;
-    let last_row = band.y0 + band.rows() - 1;
+    let last_row = band.y0 + band.rows - 1;
     if bounds.max_y < band.y0 || bounds.min_y > last_row {
         // Part of a clipped triangle that reaches other bands.
         return 0;
@@ -273,27 +273,46 @@ impl Walk {
     /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
     pub(crate) fn covered_runs(&self, rows: &mut RowMasks, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
+        let width = self.rect.max_x - self.rect.min_x + 1;
+        if self.narrow && width <= MASK_PIXELS {
+            // Most walks: a row's pixels fit one mask, found and visited at once.
+            let steps = i32::mask_steps(self.step_x);
+            let valid = u32::MAX >> (u32::BITS - width);
+            let mut edges = self.start.map(|e| e as i32);
+            let mut fragments = 0;
+            for y in self.rect.min_y..=self.rect.max_y {
+                let coverage = i32::coverage(edges, &steps) & valid;
+                edges = add(edges, self.step_y);
+                fragments += self.visit_row(y, coverage.into(), &mut visit);
+            }
+            return fragments;
+        }
         if self.narrow {
             // The start fits too: it is one of the values the walk computes.
             self.coverage(self.start.map(|e| e as i32), self.step_x, self.step_y, rows);
         } else {
             self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), rows);
         }
-        let mut fragments = 0;
-        for (y, &coverage) in (self.rect.min_y..=self.rect.max_y).zip(rows.iter()) {
-            if coverage == 0 {
-                continue;
-            }
-            let mut x = coverage.trailing_zeros();
-            fragments += u64::from(u64::BITS - coverage.leading_zeros() - x);
-            let mut rest = coverage >> x;
-            while rest != 0 {
-                visit(y, self.rect.min_x + x, (rest & RUN_MASK) as u32);
-                rest >>= LANES;
-                x += LANES as u32;
-            }
+        let rows = (self.rect.min_y..=self.rect.max_y).zip(rows.iter());
+        rows.map(|(y, &coverage)| self.visit_row(y, coverage, &mut visit)).sum()
+    }
+
+    /// Visits the runs of row `y`, whose covered pixels are the set bits of `coverage` (bit
+    /// `k` for the rect's pixel `k`), as [`Walk::covered_runs`] does; returns how many there are.
+    #[inline(always)]
+    fn visit_row(&self, y: u32, coverage: u64, visit: &mut impl FnMut(u32, u32, u32)) -> u64 {
+        if coverage == 0 {
+            return 0;
         }
-        fragments
+        let mut x = coverage.trailing_zeros();
+        let covered = u64::from(u64::BITS - coverage.leading_zeros() - x);
+        let mut rest = coverage >> x;
+        while rest != 0 {
+            visit(y, self.rect.min_x + x, (rest & RUN_MASK) as u32);
+            rest >>= LANES;
+            x += LANES as u32;
+        }
+        covered
     }
 
     /// Writes which pixels of the rect the triangle covers into the first rows of `rows`, with
