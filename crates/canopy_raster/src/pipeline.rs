@@ -572,22 +572,21 @@ pub(crate) fn edge(a: (i64, i64), b: (i64, i64), p: (i64, i64)) -> i64 {
 /// The pixels whose centres lie in the bounding box of `corners` (sub-pixel units), clipped to
 /// a `width` x `height` target.
 pub(crate) fn pixel_bounds(corners: [(i64, i64); 3], width: u32, height: u32) -> Option<PixelBounds> {
-    // Pixel (px, py) is sampled at its centre, (px + 1/2, py + 1/2).
+    let (min_x, max_x) = pixel_span(corners.map(|c| c.0), width)?;
+    let (min_y, max_y) = pixel_span(corners.map(|c| c.1), height)?;
+    Some(PixelBounds { min_x, max_x, min_y, max_y })
+}
+
+/// The first and last of `size` pixel columns (or rows) whose centres lie between the least
+/// and the greatest of `coordinates` (sub-pixel units); `None` when there is none.
+#[inline(always)]
+pub(crate) fn pixel_span(coordinates: [i64; 3], size: u32) -> Option<(u32, u32)> {
+    // Pixel p is sampled at its centre, p + 1/2.
     let half = SUBPIXEL_STEPS / 2;
-    let first = |v: i64| (v - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS);
-    let last = |v: i64| (v - half).div_euclid(SUBPIXEL_STEPS);
-    let xs = corners.map(|c| c.0);
-    let ys = corners.map(|c| c.1);
-    let min_x = first(xs[0].min(xs[1]).min(xs[2])).max(0);
-    let max_x = last(xs[0].max(xs[1]).max(xs[2])).min(width as i64 - 1);
-    let min_y = first(ys[0].min(ys[1]).min(ys[2])).max(0);
-    let max_y = last(ys[0].max(ys[1]).max(ys[2])).min(height as i64 - 1);
-    (min_x <= max_x && min_y <= max_y).then_some(PixelBounds {
-        min_x: min_x as u32,
-        max_x: max_x as u32,
-        min_y: min_y as u32,
-        max_y: max_y as u32,
-    })
+    let [a, b, c] = coordinates;
+    let first = (a.min(b).min(c) - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS).max(0);
+    let last = (a.max(b).max(c) - half).div_euclid(SUBPIXEL_STEPS).min(i64::from(size) - 1);
+    (first <= last).then_some((first as u32, last as u32))
 }
 #[cfg(test)]
 mod tests {

@@ -2,14 +2,14 @@
 //! triangles up and draw them at once.
 //!
 //! Sorting reads only the projected vertices: it drops triangles wholly outside the view
-//! volume or covering no pixel centre, and lists each other triangle, as its three vertex
+//! volume or between two rows of pixel centres, and lists each other triangle, as its three vertex
 //! indices, in every strip its pixel rows reach. Runs of triangles are sorted in parallel, and
 //! a strip reads the runs in order, so it sees its triangles in draw order. Keeping indices
 //! instead of set-up triangles keeps the data between the two stages small: a strip sets its
 //! triangles up right before drawing them, while they are in the core's cache.
 
 use crate::clip::outside;
-use crate::pipeline::{Instance, Span, View, instance_runs, pixel_bounds, runs, triangle_count};
+use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, runs, triangle_count};
 use bevy_tasks::TaskPool;
 
 /// The vertex indices of one triangle, in the frame's global numbering.
@@ -66,9 +66,9 @@ fn sort(corners: Corners, view: View, rows: u32, sorted: &mut [Vec<Corners>]) {
     let strips = if (a.code | b.code | c.code) & outside::CLIPPED != 0 {
         0..sorted.len()
     } else {
-        let p = [a, b, c].map(|v| (i64::from(v.x), i64::from(v.y)));
-        let Some(bounds) = pixel_bounds(p, view.viewport.width, view.viewport.height) else { return };
-        (bounds.min_y / rows) as usize..(bounds.max_y / rows) as usize + 1
+        // Columns are left to the setup, which drops a triangle covering none.
+        let Some((first, last)) = pixel_span([a, b, c].map(|v| i64::from(v.y)), view.viewport.height) else { return };
+        (first / rows) as usize..(last / rows) as usize + 1
     };
     for strip in &mut sorted[strips] {
         strip.push(corners);

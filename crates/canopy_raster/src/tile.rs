@@ -20,7 +20,7 @@ use crate::sort::{Corners, Sorted};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::iter::Peekable;
 use std::ops::{Add, Mul};
-use wide::{f32x4, i32x8, u32x4};
+use wide::{f32x4, i32x4, i32x8, u32x4};
 
 /// A tile's farthest depth is read anew once this many pixels have been covered in it since the
 /// last reading, times the tile's area: the reading then costs at most one depth read per
@@ -388,7 +388,11 @@ impl EdgeValue for i32 {
 
     #[inline(always)]
     fn mask_steps(step_x: [i32; 3]) -> [i32x8; 3] {
-        step_x.map(|s| i32x8::new(std::array::from_fn(|k| k as i32 * s)))
+        // Sums rather than products: SSE2 has no 32-bit lane multiplication.
+        step_x.map(|s| {
+            let first = i32x4::new([0, s, s + s, s + s + s]);
+            bytemuck::cast([first, first + i32x4::splat(s << 2)])
+        })
     }
 
     #[inline(always)]
