@@ -2,11 +2,11 @@
 //! triangles up and draw them at once.
 //!
 //! Sorting reads only the projected vertices: it drops triangles wholly outside the view
-//! volume or between two rows of pixel centres, and lists each other triangle, as its three vertex
-//! indices, in every strip its pixel rows reach. Runs of triangles are sorted in parallel, and
-//! a strip reads the runs in order, so it sees its triangles in draw order. Keeping indices
-//! instead of set-up triangles keeps the data between the two stages small: a strip sets its
-//! triangles up right before drawing them, while they are in the core's cache.
+//! volume or between two rows of pixel centres, and lists each other triangle, as its three
+//! vertex indices, in every strip its pixel rows reach. Runs of triangles are sorted in
+//! parallel, and a strip reads the runs in order, so it sees its triangles in draw order.
+//! Keeping indices instead of set-up triangles keeps the data between the two stages small: a
+//! strip sets its triangles up right before drawing them, while they are in the core's cache.
 
 use crate::clip::outside;
 use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, runs, triangle_count};

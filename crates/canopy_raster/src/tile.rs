@@ -298,7 +298,8 @@ impl Walk {
     }
 
     /// Visits the runs of row `y`, whose covered pixels are the set bits of `coverage` (bit
-    /// `k` for the rect's pixel `k`), as [`Walk::covered_runs`] does; returns how many there are.
+    /// `k` for the rect's pixel `k`), as [`Walk::covered_runs`] does; returns how many pixels
+    /// are covered.
     #[inline(always)]
     fn visit_row(&self, y: u32, coverage: u64, visit: &mut impl FnMut(u32, u32, u32)) -> u64 {
         if coverage == 0 {
