@@ -15,7 +15,7 @@ use crate::setup::{BiasedDepth, DEPTH, LANES, Plane, Surface, TriangleSetup};
 use crate::shade::{VARYINGS, Varyings, lanes_of};
 use crate::shadow::ShadowMap;
 use crate::sort::{Corners, Sorted};
-use crate::tile::{RowMasks, Walk, covered};
+use crate::tile::{RowMasks, Walk, covered, lane_multiples};
 use bevy_math::{Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use wide::{f32x4, f32x8, i32x8};
@@ -155,7 +155,7 @@ fn fill_windows(setup: &TriangleSetup, plane: &Plane, rect: PixelBounds, band: &
     let mut row_edges: [i32x8; 3] = std::array::from_fn(|k| {
         let first =
             setup.start[k] + i64::from(x0) * i64::from(setup.step_x[k]) + i64::from(y0) * i64::from(setup.step_y[k]);
-        i32x8::splat(first as i32) + lanes * i32x8::splat(setup.step_x[k])
+        i32x8::splat(first as i32) + lane_multiples(setup.step_x[k])
     });
     let row_step = setup.step_y.map(i32x8::splat);
     let lane_depths = f32x8::new(WINDOW_LANES.map(|k| k as f32)) * plane.dx.x;

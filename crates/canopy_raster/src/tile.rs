@@ -389,11 +389,7 @@ impl EdgeValue for i32 {
 
     #[inline(always)]
     fn mask_steps(step_x: [i32; 3]) -> [i32x8; 3] {
-        // Sums rather than products: SSE2 has no 32-bit lane multiplication.
-        step_x.map(|s| {
-            let first = i32x4::new([0, s, s + s, s + s + s]);
-            bytemuck::cast([first, first + i32x4::splat(s << 2)])
-        })
+        step_x.map(lane_multiples)
     }
 
     #[inline(always)]
@@ -406,6 +402,15 @@ impl EdgeValue for i32 {
     fn from_u32(value: u32) -> Self {
         value as i32
     }
+}
+
+/// `k` times `step` in lane `k` of eight: an edge function's offsets from a group's first
+/// pixel to each of its pixels.
+#[inline(always)]
+pub(crate) fn lane_multiples(step: i32) -> i32x8 {
+    // Sums rather than products: SSE2 has no 32-bit lane multiplication.
+    let first = i32x4::new([0, step, step + step, step + step + step]);
+    bytemuck::cast([first, first + i32x4::splat(step << 2)])
 }
 
 /// Edge functions advanced by one step.
