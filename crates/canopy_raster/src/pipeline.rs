@@ -1,6 +1,7 @@
 //! The frame pipeline: a parallel vertex stage, then (when shadows are on) the shadow map's
 //! depth pass (module `depth`), then the image: its triangles sorted into bands of tile rows
-//! (module `sort`), then the bands drawn in parallel (module `tile`).
+//! (module `sort`), then the bands drawn in parallel (module `tile`) and, with shadows,
+//! darkened where the light does not reach.
 //!
 //! A band takes the triangles reaching it in draw order, clips those crossing the near plane
 //! or the guard band, sets each up (module `setup`: culling, pixel bounds, edge functions and
@@ -16,9 +17,9 @@ use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
 use crate::setup::Viewport;
 use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
-use crate::shadow::{ShadowMap, fit_light};
+use crate::shadow::{PixelsInMap, ShadowMap, fit_light};
 use crate::sort::Sorted;
-use crate::tile::{self, BandScratch, TileContext};
+use crate::tile::{self, BandScratch, BandShadow, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
@@ -272,7 +273,12 @@ impl Renderer {
             vertices: &self.vertices,
             viewport: Viewport { width, height, cull_back_faces: true },
         };
-        let shadow = self.shadow.is_active().then_some(&self.shadow);
+        let shadow = self.shadow.is_active().then(|| BandShadow {
+            map: &self.shadow,
+            pixels: PixelsInMap::new(&self.shadow, view_projection, width, height),
+            light: frame.light,
+            filtered: settings.pcf,
+        });
         self.sorted.sort(pool, &self.spans, frame.instances, view, TILE_HEIGHT);
         let context = TileContext {
             frame,
@@ -417,20 +423,17 @@ impl VertexStage<'_> {
                 ScreenVertex::lanes(&ClipLanes::transform(self.view_projection, world), self.width, self.height);
             let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
             let diffuse = self.frame.light.diffuse_lanes(normal);
-            let light = self.light.map(|(light_clip, size)| {
-                let clip = ClipLanes::transform(light_clip, world);
-                (ScreenVertex::lanes(&clip, size, size), columns([clip.x, clip.y, clip.z, clip.w]), size)
-            });
+            let light = self
+                .light
+                .map(|(light_clip, size)| ScreenVertex::lanes(&ClipLanes::transform(light_clip, world), size, size));
             let (world, normal, diffuse) = (columns(world), columns(normal), diffuse.to_array());
             for (k, i) in lanes.enumerate() {
                 out.world[i] = Vec3::from_array(world[k]);
                 out.screen[i] = screen[k];
                 let normal = Vec3::from_array(normal[k]);
                 out.varyings[i] = vertex_varyings(instance, local + i, normal, diffuse[k], &self.frame.light, self.lit);
-                if let Some((vertices, clip, size)) = &light {
+                if let Some(vertices) = &light {
                     out.light[i] = vertices[k];
-                    let texel = ShadowMap::locate_clip(Vec4::from_array(clip[k]), *size);
-                    out.varyings[i][slot::SHADOW..slot::SHADOW + 3].copy_from_slice(&texel.to_array());
                 }
             }
         }
@@ -465,7 +468,7 @@ fn normalize_or_zero(v: ClipLanes) -> [Vec4; 3] {
     [v.x, v.y, v.z].map(|c| Vec4::select(valid, c * scale, Vec4::ZERO))
 }
 
-/// The varyings of one vertex before the shadow position is known.
+/// The varyings of one vertex.
 ///
 /// When `lit` the colour is the lit colour (Gouraud without shadows: nothing is left to light
 /// per pixel).
@@ -749,6 +752,39 @@ mod tests {
         let left = fb.pixel(16, 32)[0];
         assert!(right > centre + 50 && centre >= left, "{left} {centre} {right}");
         assert!(left.abs_diff(26) <= 1, "ambient floor 0.1 gives 26, got {left}");
+    }
+
+    #[test]
+    fn shadows_darken_only_drawn_pixels_and_leave_them_opaque() {
+        // A sphere over a floor, in an image whose rows do not split into whole runs.
+        let sphere = instance(MeshData::sphere(16, 32), Mat4::from_translation(Vec3::Y * 0.6), Vec3::ONE);
+        let floor = instance(MeshData::plane(4), Mat4::from_scale(Vec3::splat(3.0)), Vec3::ONE);
+        let instances = [sphere, floor];
+        let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 };
+        let camera = camera_at(Vec3::new(0.0, 2.0, 3.0), Vec3::ZERO);
+        let render = |shadows: bool| {
+            let mut target = Framebuffer::new(97, 61);
+            let settings = RenderSettings { shadows, ..RenderSettings::default() };
+            let frame = Frame { camera, light, background: [10, 20, 30, 40], instances: &instances, settings };
+            Renderer::default().render(&mut target, &TaskPool::new(), &frame);
+            target
+        };
+        let (lit, shadowed) = (render(false), render(true));
+        assert_eq!(lit.depth(), shadowed.depth());
+        let pixels = |image: &Framebuffer| image.color().chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]).collect();
+        let (lit, shadowed): (Vec<[u8; 4]>, Vec<[u8; 4]>) = (pixels(&lit), pixels(&shadowed));
+        let mut darker = 0;
+        for (a, b) in lit.iter().zip(&shadowed) {
+            if *a == [10, 20, 30, 40] {
+                assert_eq!(a, b, "the background is left as it is");
+                continue;
+            }
+            assert_eq!(b[3], 255, "drawn pixels are opaque");
+            assert!(b[..3].iter().zip(&a[..3]).all(|(s, l)| s <= l), "shadows only darken: {a:?} {b:?}");
+            darker += usize::from(b != a);
+        }
+        // The sphere's shadow on the floor, under it.
+        assert!(darker > 20, "{darker} pixels in shadow");
     }
 
     #[test]

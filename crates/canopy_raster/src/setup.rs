@@ -24,15 +24,26 @@ use bevy_math::Vec4;
 pub(crate) const LANES: usize = 4;
 
 /// Four-value packs of interpolated values: the [`Varyings`] four to a pack, then depth and
-/// `1/w`.
-pub(crate) const PACKS: usize = VARYINGS / LANES + 1;
+/// `1/w` (sharing the last pack of varyings when it has room).
+pub(crate) const PACKS: usize = (VARYINGS + 2).div_ceil(LANES);
 
 /// Where depth and `1/w` are, counted over all packs.
 pub(crate) const DEPTH: usize = VARYINGS;
 pub(crate) const INV_W: usize = VARYINGS + 1;
+const _: () = assert!(DEPTH / LANES == INV_W / LANES, "depth and 1/w share a pack");
+
+/// Pack `pack` of a vertex's varyings, with zeros in the lanes past the last varying.
+#[inline(always)]
+fn pack_of(varyings: &Varyings, pack: usize) -> Vec4 {
+    let first = pack * LANES;
+    match varyings.get(first..first + LANES) {
+        Some(values) => Vec4::from_slice(values),
+        None => Vec4::from_array(std::array::from_fn(|lane| varyings.get(first + lane).copied().unwrap_or(0.0))),
+    }
+}
 
 /// Each lane's offset from a run's first pixel.
-const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
+pub(crate) const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
 
 /// A target triangles are set up for.
 #[derive(Debug, Clone, Copy)]
@@ -117,7 +128,7 @@ pub(crate) const fn packs_read(pass: Pass) -> [bool; PACKS] {
     let mut read = [false; PACKS];
     let mut pack = 0;
     while pack < PACKS {
-        read[pack] = pack * LANES >= VARYINGS;
+        read[pack] = pack == DEPTH / LANES;
         let mut k = pack * LANES;
         while k < (pack + 1) * LANES && k < VARYINGS {
             read[pack] |= pass.uses(k);
@@ -225,12 +236,14 @@ impl TriangleSetup {
                     if !read[pack] {
                         continue;
                     }
-                    let values = std::array::from_fn(|vertex| match pack * LANES {
-                        first if first < VARYINGS => {
-                            let scale = if affine { 1.0 } else { inv_w[vertex] };
-                            Vec4::from_slice(&varyings[vertex][first..]) * scale
+                    let values = std::array::from_fn(|vertex| {
+                        let scale = if affine { 1.0 } else { inv_w[vertex] };
+                        let mut values = pack_of(varyings[vertex], pack) * scale;
+                        if pack == DEPTH / LANES {
+                            values[DEPTH % LANES] = z[vertex];
+                            values[INV_W % LANES] = inv_w[vertex];
                         }
-                        _ => Vec4::new(z[vertex], inv_w[vertex], 0.0, 0.0),
+                        values
                     });
                     *plane = Plane::through(values, &weights);
                 }
@@ -291,10 +304,11 @@ fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyin
     let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
     let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
     let quarter_spread = Vec4::splat(spread * 0.25);
-    (0..VARYINGS).step_by(LANES).filter(|k| read[k / LANES]).all(|k| {
-        let [v0, v1, v2] = varyings.map(|v| Vec4::from_slice(&v[k..]));
+    (0..VARYINGS.div_ceil(LANES)).filter(|&pack| read[pack]).all(|pack| {
+        let [v0, v1, v2] = varyings.map(|v| pack_of(v, pack));
         let range = v0.max(v1).max(v2) - v0.min(v1).min(v2);
-        (quarter_spread * range).cmple(Vec4::from_slice(&tolerance[k..])).all()
+        // Lanes past the last varying have no range, and pass against a zero tolerance.
+        (quarter_spread * range).cmple(pack_of(tolerance, pack)).all()
     })
 }
 
@@ -347,12 +361,13 @@ mod tests {
     fn a_setup_computes_only_the_packs_its_pass_reads() {
         let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
         let read = |pass: Pass| packs_read(pass).iter().filter(|&&read| read).count();
-        // Colour and depth; then normals and u; then v and the shadow position too.
+        // Colour (and diffuse term), and v with depth and 1/w; then normals and u too.
         assert_eq!(read(pass(Shading::Gouraud, false, false)), 2);
+        assert_eq!(read(pass(Shading::Gouraud, false, true)), 2);
         assert_eq!(read(pass(Shading::Phong, false, false)), 3);
-        assert_eq!(read(pass(Shading::Phong, true, true)), 4);
+        assert_eq!(read(pass(Shading::Gouraud, true, false)), 3);
         let plain = pass(Shading::Gouraud, false, false);
-        assert_eq!(packs_read(plain), [true, false, false, true]);
+        assert_eq!(packs_read(plain), [true, false, true]);
 
         let varyings: [Varyings; 3] =
             std::array::from_fn(|k| std::array::from_fn(|i| (k * VARYINGS + i) as f32 * 0.01));
@@ -366,13 +381,13 @@ mod tests {
         )
         .unwrap();
         assert_eq!(setup.flat_diffuse, 0.25);
-        // The packs of values the pass does not read (non-zero at the vertices) stay zero.
-        assert_eq!((planes[1], planes[2]), (Plane::default(), Plane::default()));
+        // A pack of values the pass does not read (non-zero at the vertices) stays zero.
+        assert_eq!(planes[1], Plane::default());
         // The colour plane reproduces vertex 0's colour at its corner, the pixel offset
         // (-1/2, -1/2) from the first pixel's centre.
         let colour = planes[0].at(-0.5, -0.5);
         assert!((colour.x - varyings[0][0]).abs() < 1e-5 && (colour.z - varyings[0][2]).abs() < 1e-5, "{colour}");
-        assert_eq!(planes[DEPTH / LANES].at(3.0, 7.0).x, 0.5, "constant depth");
+        assert_eq!(planes[DEPTH / LANES].at(3.0, 7.0)[DEPTH % LANES], 0.5, "constant depth");
     }
 
     proptest! {
@@ -382,8 +397,8 @@ mod tests {
         fn affine_interpolation_stays_within_tolerance(
             inv_w in 0.2f32..5.0,
             spread in prop::array::uniform3(0.0f32..0.01),
-            v1 in prop::array::uniform12(-1.0f32..1.0),
-            v2 in prop::array::uniform12(-1.0f32..1.0),
+            v1 in prop::array::uniform9(-1.0f32..1.0),
+            v2 in prop::array::uniform9(-1.0f32..1.0),
             weights in (0.0f32..1.0, 0.0f32..1.0),
         ) {
             let inv_w = spread.map(|s| inv_w * (1.0 + s));

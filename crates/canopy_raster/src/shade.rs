@@ -5,7 +5,6 @@
 //! depends on the shading mode, the texture and shadows, chosen once per triangle so that the
 //! pixel loops are compiled for each combination.
 
-use crate::shadow::CONSTANT_BIAS;
 use crate::texture::{Sampler, Texture};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
@@ -49,7 +48,7 @@ impl Material {
 }
 
 /// Number of values interpolated across triangles.
-pub const VARYINGS: usize = 12;
+pub const VARYINGS: usize = 9;
 
 /// The values a vertex hands to the pixels of its triangles, indexed by the [`slot`] constants.
 pub type Varyings = [f32; VARYINGS];
@@ -57,31 +56,27 @@ pub type Varyings = [f32; VARYINGS];
 /// Where each value lives in [`Varyings`].
 pub mod slot {
     /// Base colour, RGB: material colour times vertex colour (times the light's intensity for
-    /// Gouraud shading without shadows).
+    /// Gouraud shading without shadows: with shadows, light is applied once a pixel's shadow is
+    /// known).
     pub const COLOR: usize = 0;
-    /// The light's diffuse term at the vertex (Gouraud).
+    /// The light's diffuse term at the vertex (Gouraud with shadows).
     pub const DIFFUSE: usize = 3;
     /// World-space unit normal, xyz (Phong).
     pub const NORMAL: usize = 4;
     /// Texture coordinates, uv.
     pub const UV: usize = 7;
-    /// Shadow-map position: texel x, texel y, light depth.
-    pub const SHADOW: usize = 9;
 }
 
 /// How far each value may be off when a triangle is interpolated in screen space instead of
 /// perspective-correctly, in the value's own units: a sixteenth of what a pixel can show of
 /// it. Colours, diffuse terms and normals reach the image through 8-bit channels; texture
-/// coordinates (on `texture`) and shadow-map positions are measured in texels; light depths
-/// against the shadow bias. Values `pass` does not read may be off by any amount.
+/// coordinates (on `texture`) are measured in texels. Values `pass` does not read may be off
+/// by any amount.
 pub(crate) fn affine_tolerances(pass: Pass, texture: Option<&Texture>) -> Varyings {
-    const LIGHT_DEPTH: usize = slot::SHADOW + 2;
     let texels = texture.map_or(1, |t| t.width().max(t.height())) as f32;
     std::array::from_fn(|index| match index {
         _ if !pass.uses(index) => f32::INFINITY,
-        slot::UV..slot::SHADOW => 1.0 / (16.0 * texels),
-        slot::SHADOW..LIGHT_DEPTH => 1.0 / 16.0,
-        LIGHT_DEPTH => CONSTANT_BIAS / 16.0,
+        slot::UV.. => 1.0 / (16.0 * texels),
         _ => 1.0 / (16.0 * 255.0),
     })
 }
@@ -102,8 +97,7 @@ impl Pass {
             // Gouraud without shadows interpolates the colour lit at the vertices.
             slot::DIFFUSE => matches!(self.shading, Shading::Gouraud) && self.shadowed,
             4..7 => matches!(self.shading, Shading::Phong),
-            7..9 => self.textured,
-            _ => self.shadowed,
+            _ => self.textured,
         }
     }
 }
@@ -172,7 +166,7 @@ mod tests {
         let pass = |shading, textured, shadowed| Pass { shading, textured, shadowed };
         assert_eq!(count(pass(Shading::Flat, false, false)), 3);
         assert_eq!(count(pass(Shading::Gouraud, false, false)), 3);
-        assert_eq!(count(pass(Shading::Gouraud, false, true)), 7);
+        assert_eq!(count(pass(Shading::Gouraud, false, true)), 4);
         assert_eq!(count(pass(Shading::Phong, true, true)), VARYINGS - 1);
     }
 }

@@ -5,12 +5,14 @@
 //! rasterizer, depth only, with a slope-scaled bias added to every stored depth so that lit
 //! surfaces do not shadow themselves. A pixel is lit when its own depth from the light is no
 //! greater than what the map holds there, optionally filtered over the four nearest texels
-//! (bilinear percentage-closer filtering).
+//! (bilinear percentage-closer filtering). Its place in the map follows from its position on
+//! the screen and its depth (see [`PixelsInMap`]), so a pixel looks the map up only once the
+//! nearest surface is known.
 
 use crate::camera::{Camera, Light};
 use crate::depth::WINDOW;
 use crate::shade::lanes_of;
-use bevy_math::{Mat4, Vec3, Vec4};
+use bevy_math::{DMat4, DVec4, Mat4, Vec3, Vec4};
 use wide::i32x4;
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
@@ -102,16 +104,10 @@ impl ShadowMap {
     }
 
     /// Where a world point falls in the map: texel x, texel y (from the top-left corner) and
-    /// light depth, the values the pixel stage interpolates.
+    /// light depth, as [`ShadowMap::visibility`] reads them.
     pub fn locate(&self, world: Vec3) -> Vec3 {
-        Self::locate_clip(self.clip_from_world * world.extend(1.0), self.size)
-    }
-
-    /// [`ShadowMap::locate`] of a point already in the light's clip space, on a map of `size`
-    /// texels a side.
-    #[inline(always)]
-    pub(crate) fn locate_clip(clip: Vec4, size: u32) -> Vec3 {
-        let size = size as f32;
+        let clip = self.clip_from_world * world.extend(1.0);
+        let size = self.size as f32;
         Vec3::new((clip.x + 1.0) * 0.5 * size, (1.0 - clip.y) * 0.5 * size, clip.z)
     }
 
@@ -127,6 +123,14 @@ impl ShadowMap {
     /// depth per lane. Any input, even NaN, reads inside the stored depths.
     #[inline(always)]
     pub fn visibility_lanes(&self, x: Vec4, y: Vec4, depth: Vec4, filtered: bool) -> Vec4 {
+        self.read(&self.taps(x, y, depth, filtered), filtered)
+    }
+
+    /// Where the lookups of four points (as in [`ShadowMap::visibility_lanes`]) read the map,
+    /// before any texel is read: finding the taps of many lookups first lets their reads wait
+    /// on memory together.
+    #[inline(always)]
+    pub(crate) fn taps(&self, x: Vec4, y: Vec4, depth: Vec4, filtered: bool) -> Taps {
         let (x, y) = if filtered { (x - 0.5, y - 0.5) } else { (x, y) };
         // Clamped into the border: a point off the map reads only border texels (with a zero
         // weight on the second texel of a pair when it sits on the far border).
@@ -135,21 +139,103 @@ impl ShadowMap {
         // whole part is the stored column and row, found four at a time by truncation.
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
-        let stride = self.stride();
-        let first = (row * i32x4::splat(stride as i32) + column).to_array().map(|i| i as usize);
+        let first = row * i32x4::splat(self.stride() as i32) + column;
         let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());
-        let (column, row) = (whole(column), whole(row));
-        let lit = |texels: [f32; 4]| Vec4::select(depth.cmple(Vec4::from_array(texels)), Vec4::ONE, Vec4::ZERO);
+        Taps { first, right: x - whole(column), down: y - whole(row), depth }
+    }
+
+    /// The light reaching the four points of `taps` (see [`ShadowMap::visibility_lanes`]).
+    #[inline(always)]
+    pub(crate) fn read(&self, taps: &Taps, filtered: bool) -> Vec4 {
+        let first = taps.first.to_array().map(|i| i as usize);
+        let lit = |texels: [f32; 4]| Vec4::select(taps.depth.cmple(Vec4::from_array(texels)), Vec4::ONE, Vec4::ZERO);
         if !filtered {
             return lit(std::array::from_fn(|lane| self.depth[first[lane]]));
         }
         // Each lane's two-by-two texels, from one slice of the stored depths.
+        let stride = self.stride();
         let quads: [&[f32]; 4] = std::array::from_fn(|lane| &self.depth[first[lane]..][..stride + 2]);
         let corner = |k: usize| lit(std::array::from_fn(|lane| quads[lane][k]));
-        let (tx, ty) = (x - column, y - row);
+        let (tx, ty) = (taps.right, taps.down);
         let top = corner(0) * (Vec4::ONE - tx) + corner(1) * tx;
         let bottom = corner(stride) * (Vec4::ONE - tx) + corner(stride + 1) * tx;
         top * (Vec4::ONE - ty) + bottom * ty
+    }
+}
+
+/// Where the lookups of four points read a [`ShadowMap`] (see [`ShadowMap::taps`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Taps {
+    /// Each lane's texel, the top-left one of its two-by-two when filtered, as an index into
+    /// the stored depths.
+    first: i32x4,
+    /// The weights of the right and the lower texels of a two-by-two.
+    right: Vec4,
+    down: Vec4,
+    /// The points' light depths.
+    depth: Vec4,
+}
+
+/// Where the camera's pixels fall in a shadow map: the projective map from a pixel's position
+/// and depth to its texel position and light depth.
+///
+/// A pixel's depth and position on the screen determine the world point it shows, so its place
+/// in the map follows from them alone, exactly (the light's projection is orthographic, the
+/// camera's perspective: one division per pixel). Lookups can then wait until a band is drawn
+/// and be made once per visible pixel.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PixelsInMap {
+    /// The homogeneous map position (texel x, texel y, light depth, all times `w`, then `w`)
+    /// of a pixel centre, as lanes of those four: its change per pixel to the right, per pixel
+    /// down and per unit of depth, and its value at pixel (0, 0) at depth 0.
+    per_x: Vec4,
+    per_y: Vec4,
+    per_depth: Vec4,
+    origin: Vec4,
+}
+
+impl PixelsInMap {
+    /// The map of pixels of a `width` x `height` image seen through `clip_from_world` onto
+    /// `map`.
+    pub(crate) fn new(map: &ShadowMap, clip_from_world: Mat4, width: u32, height: u32) -> Self {
+        // Composed in double precision: the camera's inverse projection is ill-conditioned
+        // near the far plane.
+        let size = f64::from(map.size);
+        let texel_from_clip = DMat4::from_cols(
+            DVec4::new(size * 0.5, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, -size * 0.5, 0.0, 0.0),
+            DVec4::Z,
+            DVec4::new(size * 0.5, size * 0.5, 0.0, 1.0),
+        );
+        let (w, h) = (f64::from(width.max(1)), f64::from(height.max(1)));
+        // Pixel (x, y) is sampled at its centre, (x + 1/2, y + 1/2).
+        let ndc_from_pixel = DMat4::from_cols(
+            DVec4::new(2.0 / w, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, -2.0 / h, 0.0, 0.0),
+            DVec4::Z,
+            DVec4::new(1.0 / w - 1.0, 1.0 - 1.0 / h, 0.0, 1.0),
+        );
+        let map_from_pixel =
+            texel_from_clip * map.clip_from_world.as_dmat4() * clip_from_world.as_dmat4().inverse() * ndc_from_pixel;
+        let column = |k: usize| map_from_pixel.col(k).as_vec4();
+        Self { per_x: column(0), per_y: column(1), per_depth: column(2), origin: column(3) }
+    }
+
+    /// The homogeneous map position of the pixel column 0 of row `y` at depth 0, before the
+    /// row's pixels and depths are added (see [`PixelsInMap::locate`]).
+    #[inline(always)]
+    pub(crate) fn row(&self, y: u32) -> Vec4 {
+        self.origin + self.per_y * y as f32
+    }
+
+    /// Texel x, texel y and light depth of four pixels of the row whose
+    /// [`PixelsInMap::row`] is `row`, at columns `x` and depths `depth` (one pixel per lane),
+    /// as [`ShadowMap::visibility_lanes`] reads them.
+    #[inline(always)]
+    pub(crate) fn locate(&self, row: Vec4, x: Vec4, depth: Vec4) -> [Vec4; 3] {
+        let at = |k: usize| Vec4::splat(row[k]) + x * self.per_x[k] + depth * self.per_depth[k];
+        let inv_w = at(3).recip();
+        [at(0) * inv_w, at(1) * inv_w, at(2) * inv_w]
     }
 }
 
@@ -248,6 +334,37 @@ mod tests {
         let (camera, light) = overhead();
         let behind = (Vec3::new(-1.0, 0.0, 50.0), Vec3::new(1.0, 1.0, 52.0));
         assert!(fit_light(&camera, 1.5, &light, behind).is_none());
+    }
+
+    #[test]
+    fn pixels_find_in_the_map_where_their_world_points_fall() {
+        let (camera, light) = overhead();
+        let (width, height) = (97, 61);
+        let aspect = width as f32 / height as f32;
+        let bounds = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.5, 1.0));
+        let mut map = ShadowMap::default();
+        map.reset(512, fit_light(&camera, aspect, &light, bounds));
+        let clip_from_world = camera.view_projection(aspect);
+        let pixels = PixelsInMap::new(&map, clip_from_world, width, height);
+        // Points near and far: each seen at some pixel position and depth, which must lead
+        // back to the map position of the point itself.
+        for world in [Vec3::new(0.3, 0.2, 0.5), Vec3::new(-0.9, 0.0, -0.8), Vec3::new(0.7, 0.45, -0.95)] {
+            let ndc = clip_from_world.project_point3(world);
+            // Pixel x covers [x, x + 1) and is sampled at its centre.
+            let x = (ndc.x + 1.0) * 0.5 * width as f32 - 0.5;
+            let y = (1.0 - ndc.y) * 0.5 * height as f32 - 0.5;
+            let row = y.floor() as u32;
+            let rest_of_row = pixels.per_y * (y - row as f32);
+            let [tx, ty, depth] = pixels.locate(pixels.row(row) + rest_of_row, Vec4::splat(x), Vec4::splat(ndc.z));
+            let expected = map.locate(world);
+            assert!(
+                (tx.x - expected.x).abs() < 0.01 && (ty.x - expected.y).abs() < 0.01,
+                "{world}: {tx} {ty} {expected}"
+            );
+            // Far from the camera, depth resolves its distance coarsely: still far below the
+            // bias.
+            assert!((depth.x - expected.z).abs() < CONSTANT_BIAS / 20.0, "{world}: {depth} {expected}");
+        }
     }
 
     #[test]

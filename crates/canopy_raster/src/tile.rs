@@ -7,15 +7,20 @@
 //!
 //! Each tile keeps a conservative farthest depth of what it holds; a triangle entirely behind
 //! it is skipped before any of its pixels is visited.
+//!
+//! With shadows, pixels are drawn lit as if the light reached them all; once a band's
+//! triangles are drawn, its visible pixels look the shadow map up, once each, and those the
+//! light does not reach are darkened.
 
+use crate::camera::Light;
 use crate::clip::outside;
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
-use crate::setup::{DEPTH, INV_W, Interpolated, LANES, PACKS, Planes, Surface, TriangleSetup};
+use crate::setup::{DEPTH, INV_W, Interpolated, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup};
 use crate::shade::{
     CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, lanes_of, slot, with_compiled_pass,
 };
-use crate::shadow::ShadowMap;
+use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::iter::Peekable;
@@ -38,7 +43,8 @@ pub(crate) struct TileContext<'a> {
     pub view: View<'a>,
     /// The triangles reaching each band.
     pub sorted: &'a Sorted,
-    pub shadow: Option<&'a ShadowMap>,
+    /// The shadow map and how to light the bands with it, when shadows are on.
+    pub shadow: Option<BandShadow<'a>>,
 }
 
 /// A band's working buffers, kept between frames so that a frame of steady size does not
@@ -112,6 +118,9 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &m
         let draw = Draw { instance, material, context };
         counts.triangles +=
             with_compiled_pass!(pass, draw_instance(&mut entries, &draw, scratch, &mut masks, &mut target));
+    }
+    if let Some(shadow) = &context.shadow {
+        light_band(&mut target, shadow);
     }
     for tile in &scratch.tiles {
         counts.fragments += tile.fragments;
@@ -534,14 +543,11 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
             cosine.max(Vec4::ZERO) * light.diffuse
         }
     };
-    let mut visibility = Vec4::ONE;
-    if shadowed && let Some(map) = context.shadow {
-        let (sx, sy, depth) = (value(slot::SHADOW), value(slot::SHADOW + 1), value(slot::SHADOW + 2));
-        visibility = map.visibility_lanes(sx, sy, depth, context.frame.settings.pcf);
-    }
     let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
+    // Lit as if the light reached every pixel; with shadows, `light_band` darkens those it
+    // does not reach once the band is drawn.
     if mode != Shading::Gouraud || shadowed {
-        let intensity = (Vec4::splat(light.fill) + diffuse * visibility).max(Vec4::splat(light.ambient));
+        let intensity = (Vec4::splat(light.fill) + diffuse).max(Vec4::splat(light.ambient));
         for c in &mut rgb {
             *c *= intensity;
         }
@@ -561,14 +567,112 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
             *c *= Vec4::from_array(texels);
         }
     }
-    // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole number,
-    // in the low mantissa bits: a cheap exact conversion to bytes.
-    let [r, g, b] = rgb.map(|c| lanes_of(c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits());
-    let byte = u32x4::splat(0xff);
-    let pixels = (r & byte) | (g & byte) << 8 | (b & byte) << 16 | byte << 24;
+    let [r, g, b] = rgb.map(unit_bytes);
+    let alpha = if shadowed { unit_bytes(diffuse) } else { u32x4::splat(0xff) };
+    let pixels = r | g << 8 | b << 16 | alpha << 24;
     let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(*run.colors).map(u32::from_le));
     let blended = drawn.to_bits().bitselect(pixels, old);
     *run.colors = bytemuck::cast(blended.to_array().map(u32::to_le));
+}
+
+/// Each lane of `v`, clamped to `[0, 1]`, as a byte (0 to 255) in the low bits of its lane.
+#[inline(always)]
+fn unit_bytes(v: Vec4) -> u32x4 {
+    // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole number,
+    // in the low mantissa bits: a cheap exact conversion to bytes.
+    lanes_of(v.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits() & u32x4::splat(0xff)
+}
+
+/// Darkens the pixels of a band drawn with shadows where the light does not reach them: each
+/// drawn pixel holds its colour lit as if it did and, in alpha, its diffuse term; its
+/// shadow-map position follows from its depth.
+///
+/// The band is lit tile by tile (so that the texels read stay few), a tile row at a time: first
+/// the map positions of all its runs of [`LANES`] drawn pixels, then their reads and colours,
+/// so that the reads of many runs wait on memory together. Kept out of line: a pass of its
+/// own after the triangles, it does not belong in their loops' code.
+#[inline(never)]
+fn light_band(band: &mut Band, shadow: &BandShadow) {
+    const RUNS: usize = TILE_WIDTH as usize / LANES;
+    let width = band.width as usize;
+    let mut pending = [PendingRun::default(); RUNS];
+    for x0 in (0..width).step_by(TILE_WIDTH as usize) {
+        let x1 = (x0 + TILE_WIDTH as usize).min(width);
+        for row in 0..band.rows as usize {
+            let in_map = shadow.pixels.row(band.y0 + row as u32);
+            let row_start = row * width;
+            let mut count = 0;
+            for x in (x0..x1).step_by(LANES) {
+                let depths = &band.depth[row_start + x..row_start + x1.min(x + LANES)];
+                let depth = Vec4::from_array(run_of(depths, FAR_DEPTH));
+                let drawn = lanes_of(depth).simd_lt(f32x4::splat(FAR_DEPTH));
+                if drawn.none() {
+                    continue;
+                }
+                let [tx, ty, light_depth] = shadow.pixels.locate(in_map, Vec4::splat(x as f32) + LANE_OFFSETS, depth);
+                let taps = shadow.map.taps(tx, ty, light_depth, shadow.filtered);
+                pending[count] = PendingRun { x, drawn, taps, visibility: Vec4::ZERO };
+                count += 1;
+            }
+            for run in &mut pending[..count] {
+                run.visibility = shadow.map.read(&run.taps, shadow.filtered);
+            }
+            for run in &pending[..count] {
+                let visibility = run.visibility;
+                let colors = &mut band.color[row_start + run.x..row_start + x1.min(run.x + LANES)];
+                let lit = light_run(run_of(colors, [0; 4]), run.drawn, visibility, &shadow.light);
+                match <&mut [[u8; 4]; LANES]>::try_from(&mut *colors) {
+                    Ok(colors) => *colors = lit,
+                    Err(_) => colors.copy_from_slice(&lit[..colors.len()]),
+                }
+            }
+        }
+    }
+}
+
+/// What [`light_band`] reads.
+pub(crate) struct BandShadow<'a> {
+    pub map: &'a ShadowMap,
+    pub pixels: PixelsInMap,
+    pub light: Light,
+    pub filtered: bool,
+}
+
+/// A run of pixels whose map lookups are known but not yet read.
+#[derive(Clone, Copy, Default)]
+struct PendingRun {
+    /// The run's first pixel in its row.
+    x: usize,
+    /// Its drawn pixels (nearer than the far depth).
+    drawn: f32x4,
+    taps: Taps,
+    visibility: Vec4,
+}
+
+/// The [`LANES`] values from the start of `values`, those past its end `fill`.
+#[inline(always)]
+fn run_of<T: Copy>(values: &[T], fill: T) -> [T; LANES] {
+    <[T; LANES]>::try_from(values).unwrap_or_else(|_| std::array::from_fn(|k| values.get(k).copied().unwrap_or(fill)))
+}
+
+/// The colours of a run whose `drawn` pixels hold their colour lit in full and their diffuse
+/// term (see [`light_band`]), with `light` reaching them by `visibility`; the others keep
+/// theirs. A pixel the light reaches in full keeps its colour exactly.
+#[inline(always)]
+fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &Light) -> [[u8; 4]; LANES] {
+    const BYTE_TO_UNIT: f32 = 1.0 / 255.0;
+    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(colors).map(u32::from_le));
+    let byte = u32x4::splat(0xff);
+    let channel =
+        |shift: u32| Vec4::from_array(bytemuck::cast::<_, i32x4>((old >> shift) & byte).round_float().to_array());
+    let diffuse = channel(24) * BYTE_TO_UNIT;
+    let (fill, ambient) = (Vec4::splat(light.fill), Vec4::splat(light.ambient));
+    let full = (fill + diffuse).max(ambient);
+    // A pixel with no light at all is black either way.
+    let scale = (fill + diffuse * visibility).max(ambient) / full.max(Vec4::splat(f32::MIN_POSITIVE)) * BYTE_TO_UNIT;
+    let [r, g, b] = [0, 8, 16].map(|shift| unit_bytes(channel(shift) * scale));
+    let lit = r | g << 8 | b << 16 | byte << 24;
+    bytemuck::cast(drawn.to_bits().bitselect(lit, old).to_array().map(u32::to_le))
 }
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
