@@ -593,37 +593,44 @@ fn unit_bytes(v: Vec4) -> u32x4 {
 /// own after the triangles, it does not belong in their loops' code.
 #[inline(never)]
 fn light_band(band: &mut Band, shadow: &BandShadow) {
-    const RUNS: usize = TILE_WIDTH as usize / LANES;
     let width = band.width as usize;
-    let mut pending = [PendingRun::default(); RUNS];
+    // A tile row's whole runs, and the pixels left at the end of the band's last tile.
+    let mut pending = [PendingRun::default(); TILE_WIDTH as usize / LANES + 1];
     for x0 in (0..width).step_by(TILE_WIDTH as usize) {
         let x1 = (x0 + TILE_WIDTH as usize).min(width);
         for row in 0..band.rows as usize {
             let in_map = shadow.pixels.row(band.y0 + row as u32);
-            let row_start = row * width;
+            let pixels = row * width + x0..row * width + x1;
+            let (runs, rest) = band.depth[pixels.clone()].as_chunks::<LANES>();
             let mut count = 0;
-            for x in (x0..x1).step_by(LANES) {
-                let depths = &band.depth[row_start + x..row_start + x1.min(x + LANES)];
-                let depth = Vec4::from_array(run_of(depths, FAR_DEPTH));
+            let mut find = |run: usize, depths: [f32; LANES]| {
+                let depth = Vec4::from_array(depths);
                 let drawn = lanes_of(depth).simd_lt(f32x4::splat(FAR_DEPTH));
-                if drawn.none() {
-                    continue;
+                if drawn.any() {
+                    let x = Vec4::splat((x0 + run * LANES) as f32) + LANE_OFFSETS;
+                    let [tx, ty, light_depth] = shadow.pixels.locate(in_map, x, depth);
+                    let taps = shadow.map.taps(tx, ty, light_depth, shadow.filtered);
+                    pending[count] = PendingRun { run, drawn, taps, visibility: Vec4::ZERO };
+                    count += 1;
                 }
-                let [tx, ty, light_depth] = shadow.pixels.locate(in_map, Vec4::splat(x as f32) + LANE_OFFSETS, depth);
-                let taps = shadow.map.taps(tx, ty, light_depth, shadow.filtered);
-                pending[count] = PendingRun { x, drawn, taps, visibility: Vec4::ZERO };
-                count += 1;
+            };
+            for (run, depths) in runs.iter().enumerate() {
+                find(run, *depths);
+            }
+            if !rest.is_empty() {
+                find(runs.len(), run_of(rest, FAR_DEPTH));
             }
             for run in &mut pending[..count] {
                 run.visibility = shadow.map.read(&run.taps, shadow.filtered);
             }
+            let (runs, rest) = band.color[pixels].as_chunks_mut::<LANES>();
             for run in &pending[..count] {
-                let visibility = run.visibility;
-                let colors = &mut band.color[row_start + run.x..row_start + x1.min(run.x + LANES)];
-                let lit = light_run(run_of(colors, [0; 4]), run.drawn, visibility, &shadow.light);
-                match <&mut [[u8; 4]; LANES]>::try_from(&mut *colors) {
-                    Ok(colors) => *colors = lit,
-                    Err(_) => colors.copy_from_slice(&lit[..colors.len()]),
+                match runs.get_mut(run.run) {
+                    Some(colors) => *colors = light_run(*colors, run.drawn, run.visibility, &shadow.light),
+                    None => {
+                        let lit = light_run(run_of(rest, [0; 4]), run.drawn, run.visibility, &shadow.light);
+                        rest.copy_from_slice(&lit[..rest.len()]);
+                    }
                 }
             }
         }
@@ -641,18 +648,17 @@ pub(crate) struct BandShadow<'a> {
 /// A run of pixels whose map lookups are known but not yet read.
 #[derive(Clone, Copy, Default)]
 struct PendingRun {
-    /// The run's first pixel in its row.
-    x: usize,
+    /// Which run of its tile row it is.
+    run: usize,
     /// Its drawn pixels (nearer than the far depth).
     drawn: f32x4,
     taps: Taps,
     visibility: Vec4,
 }
 
-/// The [`LANES`] values from the start of `values`, those past its end `fill`.
-#[inline(always)]
+/// The values of a run cut short, `fill` past them.
 fn run_of<T: Copy>(values: &[T], fill: T) -> [T; LANES] {
-    <[T; LANES]>::try_from(values).unwrap_or_else(|_| std::array::from_fn(|k| values.get(k).copied().unwrap_or(fill)))
+    std::array::from_fn(|k| values.get(k).copied().unwrap_or(fill))
 }
 
 /// The colours of a run whose `drawn` pixels hold their colour lit in full and their diffuse
