@@ -338,7 +338,7 @@ impl Renderer {
 
         let threads = pool.thread_num().max(1);
         let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
-        let lit = frame.settings.shading == Shading::Gouraud && light_clip.is_none();
+        let lit = frame.settings.shading == Shading::Gouraud;
         let stage = VertexStage {
             frame,
             spans: &self.spans,
@@ -370,7 +370,7 @@ struct VertexStage<'a> {
     height: u32,
     /// The shadow map's projection and side in texels, when shadows are drawn.
     light: Option<(Mat4, u32)>,
-    /// Whether the vertex colours are lit (Gouraud shading without shadows).
+    /// Whether the vertex colours are lit (Gouraud shading).
     lit: bool,
 }
 
@@ -470,8 +470,8 @@ fn normalize_or_zero(v: ClipLanes) -> [Vec4; 3] {
 
 /// The varyings of one vertex.
 ///
-/// When `lit` the colour is the lit colour (Gouraud without shadows: nothing is left to light
-/// per pixel).
+/// When `lit` the colour is lit as if the light reached the vertex (Gouraud: nothing is left
+/// to light per pixel but shadows).
 #[inline(always)]
 fn vertex_varyings(
     instance: &Instance,

@@ -55,11 +55,10 @@ pub type Varyings = [f32; VARYINGS];
 
 /// Where each value lives in [`Varyings`].
 pub mod slot {
-    /// Base colour, RGB: material colour times vertex colour (times the light's intensity for
-    /// Gouraud shading without shadows: with shadows, light is applied once a pixel's shadow is
-    /// known).
+    /// Base colour, RGB: material colour times vertex colour (times the light's intensity, as
+    /// if nothing shadowed the vertex, for Gouraud shading).
     pub const COLOR: usize = 0;
-    /// The light's diffuse term at the vertex (Gouraud with shadows).
+    /// The light's diffuse term at the vertex (Gouraud with shadows: what shadows take away).
     pub const DIFFUSE: usize = 3;
     /// World-space unit normal, xyz (Phong).
     pub const NORMAL: usize = 4;
@@ -94,7 +93,8 @@ impl Pass {
     pub const fn uses(self, index: usize) -> bool {
         match index {
             0..3 => true,
-            // Gouraud without shadows interpolates the colour lit at the vertices.
+            // Gouraud interpolates the colour lit at the vertices, and with shadows the diffuse
+            // term too.
             slot::DIFFUSE => matches!(self.shading, Shading::Gouraud) && self.shadowed,
             4..7 => matches!(self.shading, Shading::Phong),
             _ => self.textured,

@@ -544,9 +544,9 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
         }
     };
     let mut rgb = [value(slot::COLOR), value(slot::COLOR + 1), value(slot::COLOR + 2)];
-    // Lit as if the light reached every pixel; with shadows, `light_band` darkens those it
-    // does not reach once the band is drawn.
-    if mode != Shading::Gouraud || shadowed {
+    // Lit as if the light reached every pixel (Gouraud's colours were lit at the vertices);
+    // with shadows, `light_band` darkens those it does not reach once the band is drawn.
+    if mode != Shading::Gouraud {
         let intensity = (Vec4::splat(light.fill) + diffuse).max(Vec4::splat(light.ambient));
         for c in &mut rgb {
             *c *= intensity;
@@ -675,8 +675,11 @@ fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &L
     let (fill, ambient) = (Vec4::splat(light.fill), Vec4::splat(light.ambient));
     let full = (fill + diffuse).max(ambient);
     // A pixel with no light at all is black either way.
-    let scale = (fill + diffuse * visibility).max(ambient) / full.max(Vec4::splat(f32::MIN_POSITIVE)) * BYTE_TO_UNIT;
-    let [r, g, b] = [0, 8, 16].map(|shift| unit_bytes(channel(shift) * scale));
+    let scale = (fill + diffuse * visibility).max(ambient) / full.max(Vec4::splat(f32::MIN_POSITIVE));
+    let [r, g, b] = [0, 8, 16].map(|shift| {
+        let darkened = (channel(shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0));
+        lanes_of(darkened + ROUNDING_BIAS).to_bits() & byte
+    });
     let lit = r | g << 8 | b << 16 | byte << 24;
     bytemuck::cast(drawn.to_bits().bitselect(lit, old).to_array().map(u32::to_le))
 }
