@@ -788,6 +788,23 @@ mod tests {
     }
 
     #[test]
+    fn targets_smaller_than_a_run_are_drawn_with_and_without_shadows() {
+        // Every run of these reaches past the end of its band.
+        let floor = instance(MeshData::plane(2), Mat4::from_scale(Vec3::splat(20.0)), Vec3::ONE);
+        let camera = camera_at(Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, -1.0));
+        let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 };
+        for (size, shadows) in [((1, 1), false), ((1, 1), true), ((3, 2), true), ((5, 1), true)] {
+            let mut target = Framebuffer::new(size.0, size.1);
+            let settings = RenderSettings { shadows, ..RenderSettings::default() };
+            let frame = Frame { camera, light, background: SKY, instances: std::slice::from_ref(&floor), settings };
+            Renderer::default().render(&mut target, &TaskPool::new(), &frame);
+            for pixel in target.color().chunks_exact(4) {
+                assert!(pixel != SKY && pixel[3] == 255, "{size:?} {shadows}: {pixel:?}");
+            }
+        }
+    }
+
+    #[test]
     fn rendering_is_deterministic_and_reuses_buffers() {
         let sphere = instance(MeshData::sphere(16, 32), Mat4::IDENTITY, Vec3::new(0.3, 0.6, 0.9));
         let frame = Frame {
