@@ -246,7 +246,17 @@ impl PixelsInMap {
 /// `bounds` are the scene's world bounds; `None` when nothing visible can be shadowed.
 pub fn fit_light(camera: &Camera, aspect: f32, light: &Light, bounds: (Vec3, Vec3)) -> Option<Mat4> {
     let direction = light.direction.try_normalize()?;
-    let up = if direction.y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
+    // The map's rows run along the image's rows as far as the light allows: the pixels of an
+    // image row then read texels of a few map rows, next to each other in memory.
+    let camera_view = camera.view();
+    let image_right = Vec3::new(camera_view.x_axis.x, camera_view.y_axis.x, camera_view.z_axis.x);
+    let map_right = (image_right - direction * direction.dot(image_right)).try_normalize();
+    let up = match map_right {
+        // Looking along `direction`, `up` crossed with it points right.
+        Some(right) => right.cross(direction),
+        None if direction.y.abs() > 0.999 => Vec3::Z,
+        None => Vec3::Y,
+    };
     let view = Mat4::look_to_rh(Vec3::ZERO, direction, up);
     let scene_corners = corners(bounds.0, bounds.1);
     let (scene_min, scene_max) = light_bounds(view, &scene_corners);
