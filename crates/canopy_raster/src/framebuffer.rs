@@ -115,7 +115,8 @@ pub(crate) struct Band<'a> {
     pub rows: u32,
     /// Row length in pixels.
     pub width: u32,
-    /// RGBA8 pixels of the band's rows.
+    /// RGBA8 pixels of the band's rows (with shadows, a drawn pixel's alpha holds its diffuse
+    /// term until the band's shadows are applied).
     pub color: &'a mut [[u8; 4]],
     /// Depth of the band's rows.
     pub depth: &'a mut [f32],

@@ -43,7 +43,7 @@ pub(crate) struct TileContext<'a> {
     pub view: View<'a>,
     /// The triangles reaching each band.
     pub sorted: &'a Sorted,
-    /// The shadow map and how to light the bands with it, when shadows are on.
+    /// The shadow map and how the bands' pixels find their place in it, when shadows are on.
     pub shadow: Option<BandShadow<'a>>,
 }
 
@@ -587,8 +587,9 @@ fn unit_bytes(v: Vec4) -> u32x4 {
 /// drawn pixel holds its colour lit as if it did and, in alpha, its diffuse term; its
 /// shadow-map position follows from its depth.
 ///
-/// The band is lit tile by tile (so that the texels read stay few), a tile row at a time: first
-/// the map positions of all its runs of [`LANES`] drawn pixels, then their reads and colours,
+/// The band is worked through tile by tile (so that the texels read stay few), a tile row at a
+/// time: first the map positions of all its runs of [`LANES`] drawn pixels, then their reads and
+/// colours,
 /// so that the reads of many runs wait on memory together. Kept out of line: a pass of its
 /// own after the triangles, it does not belong in their loops' code.
 #[inline(never)]
