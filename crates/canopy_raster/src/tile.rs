@@ -120,7 +120,7 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &m
             with_compiled_pass!(pass, draw_instance(&mut entries, &draw, scratch, &mut masks, &mut target));
     }
     if let Some(shadow) = &context.shadow {
-        light_band(&mut target, shadow);
+        light_band(&mut target, &scratch.tiles, shadow);
     }
     for tile in &scratch.tiles {
         counts.fragments += tile.fragments;
@@ -587,18 +587,18 @@ fn unit_bytes(v: Vec4) -> u32x4 {
 /// drawn pixel holds its colour lit as if it did and, in alpha, its diffuse term; its
 /// shadow-map position follows from its depth.
 ///
-/// The band is worked through tile by tile (so that the texels read stay few), a tile row at a
-/// time: first the map positions of all its runs of [`LANES`] drawn pixels, then their reads and
-/// colours,
-/// so that the reads of many runs wait on memory together. Kept out of line: a pass of its
-/// own after the triangles, it does not belong in their loops' code.
+/// The band is worked through tile by tile (`tiles`, so that the texels read stay few), a tile
+/// row at a time: first the map positions of all its runs of [`LANES`] drawn pixels, then their
+/// reads and colours, so that the reads of many runs wait on memory together. Kept out of line:
+/// a pass of its own after the triangles, it does not belong in their loops' code.
 #[inline(never)]
-fn light_band(band: &mut Band, shadow: &BandShadow) {
+fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
     let width = band.width as usize;
     // A tile row's whole runs, and the pixels left at the end of the band's last tile.
     let mut pending = [PendingRun::default(); TILE_WIDTH as usize / LANES + 1];
-    for x0 in (0..width).step_by(TILE_WIDTH as usize) {
-        let x1 = (x0 + TILE_WIDTH as usize).min(width);
+    // Tiles nothing was drawn into (the sky, say) have nothing to darken.
+    for tile in tiles.iter().filter(|tile| tile.fragments > 0) {
+        let (x0, x1) = (tile.rect.min_x as usize, tile.rect.max_x as usize + 1);
         for row in 0..band.rows as usize {
             let in_map = shadow.pixels.row(band.y0 + row as u32);
             let pixels = row * width + x0..row * width + x1;
