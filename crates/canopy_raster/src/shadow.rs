@@ -155,11 +155,18 @@ impl ShadowMap {
         // Each lane's two-by-two texels, from one slice of the stored depths.
         let stride = self.stride();
         let quads: [&[f32]; 4] = std::array::from_fn(|lane| &self.depth[first[lane]..][..stride + 2]);
-        let corner = |k: usize| lit(std::array::from_fn(|lane| quads[lane][k]));
+        // The weight of a texel nearer to the light than the point, zero for one that is not.
+        let shadowed = |k: usize, weight: Vec4| {
+            let texels = Vec4::from_array(std::array::from_fn(|lane| quads[lane][k]));
+            Vec4::select(taps.depth.cmpgt(texels), weight, Vec4::ZERO)
+        };
         let (tx, ty) = (taps.right, taps.down);
-        let top = corner(0) * (Vec4::ONE - tx) + corner(1) * tx;
-        let bottom = corner(stride) * (Vec4::ONE - tx) + corner(stride + 1) * tx;
-        top * (Vec4::ONE - ty) + bottom * ty
+        let (sx, sy) = (Vec4::ONE - tx, Vec4::ONE - ty);
+        // What the shadowed texels take away from full light: a point no texel shadows gets
+        // exactly 1.
+        let dark =
+            shadowed(0, sx * sy) + shadowed(1, tx * sy) + shadowed(stride, sx * ty) + shadowed(stride + 1, tx * ty);
+        Vec4::ONE - dark
     }
 }
 
@@ -400,6 +407,10 @@ mod tests {
         assert!((at(2.0) - 0.5).abs() < 1e-6, "{}", at(2.0));
         assert!((at(2.25) - 0.75).abs() < 1e-6, "{}", at(2.25));
         assert_eq!(at(2.5), 1.0);
+        // Where no texel shadows it, a point is lit exactly, wherever it falls between them.
+        for (x, y) in [(3.37, 1.81), (4.5, 2.05), (5.93, 6.21)] {
+            assert_eq!(map.visibility(Vec3::new(x, y, 0.6), true), 1.0, "({x}, {y})");
+        }
         // Negative coordinates round down: the texel left of 0 is outside, so lit.
         assert_eq!(map.visibility(Vec3::new(-0.5, 1.5, 0.6), false), 1.0);
         // Far off the map, or not a number at all, reads the border: lit, never out of bounds.

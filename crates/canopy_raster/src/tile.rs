@@ -626,10 +626,16 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
             }
             let (runs, rest) = band.color[pixels].as_chunks_mut::<LANES>();
             for run in &pending[..count] {
+                // Runs the light reaches in full (most) keep their colours and only become opaque.
+                let darkened = (lanes_of(run.visibility).simd_lt(f32x4::ONE) & run.drawn).any();
+                let shade = |colors| match darkened {
+                    true => light_run(colors, run.drawn, run.visibility, &shadow.light),
+                    false => opaque(colors, run.drawn),
+                };
                 match runs.get_mut(run.run) {
-                    Some(colors) => *colors = light_run(*colors, run.drawn, run.visibility, &shadow.light),
+                    Some(colors) => *colors = shade(*colors),
                     None => {
-                        let lit = light_run(run_of(rest, [0; 4]), run.drawn, run.visibility, &shadow.light);
+                        let lit = shade(run_of(rest, [0; 4]));
                         rest.copy_from_slice(&lit[..rest.len()]);
                     }
                 }
@@ -660,6 +666,16 @@ struct PendingRun {
 /// The values of a run cut short, `fill` past them.
 fn run_of<T: Copy>(values: &[T], fill: T) -> [T; LANES] {
     std::array::from_fn(|k| values.get(k).copied().unwrap_or(fill))
+}
+
+/// The colours of a run whose `drawn` pixels hold their colour lit in full and their diffuse
+/// term (see [`light_band`]), for the light reaching them in full: opaque, and otherwise as they
+/// are.
+#[inline(always)]
+fn opaque(colors: [[u8; 4]; LANES], drawn: f32x4) -> [[u8; 4]; LANES] {
+    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(colors).map(u32::from_le));
+    let alpha = drawn.to_bits() & u32x4::splat(0xff << 24);
+    bytemuck::cast((old | alpha).to_array().map(u32::to_le))
 }
 
 /// The colours of a run whose `drawn` pixels hold their colour lit in full and their diffuse
