@@ -570,17 +570,32 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
     let [r, g, b] = rgb.map(unit_bytes);
     let alpha = if shadowed { unit_bytes(diffuse) } else { u32x4::splat(0xff) };
     let pixels = r | g << 8 | b << 16 | alpha << 24;
-    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(*run.colors).map(u32::from_le));
-    let blended = drawn.to_bits().bitselect(pixels, old);
-    *run.colors = bytemuck::cast(blended.to_array().map(u32::to_le));
+    *run.colors = colors_of(drawn.to_bits().bitselect(pixels, words_of(*run.colors)));
 }
 
 /// Each lane of `v`, clamped to `[0, 1]`, as a byte (0 to 255) in the low bits of its lane.
 #[inline(always)]
 fn unit_bytes(v: Vec4) -> u32x4 {
-    // Adding 2^23 to a number in [0, 255] leaves it, rounded to the nearest whole number,
-    // in the low mantissa bits: a cheap exact conversion to bytes.
-    lanes_of(v.clamp(Vec4::ZERO, Vec4::ONE) * 255.0 + ROUNDING_BIAS).to_bits() & u32x4::splat(0xff)
+    rounded_bytes(v.clamp(Vec4::ZERO, Vec4::ONE) * 255.0)
+}
+
+/// Each lane of `v`, in `[0, 255]`, rounded to the nearest whole number, in the low bits of its
+/// lane.
+#[inline(always)]
+fn rounded_bytes(v: Vec4) -> u32x4 {
+    lanes_of(v + ROUNDING_BIAS).to_bits() & u32x4::splat(0xff)
+}
+
+/// A run's RGBA8 colours as one little-endian word per pixel, red in the low byte.
+#[inline(always)]
+fn words_of(colors: [[u8; 4]; LANES]) -> u32x4 {
+    u32x4::from(bytemuck::cast::<_, [u32; LANES]>(colors).map(u32::from_le))
+}
+
+/// The RGBA8 colours of [`words_of`]'s words.
+#[inline(always)]
+fn colors_of(words: u32x4) -> [[u8; 4]; LANES] {
+    bytemuck::cast(words.to_array().map(u32::to_le))
 }
 
 /// Darkens the pixels of a band drawn with shadows where the light does not reach them: each
@@ -673,9 +688,7 @@ fn run_of<T: Copy>(values: &[T], fill: T) -> [T; LANES] {
 /// are.
 #[inline(always)]
 fn opaque(colors: [[u8; 4]; LANES], drawn: f32x4) -> [[u8; 4]; LANES] {
-    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(colors).map(u32::from_le));
-    let alpha = drawn.to_bits() & u32x4::splat(0xff << 24);
-    bytemuck::cast((old | alpha).to_array().map(u32::to_le))
+    colors_of(words_of(colors) | drawn.to_bits() & u32x4::splat(0xff << 24))
 }
 
 /// The colours of a run whose `drawn` pixels hold their colour lit in full and their diffuse
@@ -684,7 +697,7 @@ fn opaque(colors: [[u8; 4]; LANES], drawn: f32x4) -> [[u8; 4]; LANES] {
 #[inline(always)]
 fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &Light) -> [[u8; 4]; LANES] {
     const BYTE_TO_UNIT: f32 = 1.0 / 255.0;
-    let old = u32x4::from(bytemuck::cast::<_, [u32; LANES]>(colors).map(u32::from_le));
+    let old = words_of(colors);
     let byte = u32x4::splat(0xff);
     let channel =
         |shift: u32| Vec4::from_array(bytemuck::cast::<_, i32x4>((old >> shift) & byte).round_float().to_array());
@@ -693,12 +706,10 @@ fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &L
     let full = (fill + diffuse).max(ambient);
     // A pixel with no light at all is black either way.
     let scale = (fill + diffuse * visibility).max(ambient) / full.max(Vec4::splat(f32::MIN_POSITIVE));
-    let [r, g, b] = [0, 8, 16].map(|shift| {
-        let darkened = (channel(shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0));
-        lanes_of(darkened + ROUNDING_BIAS).to_bits() & byte
-    });
+    let [r, g, b] =
+        [0, 8, 16].map(|shift| rounded_bytes((channel(shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0))));
     let lit = r | g << 8 | b << 16 | byte << 24;
-    bytemuck::cast(drawn.to_bits().bitselect(lit, old).to_array().map(u32::to_le))
+    colors_of(drawn.to_bits().bitselect(lit, old))
 }
 
 /// The lane mask with lane `k` set when bit `k` of `lanes` is.
