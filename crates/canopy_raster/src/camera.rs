@@ -88,7 +88,13 @@ impl Light {
 
     /// Total intensity from a diffuse term scaled by `visibility` (1 lit, 0 in shadow).
     pub fn combine(&self, diffuse_term: f32, visibility: f32) -> f32 {
-        (self.fill + diffuse_term * visibility).max(self.ambient)
+        self.combine_lanes(Vec4::splat(diffuse_term), Vec4::splat(visibility)).x
+    }
+
+    /// [`Light::combine`] of four diffuse terms and visibilities at once.
+    #[inline(always)]
+    pub(crate) fn combine_lanes(&self, diffuse_term: Vec4, visibility: Vec4) -> Vec4 {
+        (Vec4::splat(self.fill) + diffuse_term * visibility).max(Vec4::splat(self.ambient))
     }
 
     /// Light intensity on a fully lit surface with unit normal `normal`.

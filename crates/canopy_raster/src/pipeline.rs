@@ -606,6 +606,11 @@ mod tests {
         Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 1.0 }
     }
 
+    /// A light from high above, slightly to the side, with an ambient floor.
+    fn high_light() -> Light {
+        Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 }
+    }
+
     fn draw(camera: Camera, instances: &[Instance], size: (u32, u32)) -> (Framebuffer, RenderStats) {
         let mut target = Framebuffer::new(size.0, size.1);
         let frame =
@@ -760,7 +765,7 @@ mod tests {
         let sphere = instance(MeshData::sphere(16, 32), Mat4::from_translation(Vec3::Y * 0.6), Vec3::ONE);
         let floor = instance(MeshData::plane(4), Mat4::from_scale(Vec3::splat(3.0)), Vec3::ONE);
         let instances = [sphere, floor];
-        let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 };
+        let light = high_light();
         let camera = camera_at(Vec3::new(0.0, 2.0, 3.0), Vec3::ZERO);
         let render = |shadows: bool| {
             let mut target = Framebuffer::new(97, 61);
@@ -792,7 +797,7 @@ mod tests {
         // Every run of these reaches past the end of its band.
         let floor = instance(MeshData::plane(2), Mat4::from_scale(Vec3::splat(20.0)), Vec3::ONE);
         let camera = camera_at(Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, -1.0));
-        let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 };
+        let light = high_light();
         for (size, shadows) in [((1, 1), false), ((1, 1), true), ((3, 2), true), ((5, 1), true)] {
             let mut target = Framebuffer::new(size.0, size.1);
             let settings = RenderSettings { shadows, ..RenderSettings::default() };

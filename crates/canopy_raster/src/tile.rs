@@ -547,7 +547,7 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
     // Lit as if the light reached every pixel (Gouraud's colours were lit at the vertices);
     // with shadows, `light_band` darkens those it does not reach once the band is drawn.
     if mode != Shading::Gouraud {
-        let intensity = (Vec4::splat(light.fill) + diffuse).max(Vec4::splat(light.ambient));
+        let intensity = light.combine_lanes(diffuse, Vec4::ONE);
         for c in &mut rgb {
             *c *= intensity;
         }
@@ -702,10 +702,9 @@ fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &L
     let channel =
         |shift: u32| Vec4::from_array(bytemuck::cast::<_, i32x4>((old >> shift) & byte).round_float().to_array());
     let diffuse = channel(24) * BYTE_TO_UNIT;
-    let (fill, ambient) = (Vec4::splat(light.fill), Vec4::splat(light.ambient));
-    let full = (fill + diffuse).max(ambient);
-    // A pixel with no light at all is black either way.
-    let scale = (fill + diffuse * visibility).max(ambient) / full.max(Vec4::splat(f32::MIN_POSITIVE));
+    // The colour pass lit the pixel with `full`; a pixel with no light at all is black either way.
+    let full = light.combine_lanes(diffuse, Vec4::ONE);
+    let scale = light.combine_lanes(diffuse, visibility) / full.max(Vec4::splat(f32::MIN_POSITIVE));
     let [r, g, b] =
         [0, 8, 16].map(|shift| rounded_bytes((channel(shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0))));
     let lit = r | g << 8 | b << 16 | byte << 24;
