@@ -50,7 +50,7 @@ impl DepthPass {
     /// work over `pool`. Returns how many triangles were drawn (after clipping and culling).
     pub fn draw(&mut self, pool: &TaskPool, scene: DepthScene, map: &mut ShadowMap) -> usize {
         let size = map.size();
-        self.sorted.sort(pool, scene.spans, scene.instances, scene.view, STRIP_ROWS);
+        self.sorted.sort::<STRIP_ROWS>(pool, scene.spans, scene.instances, scene.view);
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
         let triangles = pool.scope(|scope| {

@@ -279,7 +279,7 @@ impl Renderer {
             light: frame.light,
             filtered: settings.pcf,
         });
-        self.sorted.sort(pool, &self.spans, frame.instances, view, TILE_HEIGHT);
+        self.sorted.sort::<TILE_HEIGHT>(pool, &self.spans, frame.instances, view);
         let context = TileContext {
             frame,
             spans: &self.spans,

@@ -28,9 +28,12 @@ pub(crate) struct Sorted {
 
 impl Sorted {
     /// Sorts every triangle of `instances` (whose vertex and triangle numbering `spans` give)
-    /// into strips of `rows` rows of `view`'s target, spreading the work over `pool`.
-    pub fn sort(&mut self, pool: &TaskPool, spans: &[Span], instances: &[Instance], view: View, rows: u32) {
-        let strips = view.viewport.height.div_ceil(rows) as usize;
+    /// into strips of `ROWS` rows of `view`'s target, spreading the work over `pool`.
+    ///
+    /// `ROWS` is a constant so that finding a row's strip is a shift, not a division per
+    /// triangle.
+    pub fn sort<const ROWS: u32>(&mut self, pool: &TaskPool, spans: &[Span], instances: &[Instance], view: View) {
+        let strips = view.viewport.height.div_ceil(ROWS) as usize;
         let parts = pool.thread_num().max(1) * RUNS_PER_THREAD;
         self.runs.resize_with(parts, Vec::new);
         for run in &mut self.runs {
@@ -42,7 +45,7 @@ impl Sorted {
                 scope.spawn(async move {
                     for run in instance_runs(spans, instances, range) {
                         for triangle in &run.instance.mesh.triangles[run.triangles] {
-                            sort(triangle.map(|i| (run.span.first_vertex + i as usize) as u32), view, rows, sorted);
+                            sort::<ROWS>(triangle.map(|i| (run.span.first_vertex + i as usize) as u32), view, sorted);
                         }
                     }
                 });
@@ -56,9 +59,9 @@ impl Sorted {
     }
 }
 
-/// Adds the triangle `corners` to the strips of `rows` rows its pixel rows reach. A triangle
+/// Adds the triangle `corners` to the strips of `ROWS` rows its pixel rows reach. A triangle
 /// that needs clipping goes to every strip, which clips it again.
-fn sort(corners: Corners, view: View, rows: u32, sorted: &mut [Vec<Corners>]) {
+fn sort<const ROWS: u32>(corners: Corners, view: View, sorted: &mut [Vec<Corners>]) {
     let [a, b, c] = corners.map(|i| &view.vertices[i as usize]);
     if a.code & b.code & c.code & outside::VIEW != 0 {
         return;
@@ -68,7 +71,7 @@ fn sort(corners: Corners, view: View, rows: u32, sorted: &mut [Vec<Corners>]) {
     } else {
         // Columns are left to the setup, which drops a triangle covering none.
         let Some((first, last)) = pixel_span([a, b, c].map(|v| i64::from(v.y)), view.viewport.height) else { return };
-        (first / rows) as usize..(last / rows) as usize + 1
+        (first / ROWS) as usize..(last / ROWS) as usize + 1
     };
     for strip in &mut sorted[strips] {
         strip.push(corners);
