@@ -496,10 +496,8 @@ fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32
 #[cold]
 #[inline(never)]
 fn shade_band_end<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32, at: usize) {
-    let (mut depths, mut colors) = ([FAR_DEPTH; LANES], [[0; 4]; LANES]);
+    let (mut depths, mut colors) = (run_of(&band.depth[at..], FAR_DEPTH), run_of(&band.color[at..], [0; 4]));
     let valid = band.depth.len() - at;
-    depths[..valid].copy_from_slice(&band.depth[at..]);
-    colors[..valid].copy_from_slice(&band.color[at..]);
     shade_pixels::<C>(shading, y, x, lanes, Run { depths: &mut depths, colors: &mut colors });
     band.depth[at..].copy_from_slice(&depths[..valid]);
     band.color[at..].copy_from_slice(&colors[..valid]);
