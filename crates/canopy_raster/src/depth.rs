@@ -13,7 +13,7 @@ use crate::framebuffer::FAR_DEPTH;
 use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View};
 use crate::setup::{BiasedDepth, DEPTH, LANES, Plane, Surface, TriangleSetup};
 use crate::shade::{VARYINGS, Varyings, lanes_of};
-use crate::shadow::ShadowMap;
+use crate::shadow::{QuadDepth, ShadowMap, nearest_of_quads};
 use crate::sort::{Corners, Sorted};
 use crate::tile::{RowMasks, Walk, covered, lane_multiples};
 use bevy_math::{Vec3, Vec4};
@@ -54,12 +54,13 @@ impl DepthPass {
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
         let triangles = pool.scope(|scope| {
-            for (index, depth) in map.rows_mut().chunks_mut(stride * STRIP_ROWS as usize).enumerate() {
+            for (index, (depth, quads)) in map.strips_mut(STRIP_ROWS as usize).enumerate() {
                 let rows = (depth.len() / stride) as u32;
                 let band = DepthBand { y0: index as u32 * STRIP_ROWS, rows, width: size, stride, first, depth };
-                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band) });
+                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band, quads) });
             }
         });
+        map.join_strips(STRIP_ROWS as usize);
         triangles.into_iter().sum()
     }
 }
@@ -76,9 +77,16 @@ struct DepthBand<'a> {
     depth: &'a mut [f32],
 }
 
-/// Clears one strip of the map and draws into it the triangles of `sorted`; returns how many
-/// were set up with their first row in the strip.
-fn draw_strip<'a>(scene: DepthScene, sorted: impl Iterator<Item = &'a Corners>, mut band: DepthBand) -> usize {
+/// Clears one strip of the map and draws into it the triangles of `sorted`, then the least
+/// depths of its two-by-twos into `quads` when lookups are filtered (all but those of its last
+/// row, which reach into the next strip); returns how many triangles were set up with their
+/// first row in the strip.
+fn draw_strip<'a>(
+    scene: DepthScene,
+    sorted: impl Iterator<Item = &'a Corners>,
+    mut band: DepthBand,
+    quads: Option<&mut [QuadDepth]>,
+) -> usize {
     for row in band.depth.chunks_exact_mut(band.stride) {
         row[band.first..band.first + band.width as usize].fill(FAR_DEPTH);
     }
@@ -103,6 +111,10 @@ fn draw_strip<'a>(scene: DepthScene, sorted: impl Iterator<Item = &'a Corners>, 
             let no_varyings = |_| &[0.0; VARYINGS];
             view.clip(scene.world, indices, no_varyings, |vertices, _| draw(vertices, &mut band));
         }
+    }
+    if let Some(quads) = quads {
+        let joined = band.depth.len() - band.stride;
+        nearest_of_quads(band.depth, &mut quads[..joined], band.stride);
     }
     triangles
 }

@@ -254,7 +254,7 @@ impl Renderer {
         } else {
             None
         };
-        self.shadow.reset(settings.shadow_map_size, light_clip);
+        self.shadow.reset(settings.shadow_map_size, light_clip, settings.pcf);
 
         let view_projection = frame.camera.view_projection(aspect);
         self.vertex_stage(pool, frame, view_projection, width, height, light_clip);

@@ -13,7 +13,7 @@ use crate::camera::{Camera, Light};
 use crate::depth::WINDOW;
 use crate::shade::lanes_of;
 use bevy_math::{DMat4, DVec4, Mat4, Vec3, Vec4};
-use wide::i32x4;
+use wide::{f32x4, f32x8, i16x8, i32x4, i32x8};
 
 /// Depth bias added to every shadow-map depth, in light depth units (the fitted depth range
 /// is `[0, 1]`).
@@ -28,10 +28,18 @@ pub const SLOPE_BIAS: f32 = 1.5;
 /// Texels are stored row by row inside a border (one texel before each row and column, several
 /// after) that always holds an infinite depth: a lookup clamped into the border reads "lit",
 /// so filtered and unfiltered lookups need no bounds test per texel.
+///
+/// For filtered lookups the map also keeps, in the same layout, the least depth of each
+/// texel's two-by-two (the texel, its right neighbour and the two below them): a point no
+/// deeper than that is lit in full, found with one read instead of four. Most of what a camera
+/// sees is lit, so most lookups end there.
 #[derive(Debug, Clone, Default)]
 pub struct ShadowMap {
     size: u32,
     depth: Vec<f32>,
+    /// The least depth of each two-by-two of `depth`, when lookups are filtered; empty
+    /// otherwise.
+    nearest_of_quads: Vec<QuadDepth>,
     clip_from_world: Mat4,
     active: bool,
 }
@@ -78,8 +86,9 @@ impl ShadowMap {
     }
 
     /// Prepares a map of `size` x `size` texels drawn through `clip_from_world`, or marks it
-    /// inactive. Keeps the allocation and the border; the texels are cleared as they are drawn.
-    pub(crate) fn reset(&mut self, size: u32, clip_from_world: Option<Mat4>) {
+    /// inactive, for `filtered` lookups or not. Keeps the allocations and the border; the
+    /// texels are cleared as they are drawn.
+    pub(crate) fn reset(&mut self, size: u32, clip_from_world: Option<Mat4>, filtered: bool) {
         self.active = clip_from_world.is_some();
         self.clip_from_world = clip_from_world.unwrap_or(Mat4::IDENTITY);
         if self.size != size || self.depth.is_empty() {
@@ -87,14 +96,42 @@ impl ShadowMap {
             let stride = self.stride();
             self.depth.clear();
             self.depth.resize(stride * stride, f32::INFINITY);
+            self.nearest_of_quads.clear();
+        }
+        if !filtered {
+            self.nearest_of_quads.clear();
+        } else if self.nearest_of_quads.is_empty() {
+            // Those of the border past where lookups start are never written.
+            self.nearest_of_quads.resize(self.depth.len(), QuadDepth::MIN);
         }
     }
 
-    /// The map's rows for drawing, [`ShadowMap::row_layout`] apart, with their texels at
-    /// `BORDER_BEFORE..BORDER_BEFORE + size`.
-    pub(crate) fn rows_mut(&mut self) -> &mut [f32] {
+    /// The map's rows for drawing in strips of `rows` rows, [`ShadowMap::row_layout`] apart,
+    /// with their texels at `BORDER_BEFORE..BORDER_BEFORE + size`: each strip's depths and,
+    /// for filtered lookups, the same rows of the two-by-twos' least depths. Once the strips are
+    /// drawn, [`nearest_of_quads`] fills each strip's two-by-twos but its last row, and
+    /// [`ShadowMap::join_strips`] those left.
+    pub(crate) fn strips_mut(&mut self, rows: usize) -> impl Iterator<Item = (&mut [f32], Option<&mut [QuadDepth]>)> {
         let (stride, size) = (self.stride(), self.size as usize);
-        &mut self.depth[BORDER_BEFORE * stride..(BORDER_BEFORE + size) * stride]
+        let texels = BORDER_BEFORE * stride..(BORDER_BEFORE + size) * stride;
+        let mut quads = self.nearest_of_quads.get_mut(texels.clone()).map(|quads| quads.chunks_mut(stride * rows));
+        self.depth[texels].chunks_mut(stride * rows).map(move |depth| (depth, quads.as_mut().and_then(Iterator::next)))
+    }
+
+    /// Fills the two-by-twos [`ShadowMap::strips_mut`]'s strips of `rows` rows leave to it: those
+    /// of the top border row, of each strip's last row, which reach into the next strip (or the
+    /// bottom border), and of the first row of the bottom border, the last one a lookup starts
+    /// on.
+    pub(crate) fn join_strips(&mut self, rows: usize) {
+        if self.nearest_of_quads.is_empty() {
+            return;
+        }
+        let (stride, size) = (self.stride(), self.size as usize);
+        let last_rows = (BORDER_BEFORE..=size).step_by(rows).map(|first| (first + rows - 1).min(size));
+        for row in std::iter::once(0).chain(last_rows).chain([size + 1]) {
+            let quads = &mut self.nearest_of_quads[row * stride..(row + 1) * stride];
+            nearest_of_quads(&self.depth[row * stride..(row + 2) * stride], quads, stride);
+        }
     }
 
     /// Distance between the rows [`ShadowMap::rows_mut`] returns, and where a row's first
@@ -144,6 +181,20 @@ impl ShadowMap {
         Taps { first, right: x - whole(column), down: y - whole(row), depth }
     }
 
+    /// Which of the four points of `taps` the light reaches in full, found with one read each:
+    /// those strictly nearer than every texel they read (see [`QuadDepth`]; [`ShadowMap::read`]
+    /// tells the others).
+    #[inline(always)]
+    pub(crate) fn lit_in_full(&self, taps: &Taps, filtered: bool) -> f32x4 {
+        let first = taps.first.to_array().map(|i| i as usize);
+        if !filtered {
+            let texels = Vec4::from_array(std::array::from_fn(|lane| self.depth[first[lane]]));
+            return lanes_of(taps.depth).simd_le(lanes_of(texels));
+        }
+        let quads = Vec4::from_array(std::array::from_fn(|lane| f32::from(self.nearest_of_quads[first[lane]])));
+        lanes_of(taps.depth * QUAD_STEPS).simd_le(lanes_of(quads))
+    }
+
     /// The light reaching the four points of `taps` (see [`ShadowMap::visibility_lanes`]).
     #[inline(always)]
     pub(crate) fn read(&self, taps: &Taps, filtered: bool) -> Vec4 {
@@ -168,6 +219,45 @@ impl ShadowMap {
             shadowed(0, sx * sy) + shadowed(1, tx * sy) + shadowed(stride, sx * ty) + shadowed(stride + 1, tx * ty);
         Vec4::ONE - dark
     }
+}
+
+/// Whole steps of [`QuadDepth`] per unit of depth.
+const QUAD_STEPS: f32 = i16::MAX as f32;
+
+/// The least depth of a two-by-two of texels, rounded down to a whole number of
+/// 1/[`QUAD_STEPS`] and then one step lower, so that a point whose depth in those steps is no
+/// greater is strictly nearer than every texel, whatever the rounding of either product.
+/// Depths past the map's range (the far depth is 1) are kept as 1.
+pub(crate) type QuadDepth = i16;
+
+/// Writes into `quads` the [`QuadDepth`] of each two-by-two of texels of `depth` (rows `stride`
+/// apart) with its top-left texel at the same index; `depth` holds at least one row more than
+/// `quads`. The last index has no two-by-two there and is left as it is: it is a border texel,
+/// and no lookup starts a two-by-two on it (nor on the last texel of any row, whose
+/// two-by-two wraps into the next row).
+pub(crate) fn nearest_of_quads(depth: &[f32], quads: &mut [QuadDepth], stride: usize) {
+    const LANES: usize = 8;
+    let Some(count) = quads.len().checked_sub(1) else { return };
+    let steps = |texels: f32x8| {
+        let whole = (texels.fast_min(f32x8::ONE) * QUAD_STEPS).fast_trunc_int() - i32x8::ONE;
+        i16x8::from_i32x8_saturate(whole).to_array()
+    };
+    // Depths are never NaN: the plain minimum is exact.
+    let texels = |at: usize| f32x8::new(depth[at..at + LANES].try_into().expect("a window"));
+    let mut chunks = quads[..count].chunks_exact_mut(LANES);
+    for (chunk, quads) in chunks.by_ref().enumerate() {
+        let at = chunk * LANES;
+        let top = texels(at).fast_min(texels(at + 1));
+        let bottom = texels(at + stride).fast_min(texels(at + stride + 1));
+        quads.copy_from_slice(&steps(top.fast_min(bottom)));
+    }
+    let done = count - chunks.into_remainder().len();
+    let mut rest = [f32::INFINITY; LANES];
+    for (k, texel) in rest.iter_mut().enumerate().take(count - done) {
+        let at = done + k;
+        *texel = depth[at].min(depth[at + 1]).min(depth[at + stride]).min(depth[at + stride + 1]);
+    }
+    quads[done..count].copy_from_slice(&steps(f32x8::new(rest))[..count - done]);
 }
 
 /// Where the lookups of four points read a [`ShadowMap`] (see [`ShadowMap::taps`]).
@@ -311,6 +401,7 @@ fn light_bounds(view: Mat4, points: &[Vec3]) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     fn overhead() -> (Camera, Light) {
         let camera = Camera { eye: Vec3::new(0.0, 3.0, 4.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 };
@@ -360,7 +451,7 @@ mod tests {
         let aspect = width as f32 / height as f32;
         let bounds = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.5, 1.0));
         let mut map = ShadowMap::default();
-        map.reset(512, fit_light(&camera, aspect, &light, bounds));
+        map.reset(512, fit_light(&camera, aspect, &light, bounds), true);
         let clip_from_world = camera.view_projection(aspect);
         let pixels = PixelsInMap::new(&map, clip_from_world, width, height);
         // Points near and far: each seen at some pixel position and depth, which must lead
@@ -384,16 +475,62 @@ mod tests {
         }
     }
 
+    /// A map of `size` texels a side for filtered lookups, drawn as the depth pass draws one
+    /// in strips of `strip_rows`: `draw(y, texels)` fills the texels of row `y`.
+    fn drawn(size: u32, strip_rows: usize, draw: impl Fn(usize, &mut [f32])) -> ShadowMap {
+        let mut map = ShadowMap::default();
+        map.reset(size, Some(Mat4::IDENTITY), true);
+        let (stride, first) = map.row_layout();
+        for (strip, (depth, quads)) in map.strips_mut(strip_rows).enumerate() {
+            for (row, texels) in depth.chunks_mut(stride).enumerate() {
+                draw(strip * strip_rows + row, &mut texels[first..first + size as usize]);
+            }
+            let joined = depth.len() - stride;
+            nearest_of_quads(depth, &mut quads.expect("filtered")[..joined], stride);
+        }
+        map.join_strips(strip_rows);
+        map
+    }
+
+    proptest! {
+        /// Drawn in strips of any height, every two-by-two a lookup can start on keeps a
+        /// depth strictly below its four texels' and at most a few steps below: what it finds
+        /// lit in full, the full filtered read finds lit exactly, and most of what the full
+        /// read finds lit it finds too.
+        #[test]
+        fn one_read_finds_what_four_find_lit_in_full(
+            texels in prop::collection::vec(prop_oneof![0.0f32..1.0, Just(1.0), Just(0.25)], 24 * 24),
+            strip_rows in 1usize..30,
+            points in prop::collection::vec((-2.0f32..27.0, -2.0f32..27.0, 0.0f32..1.0), 64),
+        ) {
+            let size = 24;
+            let map = drawn(size, strip_rows, |y, row| row.copy_from_slice(&texels[y * 24..][..24]));
+            let stride = map.stride();
+            for y in 0..=size as usize + 1 {
+                for x in 0..=size as usize + 1 {
+                    let at = y * stride + x;
+                    let least = [at, at + 1, at + stride, at + stride + 1].map(|i| map.depth[i]).into_iter().fold(f32::INFINITY, f32::min);
+                    let quad = f32::from(map.nearest_of_quads[at]);
+                    prop_assert!(quad < least.min(1.0) * QUAD_STEPS, "({x}, {y}): {quad} {least}");
+                    prop_assert!(quad >= (least.min(1.0) * QUAD_STEPS).floor() - 1.0, "({x}, {y}): {quad} {least}");
+                }
+            }
+            for (x, y, depth) in points {
+                let taps = map.taps(Vec4::splat(x), Vec4::splat(y), Vec4::splat(depth), true);
+                if map.lit_in_full(&taps, true).any() {
+                    prop_assert_eq!(map.read(&taps, true).x, 1.0, "({}, {}) at {}", x, y, depth);
+                }
+            }
+        }
+    }
+
     #[test]
     fn visibility_compares_depths_and_filters() {
-        let mut map = ShadowMap::default();
-        map.reset(8, Some(Mat4::IDENTITY));
         // Columns 0 and 1 hold an occluder at depth 0.3.
-        let (stride, first) = map.row_layout();
-        for row in map.rows_mut().chunks_mut(stride) {
-            row[first..first + 2].fill(0.3);
-            row[first + 2..first + 8].fill(1.0);
-        }
+        let map = drawn(8, 8, |_, row| {
+            row[..2].fill(0.3);
+            row[2..].fill(1.0);
+        });
         assert_eq!(map.depth_at(1, 5), 0.3);
         assert_eq!(map.depth_at(2, 5), 1.0);
         assert_eq!(map.visibility(Vec3::new(0.5, 1.5, 0.6), false), 0.0);
@@ -411,6 +548,17 @@ mod tests {
         for (x, y) in [(3.37, 1.81), (4.5, 2.05), (5.93, 6.21)] {
             assert_eq!(map.visibility(Vec3::new(x, y, 0.6), true), 1.0, "({x}, {y})");
         }
+        // One read tells those points lit in full, and the occluded ones not; unfiltered, it
+        // reads the texel itself.
+        let lit_in_full = |x: f32, filtered: bool| {
+            let taps =
+                map.taps(Vec4::new(x, 3.37, 4.5, 5.93), Vec4::new(1.5, 1.81, 2.05, 6.21), Vec4::splat(0.6), filtered);
+            map.lit_in_full(&taps, filtered).to_bitmask()
+        };
+        assert_eq!(lit_in_full(2.75, true), 0b1111);
+        assert_eq!(lit_in_full(2.25, true), 0b1110);
+        assert_eq!(lit_in_full(1.75, false), 0b1110);
+        assert_eq!(lit_in_full(2.25, false), 0b1111);
         // Negative coordinates round down: the texel left of 0 is outside, so lit.
         assert_eq!(map.visibility(Vec3::new(-0.5, 1.5, 0.6), false), 1.0);
         // Far off the map, or not a number at all, reads the border: lit, never out of bounds.

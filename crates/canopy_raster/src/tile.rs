@@ -601,9 +601,11 @@ fn colors_of(words: u32x4) -> [[u8; 4]; LANES] {
 /// shadow-map position follows from its depth.
 ///
 /// The band is worked through tile by tile (`tiles`, so that the texels read stay few), a tile
-/// row at a time: first the map positions of all its runs of [`LANES`] drawn pixels, then their
-/// reads and colours, so that the reads of many runs wait on memory together. Kept out of line:
-/// a pass of its own after the triangles, it does not belong in their loops' code.
+/// row at a time: first the map positions of all its runs of [`LANES`] drawn pixels; then the
+/// one read per pixel that finds most runs lit in full (see [`ShadowMap::lit_in_full`]), which
+/// only become opaque; then the full reads and colours of the others. Each step's reads of many
+/// runs wait on memory together. Kept out of line: a pass of its own after the triangles, it
+/// does not belong in their loops' code.
 #[inline(never)]
 fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
     let width = band.width as usize;
@@ -615,7 +617,8 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
         for row in 0..band.rows as usize {
             let in_map = shadow.pixels.row(band.y0 + row as u32);
             let pixels = row * width + x0..row * width + x1;
-            let (runs, rest) = band.depth[pixels.clone()].as_chunks::<LANES>();
+            let (depth_runs, depth_rest) = band.depth[pixels.clone()].as_chunks::<LANES>();
+            let (color_runs, color_rest) = band.color[pixels].as_chunks_mut::<LANES>();
             let mut count = 0;
             let mut find = |run: usize, depths: [f32; LANES]| {
                 let depth = Vec4::from_array(depths);
@@ -628,31 +631,52 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
                     count += 1;
                 }
             };
-            for (run, depths) in runs.iter().enumerate() {
+            for (run, depths) in depth_runs.iter().enumerate() {
                 find(run, *depths);
             }
-            if !rest.is_empty() {
-                find(runs.len(), run_of(rest, FAR_DEPTH));
+            if !depth_rest.is_empty() {
+                find(depth_runs.len(), run_of(depth_rest, FAR_DEPTH));
             }
-            for run in &mut pending[..count] {
-                run.visibility = shadow.map.read(&run.taps, shadow.filtered);
-            }
-            let (runs, rest) = band.color[pixels].as_chunks_mut::<LANES>();
-            for run in &pending[..count] {
-                // Runs the light reaches in full (most) keep their colours and only become opaque.
-                let darkened = (lanes_of(run.visibility).simd_lt(f32x4::ONE) & run.drawn).any();
-                let shade = |colors| match darkened {
-                    true => light_run(colors, run.drawn, run.visibility, &shadow.light),
-                    false => opaque(colors, run.drawn),
-                };
-                match runs.get_mut(run.run) {
-                    Some(colors) => *colors = shade(*colors),
-                    None => {
-                        let lit = shade(run_of(rest, [0; 4]));
-                        rest.copy_from_slice(&lit[..rest.len()]);
-                    }
+            // Runs the light reaches in full (most) keep their colours and only become opaque.
+            let mut left = 0;
+            for k in 0..count {
+                let run = pending[k];
+                if (shadow.map.lit_in_full(&run.taps, shadow.filtered) | !run.drawn).all() {
+                    shade_colors(color_runs, color_rest, run.run, |colors| opaque(colors, run.drawn));
+                } else {
+                    pending[left] = run;
+                    left += 1;
                 }
             }
+            for run in &mut pending[..left] {
+                run.visibility = shadow.map.read(&run.taps, shadow.filtered);
+            }
+            for run in &pending[..left] {
+                // A filtered lookup may still find the light in full (its shadowing texels
+                // weigh nothing).
+                let darkened = (lanes_of(run.visibility).simd_lt(f32x4::ONE) & run.drawn).any();
+                shade_colors(color_runs, color_rest, run.run, |colors| match darkened {
+                    true => light_run(colors, run.drawn, run.visibility, &shadow.light),
+                    false => opaque(colors, run.drawn),
+                });
+            }
+        }
+    }
+}
+
+/// Replaces the colours of run `run` of a tile row by `shade` of them; the row's whole runs are
+/// `runs`, and `rest` its pixels past them (the last run when it is cut short).
+fn shade_colors(
+    runs: &mut [[[u8; 4]; LANES]],
+    rest: &mut [[u8; 4]],
+    run: usize,
+    shade: impl FnOnce([[u8; 4]; LANES]) -> [[u8; 4]; LANES],
+) {
+    match runs.get_mut(run) {
+        Some(colors) => *colors = shade(*colors),
+        None => {
+            let shaded = shade(run_of(rest, [0; 4]));
+            rest.copy_from_slice(&shaded[..rest.len()]);
         }
     }
 }
