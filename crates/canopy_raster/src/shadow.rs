@@ -230,34 +230,46 @@ const QUAD_STEPS: f32 = i16::MAX as f32;
 /// Depths past the map's range (the far depth is 1) are kept as 1.
 pub(crate) type QuadDepth = i16;
 
-/// Writes into `quads` the [`QuadDepth`] of each two-by-two of texels of `depth` (rows `stride`
-/// apart) with its top-left texel at the same index; `depth` holds at least one row more than
-/// `quads`. The last index has no two-by-two there and is left as it is: it is a border texel,
-/// and no lookup starts a two-by-two on it (nor on the last texel of any row, whose
-/// two-by-two wraps into the next row).
+/// Writes into each row of `quads` the [`QuadDepth`] of each two-by-two of texels of `depth`
+/// (rows `stride` apart, at least one more than `quads` holds) with its top-left texel at the
+/// same index. The last texel of a row has no right neighbour and is left as it is: it is a
+/// border texel, and no lookup starts a two-by-two on it.
+///
+/// # Panics
+/// If a row holds fewer than [`QUAD_LANES`] two-by-twos.
 pub(crate) fn nearest_of_quads(depth: &[f32], quads: &mut [QuadDepth], stride: usize) {
-    const LANES: usize = 8;
-    let Some(count) = quads.len().checked_sub(1) else { return };
-    let steps = |texels: f32x8| {
-        let whole = (texels.fast_min(f32x8::ONE) * QUAD_STEPS).fast_trunc_int() - i32x8::ONE;
-        i16x8::from_i32x8_saturate(whole).to_array()
-    };
-    // Depths are never NaN: the plain minimum is exact.
-    let texels = |at: usize| f32x8::new(depth[at..at + LANES].try_into().expect("a window"));
-    let mut chunks = quads[..count].chunks_exact_mut(LANES);
-    for (chunk, quads) in chunks.by_ref().enumerate() {
-        let at = chunk * LANES;
-        let top = texels(at).fast_min(texels(at + 1));
-        let bottom = texels(at + stride).fast_min(texels(at + stride + 1));
-        quads.copy_from_slice(&steps(top.fast_min(bottom)));
+    let count = stride - 1;
+    assert!(count >= QUAD_LANES, "rows of at least {QUAD_LANES} two-by-twos");
+    for (row, quads) in quads.chunks_exact_mut(stride).enumerate() {
+        let (top, bottom) = (&depth[row * stride..][..stride], &depth[(row + 1) * stride..][..stride]);
+        let quads_of = |top: [&[f32]; 2], bottom: [&[f32]; 2]| {
+            let texels = |at: &[f32]| f32x8::new(at[..QUAD_LANES].try_into().expect("a window"));
+            let least = texels(top[0]).fast_min(texels(top[1])).fast_min(texels(bottom[0]).fast_min(texels(bottom[1])));
+            // Depths are never NaN: the plain minimum is exact.
+            let whole = (least.fast_min(f32x8::ONE) * QUAD_STEPS).fast_trunc_int() - i32x8::ONE;
+            i16x8::from_i32x8_saturate(whole).to_array()
+        };
+        let windows = windows(top, count).zip(windows(bottom, count));
+        for (quads, ((top_left, top_right), (bottom_left, bottom_right))) in
+            quads[..count].chunks_exact_mut(QUAD_LANES).zip(windows)
+        {
+            quads.copy_from_slice(&quads_of([top_left, top_right], [bottom_left, bottom_right]));
+        }
+        // The rest of the row: its last two-by-twos' window, again.
+        let last = count - QUAD_LANES;
+        let [left, right] = [last, last + 1];
+        let window = quads_of([&top[left..], &top[right..]], [&bottom[left..], &bottom[right..]]);
+        quads[last..count].copy_from_slice(&window);
     }
-    let done = count - chunks.into_remainder().len();
-    let mut rest = [f32::INFINITY; LANES];
-    for (k, texel) in rest.iter_mut().enumerate().take(count - done) {
-        let at = done + k;
-        *texel = depth[at].min(depth[at + 1]).min(depth[at + stride]).min(depth[at + stride + 1]);
-    }
-    quads[done..count].copy_from_slice(&steps(f32x8::new(rest))[..count - done]);
+}
+
+/// Two-by-twos [`nearest_of_quads`] works through at once.
+const QUAD_LANES: usize = 8;
+
+/// The windows of [`QUAD_LANES`] texels of a row's first `count` texels, each with the window
+/// one texel to its right.
+fn windows(row: &[f32], count: usize) -> impl Iterator<Item = (&[f32], &[f32])> {
+    std::iter::zip(row[..count].chunks_exact(QUAD_LANES), row[1..].chunks_exact(QUAD_LANES))
 }
 
 /// Where the lookups of four points read a [`ShadowMap`] (see [`ShadowMap::taps`]).
