@@ -134,7 +134,7 @@ impl ShadowMap {
         }
     }
 
-    /// Distance between the rows [`ShadowMap::rows_mut`] returns, and where a row's first
+    /// Distance between the rows [`ShadowMap::strips_mut`] returns, and where a row's first
     /// texel is.
     pub(crate) fn row_layout(&self) -> (usize, usize) {
         (self.stride(), BORDER_BEFORE)
@@ -506,9 +506,9 @@ mod tests {
 
     proptest! {
         /// Drawn in strips of any height, every two-by-two a lookup can start on keeps a
-        /// depth strictly below its four texels' and at most a few steps below: what it finds
-        /// lit in full, the full filtered read finds lit exactly, and most of what the full
-        /// read finds lit it finds too.
+        /// depth strictly below its four texels', by at most two steps: what one read finds lit
+        /// in full, the full filtered read finds lit exactly, and it misses only points within
+        /// two steps of a texel.
         #[test]
         fn one_read_finds_what_four_find_lit_in_full(
             texels in prop::collection::vec(prop_oneof![0.0f32..1.0, Just(1.0), Just(0.25)], 24 * 24),
