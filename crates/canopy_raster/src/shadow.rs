@@ -198,11 +198,11 @@ impl ShadowMap {
     /// The light reaching the four points of `taps` (see [`ShadowMap::visibility_lanes`]).
     #[inline(always)]
     pub(crate) fn read(&self, taps: &Taps, filtered: bool) -> Vec4 {
-        let first = taps.first.to_array().map(|i| i as usize);
-        let lit = |texels: [f32; 4]| Vec4::select(taps.depth.cmple(Vec4::from_array(texels)), Vec4::ONE, Vec4::ZERO);
         if !filtered {
-            return lit(std::array::from_fn(|lane| self.depth[first[lane]]));
+            // One texel each: the one-read test is the whole lookup.
+            return Vec4::from_array((self.lit_in_full(taps, false) & f32x4::ONE).to_array());
         }
+        let first = taps.first.to_array().map(|i| i as usize);
         // Each lane's two-by-two texels, from one slice of the stored depths.
         let stride = self.stride();
         let quads: [&[f32]; 4] = std::array::from_fn(|lane| &self.depth[first[lane]..][..stride + 2]);
