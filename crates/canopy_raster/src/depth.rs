@@ -11,6 +11,7 @@
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
 use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View};
+use crate::schedule::Schedule;
 use crate::setup::{BiasedDepth, DEPTH, LANES, Plane, Surface, TriangleSetup};
 use crate::shade::{VARYINGS, Varyings, lanes_of};
 use crate::shadow::{QuadDepth, ShadowMap, nearest_of_quads};
@@ -32,6 +33,7 @@ pub(crate) const WINDOW: usize = 8;
 pub(crate) struct DepthPass {
     /// The triangles reaching each strip.
     sorted: Sorted,
+    schedule: Schedule,
 }
 
 /// What the depth pass draws: the frame's instances and their vertices as the light sees them.
@@ -53,13 +55,13 @@ impl DepthPass {
         self.sorted.sort::<STRIP_ROWS>(pool, scene.spans, scene.instances, scene.view);
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
-        let triangles = pool.scope(|scope| {
-            for (index, (depth, quads)) in map.strips_mut(STRIP_ROWS as usize).enumerate() {
-                let rows = (depth.len() / stride) as u32;
-                let band = DepthBand { y0: index as u32 * STRIP_ROWS, rows, width: size, stride, first, depth };
-                scope.spawn(async move { draw_strip(scene, sorted.strip(index), band, quads) });
-            }
-        });
+        let strips = map.strips_mut(STRIP_ROWS as usize);
+        let draw = |index: usize, (depth, quads): (&mut [f32], _)| {
+            let rows = (depth.len() / stride) as u32;
+            let band = DepthBand { y0: index as u32 * STRIP_ROWS, rows, width: size, stride, first, depth };
+            draw_strip(scene, sorted.strip(index), band, quads)
+        };
+        let triangles = self.schedule.run(pool, strips, draw, |total, strip| *total += strip);
         map.join_strips(STRIP_ROWS as usize);
         triangles.into_iter().sum()
     }

@@ -27,6 +27,7 @@ mod depth;
 pub mod framebuffer;
 pub mod mesh;
 pub mod pipeline;
+mod schedule;
 mod setup;
 pub mod shade;
 pub mod shadow;

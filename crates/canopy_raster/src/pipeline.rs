@@ -1,7 +1,8 @@
 //! The frame pipeline: a parallel vertex stage, then (when shadows are on) the shadow map's
 //! depth pass (module `depth`), then the image: its triangles sorted into bands of tile rows
 //! (module `sort`), then the bands drawn in parallel (module `tile`) and, with shadows,
-//! darkened where the light does not reach.
+//! darkened where the light does not reach. The bands and the map's strips are handed to the
+//! threads those that took longest in the last frame first (module `schedule`).
 //!
 //! A band takes the triangles reaching it in draw order, clips those crossing the near plane
 //! or the guard band, sets each up (module `setup`: culling, pixel bounds, edge functions and
@@ -15,11 +16,12 @@ use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
 use crate::depth::{DepthPass, DepthScene};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
+use crate::schedule::Schedule;
 use crate::setup::Viewport;
 use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
 use crate::shadow::{PixelsInMap, ShadowMap, fit_light};
 use crate::sort::Sorted;
-use crate::tile::{self, BandScratch, BandShadow, TileContext};
+use crate::tile::{self, BandCounts, BandScratch, BandShadow, TileContext};
 use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
@@ -223,6 +225,7 @@ pub struct Renderer {
     /// The triangles reaching each band of the image.
     sorted: Sorted,
     bands: Vec<BandScratch>,
+    band_schedule: Schedule,
     depth_pass: DepthPass,
     shadow: ShadowMap,
 }
@@ -290,12 +293,9 @@ impl Renderer {
             shadow,
         };
         self.bands.resize_with(height.div_ceil(TILE_HEIGHT) as usize, BandScratch::default);
-        let counts = pool.scope(|scope| {
-            for (row, (band, scratch)) in target.bands_mut(TILE_HEIGHT).zip(&mut self.bands).enumerate() {
-                let context = &context;
-                scope.spawn(async move { tile::draw_band(context, row as u32, band, scratch) });
-            }
-        });
+        let bands = target.bands_mut(TILE_HEIGHT).zip(&mut self.bands);
+        let draw = |row: usize, (band, scratch)| tile::draw_band(&context, row as u32, band, scratch);
+        let counts = self.band_schedule.run(pool, bands, draw, BandCounts::add);
         for counts in counts {
             stats.fragments += counts.fragments;
             stats.occluded += counts.occluded;

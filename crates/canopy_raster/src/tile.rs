@@ -55,7 +55,7 @@ pub(crate) struct BandScratch {
     tiles: Vec<TileState>,
 }
 
-/// What drawing a band counted.
+/// What drawing a band (or several) counted.
 #[derive(Debug, Default)]
 pub(crate) struct BandCounts {
     /// Pixels covered, counted once per triangle covering them.
@@ -64,6 +64,15 @@ pub(crate) struct BandCounts {
     pub occluded: u64,
     /// Triangles set up whose first row is in the band.
     pub triangles: usize,
+}
+
+impl BandCounts {
+    /// Adds another band's counts.
+    pub fn add(&mut self, other: Self) {
+        self.fragments += other.fragments;
+        self.occluded += other.occluded;
+        self.triangles += other.triangles;
+    }
 }
 
 /// Which pixels of each row of a walk are covered: bit `k` of word `r` for pixel `k` of the
