@@ -63,7 +63,7 @@ impl DepthPass {
         };
         let triangles = self.schedule.run(pool, strips, draw, |total, strip| *total += strip);
         map.join_strips(STRIP_ROWS as usize);
-        triangles.into_iter().sum()
+        triangles
     }
 }
 

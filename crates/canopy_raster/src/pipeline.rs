@@ -296,12 +296,12 @@ impl Renderer {
         let bands = target.bands_mut(TILE_HEIGHT).zip(&mut self.bands);
         let draw = |row: usize, (band, scratch)| tile::draw_band(&context, row as u32, band, scratch);
         let counts = self.band_schedule.run(pool, bands, draw, BandCounts::add);
-        for counts in counts {
-            stats.fragments += counts.fragments;
-            stats.occluded += counts.occluded;
-            stats.triangles_rasterized += counts.triangles;
+        RenderStats {
+            fragments: counts.fragments,
+            occluded: counts.occluded,
+            triangles_rasterized: counts.triangles,
+            ..stats
         }
-        stats
     }
 
     /// The shadow map of the last frame.

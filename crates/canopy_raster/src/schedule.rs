@@ -27,8 +27,8 @@ pub(crate) struct Schedule {
 
 impl Schedule {
     /// Calls `work(index, part)` for each of `parts` on the threads of `pool` (the calling
-    /// thread included), the parts that took longest last time first, and returns what each
-    /// thread's calls added up to with `add`, starting from `R::default()`.
+    /// thread included), the parts that took longest last time first, and returns what all the
+    /// calls add up to with `add`, starting from `R::default()`.
     ///
     /// # Panics
     /// If there are more than [`MAX_PARTS`] parts.
@@ -38,7 +38,7 @@ impl Schedule {
         parts: impl Iterator<Item = T>,
         work: impl Fn(usize, T) -> R + Sync,
         add: impl Fn(&mut R, R) + Sync,
-    ) -> Vec<R> {
+    ) -> R {
         let slots: [Mutex<Option<T>>; MAX_PARTS] = std::array::from_fn(|_| Mutex::new(None));
         let mut count = 0;
         for part in parts {
@@ -72,7 +72,10 @@ impl Schedule {
         for (time, nanos) in times.iter_mut().zip(nanos) {
             *time = Duration::from_nanos(nanos.load(Ordering::Relaxed));
         }
-        totals
+        totals.into_iter().fold(R::default(), |mut sum, total| {
+            add(&mut sum, total);
+            sum
+        })
     }
 }
 
@@ -93,14 +96,14 @@ mod tests {
             vec![(index, value)]
         };
         let add = |total: &mut Vec<(usize, u32)>, more: Vec<(usize, u32)>| total.extend(more);
-        let mut done: Vec<_> = schedule.run(&pool, (0..6).map(|k| k * 10), work, add).concat();
+        let mut done = schedule.run(&pool, (0..6).map(|k| k * 10), work, add);
         done.sort_unstable();
         assert_eq!(done, (0..6).map(|k| (k, k as u32 * 10)).collect::<Vec<_>>());
         assert_eq!(schedule.order, [0, 1, 2, 3, 4, 5], "no times yet: in order");
         assert!(schedule.times[3] >= Duration::from_millis(2), "{:?}", schedule.times);
 
         schedule.times = [3, 1, 4, 1, 5, 9].map(Duration::from_millis).to_vec();
-        let done = schedule.run(&pool, 0..6u32, work, add).concat();
+        let done = schedule.run(&pool, 0..6u32, work, add);
         assert_eq!(done.len(), 6);
         assert_eq!(schedule.order, [5, 4, 2, 0, 1, 3], "longest first, ties in order");
     }
