@@ -620,6 +620,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
     let width = band.width as usize;
     // A tile row's whole runs, and the pixels left at the end of the band's last tile.
     let mut pending = [PendingRun::default(); TILE_WIDTH as usize / LANES + 1];
+    let mut visibility = [Vec4::ZERO; TILE_WIDTH as usize / LANES + 1];
     // Tiles nothing was drawn into (the sky, say) have nothing to darken.
     for tile in tiles.iter().filter(|tile| tile.fragments > 0) {
         let (x0, x1) = (tile.rect.min_x as usize, tile.rect.max_x as usize + 1);
@@ -636,7 +637,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
                     let x = Vec4::splat((x0 + run * LANES) as f32) + LANE_OFFSETS;
                     let [tx, ty, light_depth] = shadow.pixels.locate(in_map, x, depth);
                     let taps = shadow.map.taps(tx, ty, light_depth, shadow.filtered);
-                    pending[count] = PendingRun { run, drawn, taps, visibility: Vec4::ZERO };
+                    pending[count] = PendingRun { run, drawn, taps };
                     count += 1;
                 }
             };
@@ -647,25 +648,26 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
                 find(depth_runs.len(), run_of(depth_rest, FAR_DEPTH));
             }
             // Runs the light reaches in full (most) keep their colours and only become opaque.
+            // The others move to the front of `pending`, read in place (not copied whole).
             let mut left = 0;
             for k in 0..count {
-                let run = pending[k];
-                if (shadow.map.lit_in_full(&run.taps, shadow.filtered) | !run.drawn).all() {
-                    shade_colors(color_runs, color_rest, run.run, |colors| opaque(colors, run.drawn));
+                let PendingRun { run, drawn, ref taps } = pending[k];
+                if (shadow.map.lit_in_full(taps, shadow.filtered) | !drawn).all() {
+                    shade_colors(color_runs, color_rest, run, |colors| opaque(colors, drawn));
                 } else {
-                    pending[left] = run;
+                    pending[left] = pending[k];
                     left += 1;
                 }
             }
-            for run in &mut pending[..left] {
-                run.visibility = shadow.map.read(&run.taps, shadow.filtered);
+            for (run, visibility) in pending[..left].iter().zip(&mut visibility) {
+                *visibility = shadow.map.read(&run.taps, shadow.filtered);
             }
-            for run in &pending[..left] {
+            for (run, &visibility) in pending[..left].iter().zip(&visibility) {
                 // A filtered lookup may still find the light in full (its shadowing texels
                 // weigh nothing).
-                let darkened = (lanes_of(run.visibility).simd_lt(f32x4::ONE) & run.drawn).any();
+                let darkened = (lanes_of(visibility).simd_lt(f32x4::ONE) & run.drawn).any();
                 shade_colors(color_runs, color_rest, run.run, |colors| match darkened {
-                    true => light_run(colors, run.drawn, run.visibility, &shadow.light),
+                    true => light_run(colors, run.drawn, visibility, &shadow.light),
                     false => opaque(colors, run.drawn),
                 });
             }
@@ -706,7 +708,6 @@ struct PendingRun {
     /// Its drawn pixels (nearer than the far depth).
     drawn: f32x4,
     taps: Taps,
-    visibility: Vec4,
 }
 
 /// The values of a run cut short, `fill` past them.
