@@ -191,9 +191,10 @@ fn fill_windows(setup: &TriangleSetup, plane: &Plane, rect: PixelBounds, band: &
     if windows == 1 {
         // Most of the map's triangles: one window a row, everything kept in registers, depths
         // stepped down the rows too (over a few rows, rounding stays far below the bias).
-        let (mut depth, depth_step) = (row_depths(rect.min_y), f32x8::splat(plane.dy.x));
+        // The lanes past the rect start, and stay, infinitely deep.
+        let (mut depth, depth_step) = (depths(past_rect, row_depths(rect.min_y)), f32x8::splat(plane.dy.x));
         for _ in rect.min_y..=rect.max_y {
-            window(at, depths(row_edges[0] | row_edges[1] | row_edges[2] | past_rect, depth));
+            window(at, depths(row_edges[0] | row_edges[1] | row_edges[2], depth));
             row_edges = std::array::from_fn(|k| row_edges[k] + row_step[k]);
             depth += depth_step;
             at += band.stride;
