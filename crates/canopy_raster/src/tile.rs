@@ -620,6 +620,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
     let width = band.width as usize;
     // A tile row's whole runs, and the pixels left at the end of the band's last tile.
     let mut pending = [PendingRun::default(); TILE_WIDTH as usize / LANES + 1];
+    // The light reaching the runs a tile row leaves for full reads, in their order.
     let mut visibility = [Vec4::ZERO; TILE_WIDTH as usize / LANES + 1];
     // Tiles nothing was drawn into (the sky, say) have nothing to darken.
     for tile in tiles.iter().filter(|tile| tile.fragments > 0) {
