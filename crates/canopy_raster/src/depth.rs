@@ -115,8 +115,7 @@ fn draw_strip<'a>(
         }
     }
     if let Some(quads) = quads {
-        let joined = band.depth.len() - band.stride;
-        nearest_of_quads(band.depth, &mut quads[..joined], band.stride);
+        nearest_of_quads(band.depth, quads, band.stride);
     }
     triangles
 }

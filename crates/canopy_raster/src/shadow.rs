@@ -230,17 +230,19 @@ const QUAD_STEPS: f32 = i16::MAX as f32;
 /// Depths past the map's range (the far depth is 1) are kept as 1.
 pub(crate) type QuadDepth = i16;
 
-/// Writes into each row of `quads` the [`QuadDepth`] of each two-by-two of texels of `depth`
-/// (rows `stride` apart, at least one more than `quads` holds) with its top-left texel at the
-/// same index. The last texel of a row has no right neighbour and is left as it is: it is a
-/// border texel, and no lookup starts a two-by-two on it.
+/// Writes into the rows of `quads` the [`QuadDepth`] of each two-by-two of texels of `depth`
+/// (rows `stride` apart) with its top-left texel at the same index, for every row `depth` holds
+/// the row below of: a strip's last row is left for [`ShadowMap::join_strips`]. The last texel
+/// of a row has no right neighbour and is left as it is: it is a border texel, and no lookup
+/// starts a two-by-two on it.
 ///
 /// # Panics
 /// If a row holds fewer than [`QUAD_LANES`] two-by-twos.
 pub(crate) fn nearest_of_quads(depth: &[f32], quads: &mut [QuadDepth], stride: usize) {
     let count = stride - 1;
     assert!(count >= QUAD_LANES, "rows of at least {QUAD_LANES} two-by-twos");
-    for (row, quads) in quads.chunks_exact_mut(stride).enumerate() {
+    let rows = (depth.len() / stride).saturating_sub(1);
+    for (row, quads) in quads.chunks_exact_mut(stride).take(rows).enumerate() {
         let (top, bottom) = (&depth[row * stride..][..stride], &depth[(row + 1) * stride..][..stride]);
         let quads_of = |top: [&[f32]; 2], bottom: [&[f32]; 2]| {
             let texels = |at: &[f32]| f32x8::new(at[..QUAD_LANES].try_into().expect("a window"));
@@ -497,8 +499,7 @@ mod tests {
             for (row, texels) in depth.chunks_mut(stride).enumerate() {
                 draw(strip * strip_rows + row, &mut texels[first..first + size as usize]);
             }
-            let joined = depth.len() - stride;
-            nearest_of_quads(depth, &mut quads.expect("filtered")[..joined], stride);
+            nearest_of_quads(depth, quads.expect("filtered"), stride);
         }
         map.join_strips(strip_rows);
         map
