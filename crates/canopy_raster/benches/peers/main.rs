@@ -6,6 +6,10 @@
 //! (default 40). The Mesa llvmpipe peer needs `libegl1 libegl-mesa0 libgl1-mesa-dri`; without
 //! them its rows say why they are missing.
 //!
+//! Canopy draws each round's frame three times: without shadows, with shadows read at the
+//! nearest texel, and with shadows filtered over four texels (PCF, its default); the shadowed
+//! frames' ratios are over the unshadowed frame of the same round.
+//!
 //! Every renderer draws the same mesh with the same matrices; the coverage column (the share
 //! of pixels not left at the background) shows that they drew the same picture. The ratio
 //! column is the median over rounds of each frame's time over Canopy's frame of the same
@@ -33,18 +37,28 @@ const WARM_UP: usize = 3;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Contender {
     Canopy,
+    /// With shadows looked up at the nearest texel.
     CanopyShadowed,
+    /// With shadows filtered over the four nearest texels (the default).
+    CanopyShadowedPcf,
     Euc,
     Llvmpipe,
 }
 
 impl Contender {
-    const ALL: [Contender; 4] = [Contender::Canopy, Contender::CanopyShadowed, Contender::Euc, Contender::Llvmpipe];
+    const ALL: [Contender; 5] = [
+        Contender::Canopy,
+        Contender::CanopyShadowed,
+        Contender::CanopyShadowedPcf,
+        Contender::Euc,
+        Contender::Llvmpipe,
+    ];
 
     fn label(self) -> &'static str {
         match self {
             Contender::Canopy => "Canopy",
-            Contender::CanopyShadowed => "Canopy + shadow map (PCF)",
+            Contender::CanopyShadowed => "Canopy + shadow map (nearest texel)",
+            Contender::CanopyShadowedPcf => "Canopy + shadow map (PCF)",
             Contender::Euc => "euc 0.5.3",
             Contender::Llvmpipe => "Mesa llvmpipe (EGL)",
         }
@@ -60,8 +74,7 @@ struct Canopy {
 }
 
 impl Canopy {
-    fn render(&mut self, camera: &standard::StandardCamera, shadows: bool) {
-        let settings = RenderSettings { shadows, ..RenderSettings::default() };
+    fn render(&mut self, camera: &standard::StandardCamera, settings: RenderSettings) {
         let frame = standard::frame(camera, &self.instances, settings);
         self.renderer.render(&mut self.target, &self.pool, &frame);
     }
@@ -71,6 +84,11 @@ impl Canopy {
         let covered = self.target.color().chunks_exact(4).filter(|p| *p != background).count();
         covered as f64 / (self.target.width() * self.target.height()) as f64
     }
+}
+
+/// Canopy's settings with shadows, filtered (`pcf`) or read at the nearest texel.
+fn shadowed(pcf: bool) -> RenderSettings {
+    RenderSettings { shadows: true, pcf, ..RenderSettings::default() }
 }
 
 fn median(samples: &mut [f64]) -> f64 {
@@ -155,8 +173,9 @@ fn main() {
             for (index, contender) in Contender::ALL.into_iter().enumerate() {
                 let started = Instant::now();
                 match contender {
-                    Contender::Canopy => canopy.render(camera, false),
-                    Contender::CanopyShadowed => canopy.render(camera, true),
+                    Contender::Canopy => canopy.render(camera, RenderSettings::default()),
+                    Contender::CanopyShadowed => canopy.render(camera, shadowed(false)),
+                    Contender::CanopyShadowedPcf => canopy.render(camera, shadowed(true)),
                     Contender::Euc => euc.render(&scene, clip),
                     Contender::Llvmpipe => match &mut gl {
                         Ok(gl) => gl.render(clip),
@@ -169,8 +188,9 @@ fn main() {
             }
         }
         // Coverage of each renderer's last frame of this camera (Canopy's without shadows).
-        canopy.render(camera, false);
-        let coverage = [Some(canopy.coverage()), None, Some(euc.coverage()), gl.as_mut().ok().map(|gl| gl.coverage())];
+        canopy.render(camera, RenderSettings::default());
+        let coverage =
+            [Some(canopy.coverage()), None, None, Some(euc.coverage()), gl.as_mut().ok().map(|gl| gl.coverage())];
         let canopy_frames = samples[0].clone();
         let canopy_fastest = quantile(&mut samples[0].clone(), FASTEST_TENTH);
         for (index, contender) in Contender::ALL.into_iter().enumerate() {
@@ -184,7 +204,7 @@ fn main() {
             let coverage = coverage[index].map_or("same".to_string(), |c| format!("{:.1}%", c * 100.0));
             let [ratio, fastest_ratio] = [ratio, fastest_ratio].map(|ratio| match contender {
                 Contender::Canopy => "-".to_string(),
-                Contender::CanopyShadowed => format!("shadows cost {ratio:.2}x"),
+                Contender::CanopyShadowed | Contender::CanopyShadowedPcf => format!("shadows cost {ratio:.2}x"),
                 _ => format!("{ratio:.1}x"),
             });
             println!(
