@@ -18,7 +18,7 @@ use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
 use crate::schedule::Schedule;
 use crate::setup::Viewport;
-use crate::shade::{Material, Shading, VARYINGS, Varyings, lanes_of, slot};
+use crate::shade::{Material, Shading, VARYINGS, Varyings, floor_lanes, slot};
 use crate::shadow::{PixelsInMap, ShadowMap, fit_light};
 use crate::sort::Sorted;
 use crate::tile::{self, BandCounts, BandScratch, BandShadow, TileContext};
@@ -26,7 +26,6 @@ use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
 use std::sync::Arc;
-use wide::i32x4;
 
 /// Tile width in pixels.
 pub const TILE_WIDTH: u32 = 64;
@@ -150,24 +149,12 @@ impl ScreenVertex {
         // The limits only guard against rounding past the guard band after clipping; `max`
         // comes first so that a position without a direction (on the eye point) lands on one.
         let limit = Vec4::splat(3.0 * MAX_TARGET_SIZE as f32 * steps);
-        let fixed = |v: Vec4| floor_lanes(v.max(-limit).min(limit) + 0.5);
+        let fixed = |v: Vec4| floor_lanes(v.max(-limit).min(limit) + 0.5).to_array();
         let x = fixed((clip.x * inv_w + 1.0) * 0.5 * width as f32 * steps);
         let y = fixed((1.0 - clip.y * inv_w) * 0.5 * height as f32 * steps);
         let (z, inv_w) = ((clip.z * inv_w).max(Vec4::ZERO).to_array(), inv_w.to_array());
         std::array::from_fn(|k| Self { code: 0, x: x[k], y: y[k], z: z[k], inv_w: inv_w[k] })
     }
-}
-
-/// The largest whole number not above each lane of `v`, for values well within `i32` (the
-/// baseline x86-64 target has no rounding instruction).
-#[inline(always)]
-fn floor_lanes(v: Vec4) -> [i32; 4] {
-    let v = lanes_of(v);
-    let truncated = v.fast_trunc_int();
-    // Truncation moves negative fractions up; the lanes it moved step back down (a true
-    // comparison is all ones, minus one as an integer).
-    let moved_up: i32x4 = bytemuck::cast(v.simd_lt(truncated.round_float()));
-    (truncated + moved_up).to_array()
 }
 
 /// Where an instance's vertices and triangles start in the frame's global numbering, and its
@@ -675,12 +662,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn lanes_floor_like_whole_numbers() {
-        assert_eq!(floor_lanes(Vec4::new(-1.5, -1.0, 0.25, 2.0)), [-2, -1, 0, 2]);
-        assert_eq!(floor_lanes(Vec4::new(-0.0, -0.75, 1e6 + 0.5, -1e6 - 0.5)), [0, -1, 1_000_000, -1_000_001]);
     }
 
     #[test]

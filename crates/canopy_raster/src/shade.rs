@@ -8,7 +8,7 @@
 use crate::texture::{Sampler, Texture};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
-use wide::f32x4;
+use wide::{f32x4, i32x4};
 
 /// How light is computed across a triangle; the sources compare all three.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
@@ -156,9 +156,28 @@ pub(crate) fn lanes_of(v: Vec4) -> f32x4 {
     f32x4::new(v.to_array())
 }
 
+/// The largest whole number not above each lane of `v`, for values well within `i32` (the
+/// baseline x86-64 target has no rounding instruction).
+#[inline(always)]
+pub(crate) fn floor_lanes(v: Vec4) -> i32x4 {
+    let v = lanes_of(v);
+    let truncated = v.fast_trunc_int();
+    // Truncation moves negative fractions up; the lanes it moved step back down (a true
+    // comparison is all ones, minus one as an integer).
+    let moved_up: i32x4 = bytemuck::cast(v.simd_lt(truncated.round_float()));
+    truncated + moved_up
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lanes_floor_like_whole_numbers() {
+        let floor = |v: Vec4| floor_lanes(v).to_array();
+        assert_eq!(floor(Vec4::new(-1.5, -1.0, 0.25, 2.0)), [-2, -1, 0, 2]);
+        assert_eq!(floor(Vec4::new(-0.0, -0.75, 1e6 + 0.5, -1e6 - 0.5)), [0, -1, 1_000_000, -1_000_001]);
+    }
 
     #[test]
     fn passes_interpolate_only_what_they_use() {

@@ -4,7 +4,9 @@
 //! bottom-right; texel `(i, j)` covers `[i, i + 1] x [j, j + 1]` in texel units, so its centre is
 //! at `((i + 1/2) / width, (j + 1/2) / height)`.
 
-use bevy_math::{Vec2, Vec3};
+use crate::shade::floor_lanes;
+use bevy_math::{Vec2, Vec3, Vec4};
+use wide::{i32x4, u32x4};
 
 /// How texels are combined at a sample point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
@@ -46,24 +48,41 @@ pub enum TextureError {
     /// The image has no pixels.
     #[error("the image is empty")]
     Empty,
+    /// The image has more texels than a texture can hold.
+    #[error("the image has {0} texels, more than the {MAX_TEXELS} a texture can hold")]
+    TooLarge(u64),
 }
 
-/// An RGB image with channels in `[0, 1]`, stored row by row from the top-left texel.
+/// The most texels a texture holds: their indices fit `i32` lanes.
+pub const MAX_TEXELS: u64 = i32::MAX as u64;
+
+/// An RGB image stored row by row from the top-left texel, eight bits a channel (as the image
+/// files hold them), one word per texel with red in the low byte.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Texture {
     width: u32,
     height: u32,
-    texels: Vec<Vec3>,
+    texels: Vec<u32>,
 }
 
+/// Texel coordinates beyond this many texels from the origin are clamped to it: up to here an
+/// `f32` holds every whole number, so wrapping stays exact.
+const COORDINATE_LIMIT: f32 = 8_388_608.0;
+
 impl Texture {
-    /// A texture of `width` x `height` texels from a function of the texel position.
+    /// A texture of `width` x `height` texels from a function of the texel position; channels
+    /// are clamped to `[0, 1]` and rounded to eight bits.
     ///
     /// # Panics
-    /// If either size is zero.
+    /// If either size is zero or the texture would hold more than [`MAX_TEXELS`].
     pub fn from_fn(width: u32, height: u32, texel: impl Fn(u32, u32) -> Vec3) -> Self {
         assert!(width > 0 && height > 0, "a texture needs at least one texel");
-        let texels = (0..height).flat_map(|y| (0..width).map(move |x| (x, y))).map(|(x, y)| texel(x, y)).collect();
+        assert!(u64::from(width) * u64::from(height) <= MAX_TEXELS, "at most {MAX_TEXELS} texels");
+        let byte = |channel: f32| (channel.clamp(0.0, 1.0) * 255.0).round() as u8;
+        let texels = (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| word(texel(x, y).to_array().map(byte)))
+            .collect();
         Self { width, height, texels }
     }
 
@@ -75,7 +94,11 @@ impl Texture {
             return Err(TextureError::Empty);
         }
         let (width, height) = image.dimensions();
-        let texels = image.pixels().map(|p| Vec3::from_array(p.0.map(f32::from)) / 255.0).collect();
+        let count = u64::from(width) * u64::from(height);
+        if count > MAX_TEXELS {
+            return Err(TextureError::TooLarge(count));
+        }
+        let texels = image.pixels().map(|p| word(p.0)).collect();
         Ok(Self { width, height, texels })
     }
 
@@ -89,49 +112,88 @@ impl Texture {
         self.height
     }
 
-    /// The texel in column `x`, row `y`.
-    fn texel(&self, x: u32, y: u32) -> Vec3 {
-        self.texels[(y * self.width + x) as usize]
-    }
-
     /// The colour at texture coordinates `uv`.
     pub fn sample(&self, uv: Vec2, sampler: Sampler) -> Vec3 {
-        let size = Vec2::new(self.width as f32, self.height as f32);
-        // Texel units; non-finite coordinates (a degenerate interpolation) read texel 0.
-        let p = if uv.is_finite() { uv * size } else { Vec2::ZERO };
+        let [r, g, b] = self.sample_lanes(Vec4::splat(uv.x), Vec4::splat(uv.y), sampler);
+        Vec3::new(r.x, g.x, b.x)
+    }
+
+    /// [`Texture::sample`] at four points at once, given as lanes of `u` and of `v`: the red,
+    /// green and blue lanes of their colours. Each point reads the texels its lane's
+    /// coordinates lead to, four lanes' arithmetic at a time; non-finite coordinates (a
+    /// degenerate interpolation) read texel `(0, 0)`.
+    #[inline(always)]
+    pub(crate) fn sample_lanes(&self, u: Vec4, v: Vec4, sampler: Sampler) -> [Vec4; 3] {
+        let finite = u.is_finite_mask() & v.is_finite_mask();
+        let limit = Vec4::splat(COORDINATE_LIMIT);
+        // Texel units, within the limit.
+        let texels = |t: Vec4, size: u32| Vec4::select(finite, t * size as f32, Vec4::ZERO).clamp(-limit, limit);
+        let (x, y) = (texels(u, self.width), texels(v, self.height));
+        let (columns, rows) = (|x| wrap(x, self.width, sampler.address), |y| wrap(y, self.height, sampler.address));
         match sampler.filter {
-            Filter::Nearest => {
-                let x = wrap(p.x.floor(), self.width, sampler.address);
-                let y = wrap(p.y.floor(), self.height, sampler.address);
-                self.texel(x, y)
-            }
+            Filter::Nearest => self.texels_at(columns(floor_lanes(x)), rows(floor_lanes(y))),
             Filter::Bilinear => {
-                let p = p - 0.5;
-                let base = p.floor();
-                let t = p - base;
-                let [x0, x1] = [base.x, base.x + 1.0].map(|x| wrap(x, self.width, sampler.address));
-                let [y0, y1] = [base.y, base.y + 1.0].map(|y| wrap(y, self.height, sampler.address));
-                let top = self.texel(x0, y0).lerp(self.texel(x1, y0), t.x);
-                let bottom = self.texel(x0, y1).lerp(self.texel(x1, y1), t.x);
-                top.lerp(bottom, t.y)
+                let (x, y) = (x - 0.5, y - 0.5);
+                let (left, top) = (floor_lanes(x), floor_lanes(y));
+                let whole = |c: i32x4| Vec4::from_array(c.round_float().to_array());
+                let (right_weight, down_weight) = (x - whole(left), y - whole(top));
+                let [x0, x1] = [left, left + 1].map(columns);
+                let [y0, y1] = [top, top + 1].map(rows);
+                let lerp = |a: [Vec4; 3], b: [Vec4; 3], t: Vec4| std::array::from_fn(|c| a[c] * (1.0 - t) + b[c] * t);
+                let upper = lerp(self.texels_at(x0, y0), self.texels_at(x1, y0), right_weight);
+                let lower = lerp(self.texels_at(x0, y1), self.texels_at(x1, y1), right_weight);
+                lerp(upper, lower, down_weight)
             }
         }
     }
+
+    /// The red, green and blue lanes of the texels in columns `x` and rows `y`, one per lane,
+    /// each inside the texture.
+    #[inline(always)]
+    fn texels_at(&self, x: i32x4, y: i32x4) -> [Vec4; 3] {
+        // Below `MAX_TEXELS` every index fits an `i32`.
+        let index = (y * i32x4::splat(self.width as i32) + x).to_array();
+        let words = u32x4::new(index.map(|i| self.texels[i as usize]));
+        let channel = |shift: u32| {
+            let bytes: i32x4 = bytemuck::cast((words >> shift) & u32x4::splat(0xff));
+            Vec4::from_array(bytes.round_float().to_array()) / 255.0
+        };
+        [channel(0), channel(8), channel(16)]
+    }
 }
 
-/// Maps a whole texel coordinate into `0..size` by the addressing rule.
-fn wrap(coordinate: f32, size: u32, address: Address) -> u32 {
-    // Large coordinates saturate in the cast; both rules keep the result in range anyway.
-    let i = coordinate as i64;
+/// The texel word holding `rgb`.
+fn word(rgb: [u8; 3]) -> u32 {
+    u32::from_le_bytes([rgb[0], rgb[1], rgb[2], 0xff])
+}
+
+/// Whole texel coordinates (within the limit, or one past it) mapped into `0..size` by the
+/// addressing rule, four at a time.
+#[inline(always)]
+fn wrap(whole: i32x4, size: u32, address: Address) -> i32x4 {
+    let last = i32x4::splat(size as i32 - 1);
     match address {
-        Address::Repeat => i.rem_euclid(size as i64) as u32,
-        Address::Clamp => i.clamp(0, size as i64 - 1) as u32,
+        // Two's complement keeps the low bits of a whole number the same modulo a power of
+        // two, negative or not.
+        Address::Repeat if size.is_power_of_two() => whole & last,
+        Address::Repeat => {
+            // Exact in floats: every value stays below 2^24. The rounded quotient may be one
+            // off either way, which the two corrections undo; the clamp only keeps textures
+            // wider than the limit inside themselves.
+            let (whole, size) = (Vec4::from_array(whole.round_float().to_array()), size as f32);
+            let wrapped = whole - (whole / size).floor() * size;
+            let wrapped = Vec4::select(wrapped.cmplt(Vec4::ZERO), wrapped + size, wrapped);
+            let wrapped = Vec4::select(wrapped.cmpge(Vec4::splat(size)), wrapped - size, wrapped);
+            floor_lanes(wrapped).min(last).max(i32x4::ZERO)
+        }
+        Address::Clamp => whole.min(last).max(i32x4::ZERO),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     /// A 2 x 2 texture: black, red / green, blue.
     fn quad() -> Texture {
@@ -181,8 +243,39 @@ mod tests {
             image.write_to(&mut bytes, format).unwrap();
             let texture = Texture::decode(bytes.get_ref()).unwrap();
             assert_eq!((texture.width(), texture.height()), (3, 2));
-            assert_eq!(texture.texel(2, 1), Vec3::new(200.0, 200.0, 7.0) / 255.0);
+            let last = Vec2::new(2.5 / 3.0, 1.5 / 2.0);
+            assert_eq!(texture.sample(last, NEAREST_CLAMP), Vec3::new(200.0, 200.0, 7.0) / 255.0);
         }
         assert!(matches!(Texture::decode(b"not an image"), Err(TextureError::Decode(_))));
+    }
+
+    proptest! {
+        /// Four points read at once each find the texel that whole-number arithmetic on their
+        /// coordinates gives, for sizes that are powers of two and sizes that are not.
+        #[test]
+        fn lanes_repeat_and_clamp_like_whole_numbers(
+            us in prop::array::uniform4(-1e4f32..1e4),
+            vs in prop::array::uniform4(-1e4f32..1e4),
+            width in 1u32..9,
+            height in 1u32..9,
+        ) {
+            // Each texel's red and green channels tell its column and row.
+            let texture = Texture::from_fn(width, height, |x, y| Vec3::new(x as f32, y as f32, 0.0) / 8.0);
+            for address in [Address::Repeat, Address::Clamp] {
+                let sampler = Sampler { filter: Filter::Nearest, address };
+                let [red, green, _] = texture.sample_lanes(Vec4::from_array(us), Vec4::from_array(vs), sampler);
+                let expected = |t: f32, size: u32| {
+                    let whole = (t * size as f32).floor() as i64;
+                    match address {
+                        Address::Repeat => whole.rem_euclid(i64::from(size)),
+                        Address::Clamp => whole.clamp(0, i64::from(size) - 1),
+                    }
+                };
+                for lane in 0..4 {
+                    prop_assert_eq!((red[lane] * 8.0).round() as i64, expected(us[lane], width));
+                    prop_assert_eq!((green[lane] * 8.0).round() as i64, expected(vs[lane], height));
+                }
+            }
+        }
     }
 }

@@ -22,7 +22,7 @@ use crate::shade::{
 };
 use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
-use bevy_math::{Vec2, Vec3, Vec4};
+use bevy_math::{Vec3, Vec4};
 use std::iter::Peekable;
 use std::ops::{Add, Mul};
 use wide::{f32x4, i32x4, i32x8, u32x4};
@@ -560,18 +560,9 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
         }
     }
     if textured && let Some(texture) = material.texture.as_deref() {
-        let (u, v) = (value(slot::UV).to_array(), value(slot::UV + 1).to_array());
-        let mut texels = [[0.0; LANES]; 3];
-        for lane in 0..LANES {
-            if drawn_lanes & 1 << lane != 0 {
-                let texel = texture.sample(Vec2::new(u[lane], v[lane]), material.sampler);
-                for (channel, texels) in texels.iter_mut().enumerate() {
-                    texels[lane] = texel[channel];
-                }
-            }
-        }
-        for (c, texels) in rgb.iter_mut().zip(texels) {
-            *c *= Vec4::from_array(texels);
+        let texels = texture.sample_lanes(value(slot::UV), value(slot::UV + 1), material.sampler);
+        for (c, texel) in rgb.iter_mut().zip(texels) {
+            *c *= texel;
         }
     }
     let [r, g, b] = rgb.map(unit_bytes);
