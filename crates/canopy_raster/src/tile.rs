@@ -467,7 +467,11 @@ fn fill_pass<C: CompiledPass>(
         triangle,
         context,
     };
-    walk.covered_runs(rows, |py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes))
+    walk.covered_runs(
+        rows,
+        #[inline(always)]
+        |py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes),
+    )
 }
 
 /// What the runs of a triangle share.
