@@ -8,7 +8,7 @@
 use crate::texture::{Sampler, Texture};
 use bevy_math::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
-use wide::{f32x4, i32x4};
+use wide::{f32x4, i32x4, u32x4};
 
 /// How light is computed across a triangle; the sources compare all three.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
@@ -154,6 +154,18 @@ pub(crate) use with_compiled_pass;
 #[inline(always)]
 pub(crate) fn lanes_of(v: Vec4) -> f32x4 {
     f32x4::new(v.to_array())
+}
+
+/// Each lane of `v` as a float.
+#[inline(always)]
+pub(crate) fn floats_of(v: i32x4) -> Vec4 {
+    Vec4::from_array(v.round_float().to_array())
+}
+
+/// The byte `shift` bits up in each of `words` (0 to 255), as floats: a channel of RGBA8 words.
+#[inline(always)]
+pub(crate) fn bytes_of(words: u32x4, shift: u32) -> Vec4 {
+    floats_of(bytemuck::cast((words >> shift) & u32x4::splat(0xff)))
 }
 
 /// The largest whole number not above each lane of `v`, for values well within `i32` (the

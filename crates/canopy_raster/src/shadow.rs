@@ -11,7 +11,7 @@
 
 use crate::camera::{Camera, Light};
 use crate::depth::WINDOW;
-use crate::shade::lanes_of;
+use crate::shade::{floats_of, lanes_of};
 use bevy_math::{DMat4, DVec4, Mat4, Vec3, Vec4};
 use wide::{f32x4, f32x8, i16x8, i32x4, i32x8};
 
@@ -177,8 +177,7 @@ impl ShadowMap {
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
         let first = row * i32x4::splat(self.stride() as i32) + column;
-        let whole = |v: i32x4| Vec4::from_array(v.round_float().to_array());
-        Taps { first, right: x - whole(column), down: y - whole(row), depth }
+        Taps { first, right: x - floats_of(column), down: y - floats_of(row), depth }
     }
 
     /// Which of the four points of `taps` the light reaches in full, found with one read each:

@@ -4,7 +4,7 @@
 //! bottom-right; texel `(i, j)` covers `[i, i + 1] x [j, j + 1]` in texel units, so its centre is
 //! at `((i + 1/2) / width, (j + 1/2) / height)`.
 
-use crate::shade::floor_lanes;
+use crate::shade::{bytes_of, floats_of, floor_lanes};
 use bevy_math::{Vec2, Vec3, Vec4};
 use wide::{i32x4, u32x4};
 
@@ -127,16 +127,15 @@ impl Texture {
         let finite = u.is_finite_mask() & v.is_finite_mask();
         let limit = Vec4::splat(COORDINATE_LIMIT);
         // Texel units, within the limit.
-        let texels = |t: Vec4, size: u32| Vec4::select(finite, t * size as f32, Vec4::ZERO).clamp(-limit, limit);
-        let (x, y) = (texels(u, self.width), texels(v, self.height));
+        let in_texels = |t: Vec4, size: u32| Vec4::select(finite, t * size as f32, Vec4::ZERO).clamp(-limit, limit);
+        let (x, y) = (in_texels(u, self.width), in_texels(v, self.height));
         let (columns, rows) = (|x| wrap(x, self.width, sampler.address), |y| wrap(y, self.height, sampler.address));
         match sampler.filter {
             Filter::Nearest => self.texels_at(columns(floor_lanes(x)), rows(floor_lanes(y))),
             Filter::Bilinear => {
                 let (x, y) = (x - 0.5, y - 0.5);
                 let (left, top) = (floor_lanes(x), floor_lanes(y));
-                let whole = |c: i32x4| Vec4::from_array(c.round_float().to_array());
-                let (right_weight, down_weight) = (x - whole(left), y - whole(top));
+                let (right_weight, down_weight) = (x - floats_of(left), y - floats_of(top));
                 let [x0, x1] = [left, left + 1].map(columns);
                 let [y0, y1] = [top, top + 1].map(rows);
                 let lerp = |a: [Vec4; 3], b: [Vec4; 3], t: Vec4| std::array::from_fn(|c| a[c] * (1.0 - t) + b[c] * t);
@@ -154,11 +153,7 @@ impl Texture {
         // Below `MAX_TEXELS` every index fits an `i32`.
         let index = (y * i32x4::splat(self.width as i32) + x).to_array();
         let words = u32x4::new(index.map(|i| self.texels[i as usize]));
-        let channel = |shift: u32| {
-            let bytes: i32x4 = bytemuck::cast((words >> shift) & u32x4::splat(0xff));
-            Vec4::from_array(bytes.round_float().to_array()) * (1.0 / 255.0)
-        };
-        [channel(0), channel(8), channel(16)]
+        [0, 8, 16].map(|shift| bytes_of(words, shift) * (1.0 / 255.0))
     }
 }
 
@@ -180,7 +175,7 @@ fn wrap(whole: i32x4, size: u32, address: Address) -> i32x4 {
             // Exact in floats: every value stays below 2^24. The rounded quotient may be one
             // off either way, which the two corrections undo; the clamp only keeps textures
             // wider than the limit inside themselves.
-            let (whole, size) = (Vec4::from_array(whole.round_float().to_array()), size as f32);
+            let (whole, size) = (floats_of(whole), size as f32);
             let wrapped = whole - (whole / size).floor() * size;
             let wrapped = Vec4::select(wrapped.cmplt(Vec4::ZERO), wrapped + size, wrapped);
             let wrapped = Vec4::select(wrapped.cmpge(Vec4::splat(size)), wrapped - size, wrapped);
