@@ -244,6 +244,34 @@ mod tests {
         assert!(matches!(Texture::decode(b"not an image"), Err(TextureError::Decode(_))));
     }
 
+    #[test]
+    fn extreme_coordinates_read_inside_the_texture() {
+        // Three by five texels, each a colour of its own, a quarter apart in some channel
+        // (stored to within half of 1/255).
+        let colour = |x: u32, y: u32| Vec3::new(x as f32 / 4.0, y as f32 / 4.0, 1.0);
+        let texture = Texture::from_fn(3, 5, colour);
+        let texels: Vec<Vec3> = (0..5).flat_map(|y| (0..3).map(move |x| colour(x, y))).collect();
+        let huge = [f32::MAX, -f32::MAX, 1e30, -1e30, 8_388_607.5, -8_388_609.0];
+        for filter in [Filter::Nearest, Filter::Bilinear] {
+            for address in [Address::Repeat, Address::Clamp] {
+                let sampler = Sampler { filter, address };
+                for (u, v) in huge.iter().flat_map(|&u| huge.map(|v| (u, v))) {
+                    let sampled = texture.sample(Vec2::new(u, v), sampler);
+                    let blended = sampled.cmpge(Vec3::ZERO).all() && sampled.cmple(Vec3::ONE).all();
+                    assert!(blended, "{filter:?} {address:?} at ({u}, {v}): {sampled}");
+                    if filter == Filter::Nearest {
+                        assert!(texels.iter().any(|t| t.distance(sampled) < 0.01), "({u}, {v}): {sampled}");
+                    }
+                }
+                // Non-finite coordinates read the first texel.
+                for (u, v) in [(f32::NAN, 0.5), (0.5, f32::INFINITY), (f32::NEG_INFINITY, f32::NAN)] {
+                    let sampled = texture.sample(Vec2::new(u, v), Sampler { filter: Filter::Nearest, address });
+                    assert!(sampled.distance(colour(0, 0)) < 0.01, "({u}, {v}): {sampled}");
+                }
+            }
+        }
+    }
+
     proptest! {
         /// Four points read at once each find the texel that whole-number arithmetic on their
         /// coordinates gives, for sizes that are powers of two and sizes that are not.
