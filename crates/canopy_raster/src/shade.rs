@@ -162,6 +162,9 @@ pub(crate) fn floats_of(v: i32x4) -> Vec4 {
     Vec4::from_array(v.round_float().to_array())
 }
 
+/// What one step of an eight-bit channel is worth in `[0, 1]`.
+pub(crate) const BYTE_TO_UNIT: f32 = 1.0 / 255.0;
+
 /// The byte `shift` bits up in each of `words` (0 to 255), as floats: a channel of RGBA8 words.
 #[inline(always)]
 pub(crate) fn bytes_of(words: u32x4, shift: u32) -> Vec4 {

@@ -4,7 +4,7 @@
 //! bottom-right; texel `(i, j)` covers `[i, i + 1] x [j, j + 1]` in texel units, so its centre is
 //! at `((i + 1/2) / width, (j + 1/2) / height)`.
 
-use crate::shade::{bytes_of, floats_of, floor_lanes};
+use crate::shade::{BYTE_TO_UNIT, bytes_of, floats_of, floor_lanes};
 use bevy_math::{Vec2, Vec3, Vec4};
 use wide::{i32x4, u32x4};
 
@@ -153,7 +153,7 @@ impl Texture {
         // Below `MAX_TEXELS` every index fits an `i32`.
         let index = (y * i32x4::splat(self.width as i32) + x).to_array();
         let words = u32x4::new(index.map(|i| self.texels[i as usize]));
-        [0, 8, 16].map(|shift| bytes_of(words, shift) * (1.0 / 255.0))
+        [0, 8, 16].map(|shift| bytes_of(words, shift) * BYTE_TO_UNIT)
     }
 }
 

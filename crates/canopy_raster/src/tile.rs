@@ -18,8 +18,8 @@ use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
 use crate::setup::{DEPTH, INV_W, Interpolated, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup};
 use crate::shade::{
-    CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, bytes_of, lanes_of, slot,
-    with_compiled_pass,
+    BYTE_TO_UNIT, CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, bytes_of, lanes_of,
+    slot, with_compiled_pass,
 };
 use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
@@ -725,15 +725,13 @@ fn opaque(colors: [[u8; 4]; LANES], drawn: f32x4) -> [[u8; 4]; LANES] {
 /// theirs. A pixel the light reaches in full keeps its colour exactly.
 #[inline(always)]
 fn light_run(colors: [[u8; 4]; LANES], drawn: f32x4, visibility: Vec4, light: &Light) -> [[u8; 4]; LANES] {
-    const BYTE_TO_UNIT: f32 = 1.0 / 255.0;
     let old = words_of(colors);
-    let channel = |shift: u32| bytes_of(old, shift);
-    let diffuse = channel(24) * BYTE_TO_UNIT;
+    let diffuse = bytes_of(old, 24) * BYTE_TO_UNIT;
     // The colour pass lit the pixel with `full`; a pixel with no light at all is black either way.
     let full = light.combine_lanes(diffuse, Vec4::ONE);
     let scale = light.combine_lanes(diffuse, visibility) / full.max(Vec4::splat(f32::MIN_POSITIVE));
     let [r, g, b] =
-        [0, 8, 16].map(|shift| rounded_bytes((channel(shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0))));
+        [0, 8, 16].map(|shift| rounded_bytes((bytes_of(old, shift) * scale).clamp(Vec4::ZERO, Vec4::splat(255.0))));
     let lit = r | g << 8 | b << 16 | u32x4::splat(0xff) << 24;
     colors_of(drawn.to_bits().bitselect(lit, old))
 }
