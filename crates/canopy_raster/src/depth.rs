@@ -10,11 +10,11 @@
 
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
-use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View};
+use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, edge};
 use crate::schedule::Schedule;
-use crate::setup::{BiasedDepth, DEPTH, LANES, Plane, Surface, TriangleSetup};
-use crate::shade::{VARYINGS, Varyings, lanes_of};
-use crate::shadow::{QuadDepth, ShadowMap, nearest_of_quads};
+use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, positive_order};
+use crate::shade::{VARYINGS, lanes_of};
+use crate::shadow::{CONSTANT_BIAS, QuadDepth, SLOPE_BIAS, ShadowMap, nearest_of_quads};
 use crate::sort::{Corners, Sorted};
 use crate::tile::{RowMasks, Walk, covered, lane_multiples};
 use bevy_math::{Vec3, Vec4};
@@ -96,12 +96,9 @@ fn draw_strip<'a>(
     let view = scene.view;
     let mut triangles = 0;
     let mut draw = |vertices: [&ScreenVertex; 3], band: &mut DepthBand| {
-        const NO_VARYINGS: Varyings = [0.0; VARYINGS];
-        let surface = Surface { tolerance: &NO_VARYINGS, flat_diffuse: 0.0 };
-        let varyings = [&NO_VARYINGS; 3];
-        if let Some((setup, planes)) = TriangleSetup::new::<BiasedDepth>(vertices, varyings, view.viewport, surface) {
-            fill_triangle(&setup, &planes[DEPTH / LANES], &mut masks, band);
-            triangles += usize::from((band.y0..band.y0 + band.rows).contains(&setup.bounds.min_y));
+        if let Some(triangle) = DepthTriangle::new(vertices, view.viewport) {
+            fill_triangle(&triangle, &mut masks, band);
+            triangles += usize::from((band.y0..band.y0 + band.rows).contains(&triangle.edges.bounds.min_y));
         }
     };
     for corners in sorted {
@@ -120,108 +117,174 @@ fn draw_strip<'a>(
     triangles
 }
 
-/// Draws the depths of `setup`, whose biased depth is the first lane of `plane`, into the rows
-/// of `band` it covers.
-fn fill_triangle(setup: &TriangleSetup, plane: &Plane, masks: &mut RowMasks, band: &mut DepthBand) {
-    let bounds = setup.bounds;
-    let rect =
-        PixelBounds { min_y: bounds.min_y.max(band.y0), max_y: bounds.max_y.min(band.y0 + band.rows - 1), ..bounds };
-    if rect.min_y > rect.max_y {
+/// A triangle as the depth pass draws it: the texels it covers and the plane of its depth,
+/// pushed back by the slope-scaled bias.
+struct DepthTriangle {
+    edges: Edges,
+    plane: Plane<f32>,
+}
+
+impl DepthTriangle {
+    /// The projected triangle `vertices` on the map `viewport`; `None` when it is culled or
+    /// covers no texel centre.
+    #[inline(always)]
+    fn new(vertices: [&ScreenVertex; 3], viewport: Viewport) -> Option<Self> {
+        let p = vertices.map(|v| (i64::from(v.x), i64::from(v.y)));
+        let area = edge(p[0], p[1], p[2]);
+        let z = vertices.map(|v| v.z);
+        // Written out rather than indexed by the order: the corners stay in registers.
+        let (p, depths) = match positive_order(area, viewport)? {
+            [0, 1, 2] => (p, z),
+            _ => ([p[0], p[2], p[1]], [z[0], z[2], z[1]]),
+        };
+        let edges = Edges::new(p, viewport)?;
+        let mut plane = Plane::through(depths, &Weights::new(&edges, area));
+        plane.origin += CONSTANT_BIAS + SLOPE_BIAS * plane.dx.abs().max(plane.dy.abs());
+        Some(Self { edges, plane })
+    }
+}
+
+/// Draws the depths of `triangle` into the rows of `band` it covers.
+#[inline(always)]
+fn fill_triangle(triangle: &DepthTriangle, masks: &mut RowMasks, band: &mut DepthBand) {
+    let bounds = triangle.edges.bounds;
+    let rows = (bounds.min_y.max(band.y0), bounds.max_y.min(band.y0 + band.rows - 1));
+    if rows.0 > rows.1 {
         return;
     }
-    if setup.narrow {
-        fill_windows(setup, plane, rect, band);
-        return;
-    }
-    // Edge functions beyond `i32` (large triangles, rare in a shadow map): the colour tiles'
-    // walk, one tile-sized block at a time.
-    for min_y in (rect.min_y..=rect.max_y).step_by(TILE_HEIGHT as usize) {
-        for min_x in (rect.min_x..=rect.max_x).step_by(TILE_WIDTH as usize) {
-            let block = PixelBounds {
-                min_x,
-                max_x: (min_x + TILE_WIDTH - 1).min(rect.max_x),
-                min_y,
-                max_y: (min_y + TILE_HEIGHT - 1).min(rect.max_y),
-            };
-            if let Some(walk) = Walk::new(setup, block) {
-                fill_runs(&walk, masks, bounds, plane, band);
-            }
-        }
+    if triangle.edges.narrow && bounds.max_x - bounds.min_x < WINDOW as u32 {
+        fill_column(triangle, rows, band);
+    } else {
+        fill_wide(triangle, rows, masks, band);
     }
 }
 
 /// Each lane's offset in a window, in texels.
 const WINDOW_LANES: [i32; WINDOW] = [0, 1, 2, 3, 4, 5, 6, 7];
 
-/// Draws the rows `rect` of a triangle whose edge functions fit `i32` (see
-/// [`TriangleSetup::narrow`]), [`WINDOW`] texels at a time: in each window the texels inside
-/// the triangle and within the rect keep the lesser of their depth and the triangle's.
+/// Draws the rows `first..=last` of a triangle whose edge functions fit `i32` (see
+/// [`Edges::narrow`]) and whose bounds are at most [`WINDOW`] texels wide (most of the map's
+/// triangles), one window a row: the texels inside the triangle and its bounds keep the lesser
+/// of their depth and the triangle's.
 ///
-/// Edge functions and depths are stepped across lanes, windows and rows by additions alone;
-/// a lane outside the triangle or the rect gets an infinite depth, which changes nothing.
-fn fill_windows(setup: &TriangleSetup, plane: &Plane, rect: PixelBounds, band: &mut DepthBand) {
-    let bounds = setup.bounds;
-    let (x0, y0) = (rect.min_x - bounds.min_x, rect.min_y - bounds.min_y);
-    let lanes = i32x8::new(WINDOW_LANES);
-    // The walk stays inside the bounding box widened by the narrow margin, where every value
-    // fits `i32`.
-    let mut row_edges: [i32x8; 3] = std::array::from_fn(|k| {
-        let first =
-            setup.start[k] + i64::from(x0) * i64::from(setup.step_x[k]) + i64::from(y0) * i64::from(setup.step_y[k]);
-        i32x8::splat(first as i32) + lane_multiples(setup.step_x[k])
-    });
-    let row_step = setup.step_y.map(i32x8::splat);
-    let lane_depths = f32x8::new(WINDOW_LANES.map(|k| k as f32)) * plane.dx.x;
-    let width = rect.max_x - rect.min_x + 1;
-    let windows = width.div_ceil(WINDOW as u32);
-    // Lanes of the last window past the rect, with their sign bit set.
-    let past_rect = lanes.simd_ge(i32x8::splat((width - (windows - 1) * WINDOW as u32) as i32));
-    let infinite = i32x8::splat(f32::INFINITY.to_bits() as i32);
-    // A window's depths where the lanes of `outside` have their sign bit clear, infinity on
-    // the others.
-    let depths = |outside: i32x8, depths: f32x8| depths + bytemuck::cast::<i32x8, f32x8>((outside >> 31) & infinite);
-    let row_depths = |y: u32| f32x8::splat(plane.at(x0 as f32, (y - bounds.min_y) as f32).x) + lane_depths;
-    let mut at = (rect.min_y - band.y0) as usize * band.stride + band.first + rect.min_x as usize;
-    let mut window = |at: usize, depths: f32x8| {
-        let texels: &mut [f32; WINDOW] = (&mut band.depth[at..at + WINDOW]).try_into().unwrap();
-        // No value is NaN: the plain minimum is exact.
-        *texels = depths.fast_min(f32x8::new(*texels)).to_array();
-    };
-    if windows == 1 {
-        // Most of the map's triangles: one window a row, everything kept in registers, depths
-        // stepped down the rows too (over a few rows, rounding stays far below the bias).
-        // The lanes past the rect start, and stay, infinitely deep.
-        let (mut depth, depth_step) = (depths(past_rect, row_depths(rect.min_y)), f32x8::splat(plane.dy.x));
-        for _ in rect.min_y..=rect.max_y {
-            window(at, depths(row_edges[0] | row_edges[1] | row_edges[2], depth));
-            row_edges = std::array::from_fn(|k| row_edges[k] + row_step[k]);
-            depth += depth_step;
-            at += band.stride;
+/// Edge functions and depths are stepped across lanes and down the rows by additions alone
+/// (over a few rows, rounding stays far below the bias), and everything stays in registers;
+/// a lane outside the triangle or its bounds gets an infinite depth, which changes nothing.
+#[inline(always)]
+fn fill_column(triangle: &DepthTriangle, (first, last): (u32, u32), band: &mut DepthBand) {
+    let DepthTriangle { edges, plane } = triangle;
+    let bounds = edges.bounds;
+    let mut row_edges = window_edges(edges, first);
+    let row_step = each_edge(|k| i32x8::splat(edges.step_y[k]));
+    // The lanes past the bounds start, and stay, infinitely deep.
+    let past_bounds = i32x8::new(WINDOW_LANES).simd_gt(i32x8::splat((bounds.max_x - bounds.min_x) as i32));
+    let mut depth = beyond(past_bounds, window_depths(plane, bounds, first));
+    let depth_step = f32x8::splat(plane.dy);
+    let mut at = (first - band.y0) as usize * band.stride + band.first + bounds.min_x as usize;
+    for _ in first..=last {
+        fill_window(band, at, beyond(row_edges[0] | row_edges[1] | row_edges[2], depth));
+        row_edges = each_edge(|k| row_edges[k] + row_step[k]);
+        depth += depth_step;
+        at += band.stride;
+    }
+}
+
+/// Draws the rows `first..=last` of a triangle wider than a window, or whose edge functions
+/// do not fit `i32` (both rare in a shadow map). Kept out of line, so that the loops of the
+/// common triangles keep their values in registers.
+#[inline(never)]
+fn fill_wide(triangle: &DepthTriangle, (first, last): (u32, u32), masks: &mut RowMasks, band: &mut DepthBand) {
+    let DepthTriangle { edges, plane } = triangle;
+    let bounds = edges.bounds;
+    if !edges.narrow {
+        // Edge functions beyond `i32` (large triangles): the colour tiles' walk, one
+        // tile-sized block at a time.
+        for min_y in (first..=last).step_by(TILE_HEIGHT as usize) {
+            for min_x in (bounds.min_x..=bounds.max_x).step_by(TILE_WIDTH as usize) {
+                let block = PixelBounds {
+                    min_x,
+                    max_x: (min_x + TILE_WIDTH - 1).min(bounds.max_x),
+                    min_y,
+                    max_y: (min_y + TILE_HEIGHT - 1).min(last),
+                };
+                if let Some(walk) = Walk::new(edges, block) {
+                    fill_runs(&walk, masks, bounds, plane, band);
+                }
+            }
         }
         return;
     }
-    let window_step = setup.step_x.map(|s| i32x8::splat(s * WINDOW as i32));
-    let window_depth_step = f32x8::splat(plane.dx.x * WINDOW as f32);
-    for y in rect.min_y..=rect.max_y {
-        let (mut edges, mut row_depths) = (row_edges, row_depths(y));
+    // Several windows a row, stepped across the row and down the rows by additions.
+    let width = bounds.max_x - bounds.min_x + 1;
+    let windows = width.div_ceil(WINDOW as u32);
+    // Lanes of the last window past the bounds, with their sign bit set.
+    let past_bounds = i32x8::new(WINDOW_LANES).simd_ge(i32x8::splat((width - (windows - 1) * WINDOW as u32) as i32));
+    let mut row_edges = window_edges(edges, first);
+    let row_step = each_edge(|k| i32x8::splat(edges.step_y[k]));
+    let window_step = each_edge(|k| i32x8::splat(edges.step_x[k] * WINDOW as i32));
+    let window_depth_step = f32x8::splat(plane.dx * WINDOW as f32);
+    let mut at = (first - band.y0) as usize * band.stride + band.first + bounds.min_x as usize;
+    for y in first..=last {
+        let (mut edges, mut depths) = (row_edges, window_depths(plane, bounds, y));
         for last in (1..=windows).map(|window| window == windows) {
-            let outside = edges[0] | edges[1] | edges[2] | if last { past_rect } else { i32x8::ZERO };
-            window(at, depths(outside, row_depths));
+            let outside = edges[0] | edges[1] | edges[2] | if last { past_bounds } else { i32x8::ZERO };
+            fill_window(band, at, beyond(outside, depths));
             at += WINDOW;
-            edges = std::array::from_fn(|k| edges[k] + window_step[k]);
-            row_depths += window_depth_step;
+            edges = each_edge(|k| edges[k] + window_step[k]);
+            depths += window_depth_step;
         }
-        row_edges = std::array::from_fn(|k| row_edges[k] + row_step[k]);
+        row_edges = each_edge(|k| row_edges[k] + row_step[k]);
         at += band.stride - windows as usize * WINDOW;
     }
 }
 
+/// The edge functions of the lanes of the first window of row `y` of a narrow triangle (the
+/// walk stays inside the bounding box widened by the narrow margin, where every value fits
+/// `i32`).
+#[inline(always)]
+fn window_edges(edges: &Edges, y: u32) -> [i32x8; 3] {
+    let down = i64::from(y - edges.bounds.min_y);
+    each_edge(|k| {
+        let start = edges.start[k] + down * i64::from(edges.step_y[k]);
+        i32x8::splat(start as i32) + lane_multiples(edges.step_x[k])
+    })
+}
+
+/// The depths of `plane` at the lanes of the first window of row `y` of `bounds`.
+#[inline(always)]
+fn window_depths(plane: &Plane<f32>, bounds: PixelBounds, y: u32) -> f32x8 {
+    let lanes = f32x8::new(WINDOW_LANES.map(|k| k as f32)) * plane.dx;
+    f32x8::splat(plane.at(0.0, (y - bounds.min_y) as f32)) + lanes
+}
+
+/// `depths` where the lanes of `outside` have their sign bit clear, infinity on the others.
+#[inline(always)]
+fn beyond(outside: i32x8, depths: f32x8) -> f32x8 {
+    depths + bytemuck::cast::<i32x8, f32x8>((outside >> 31) & i32x8::splat(f32::INFINITY.to_bits() as i32))
+}
+
+/// Keeps in each texel of the window from `at` the lesser of its depth and `depths`'.
+#[inline(always)]
+fn fill_window(band: &mut DepthBand, at: usize, depths: f32x8) {
+    let texels: &mut [f32; WINDOW] = (&mut band.depth[at..at + WINDOW]).try_into().expect("a window");
+    // No value is NaN: the plain minimum is exact.
+    *texels = depths.fast_min(f32x8::new(*texels)).to_array();
+}
+
+/// `value(k)` for each of a triangle's three edges, written out so that it stays in the
+/// caller's registers.
+#[inline(always)]
+fn each_edge<T>(value: impl Fn(usize) -> T) -> [T; 3] {
+    [value(0), value(1), value(2)]
+}
+
 /// The depth-only pixel loop of the tile walk; `plane` starts at the first pixel of `bounds`
 /// and holds the biased depth in its first lane.
-fn fill_runs(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plane, band: &mut DepthBand) {
-    let lane_steps = plane.lane_steps(0);
+#[inline(never)]
+fn fill_runs(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plane<f32>, band: &mut DepthBand) {
+    let lane_steps = LANE_OFFSETS * plane.dx;
     walk.covered_runs(rows, |py, run, lanes| {
-        let z = plane.at((run - bounds.min_x) as f32, (py - bounds.min_y) as f32).x;
+        let z = plane.at((run - bounds.min_x) as f32, (py - bounds.min_y) as f32);
         let z = lanes_of(Vec4::splat(z) + lane_steps);
         let at = (py - band.y0) as usize * band.stride + band.first + run as usize;
         // The border after each row holds the run's lanes past the row's end.
@@ -234,7 +297,7 @@ fn fill_runs(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plan
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::setup::Viewport;
+    use crate::pipeline::SUBPIXEL_STEPS;
     use proptest::prelude::*;
 
     /// The side of the test map, in texels.
@@ -242,6 +305,16 @@ mod tests {
 
     /// The first row and the rows of the test band: triangles reach past both of its ends.
     const BAND: (u32, u32) = (32, 40);
+
+    const MAP: Viewport = Viewport { width: SIZE, height: SIZE, cull_back_faces: false };
+
+    /// The triangle with corners `corners` (sub-pixel units) at depths `z`, if it covers a
+    /// texel centre.
+    fn triangle(corners: [(i32, i32); 3], z: [f32; 3]) -> Option<DepthTriangle> {
+        let vertices =
+            [0, 1, 2].map(|k| ScreenVertex { code: 0, x: corners[k].0, y: corners[k].1, z: z[k], inv_w: 1.0 });
+        DepthTriangle::new(vertices.each_ref(), MAP)
+    }
 
     /// The stored rows of a band laid out as the shadow map's: texels at the far depth, one
     /// border texel before each row and [`WINDOW`] - 1 after, at infinity.
@@ -255,48 +328,67 @@ mod tests {
     }
 
     /// The band after drawing the triangle `corners` (sub-pixel units) at depths `z`, walked
-    /// as `narrow` says.
+    /// as `narrow` says; `None` when it covers no texel centre or does not fit `i32`.
     fn draw(corners: [(i32, i32); 3], z: [f32; 3], narrow: bool) -> Option<Vec<f32>> {
-        let vertices =
-            [0, 1, 2].map(|k| ScreenVertex { code: 0, x: corners[k].0, y: corners[k].1, z: z[k], inv_w: 1.0 });
-        let viewport = Viewport { width: SIZE, height: SIZE, cull_back_faces: false };
-        let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
-        let (setup, planes) =
-            TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), [&[0.0; VARYINGS]; 3], viewport, surface)?;
-        if !setup.narrow {
+        let DepthTriangle { edges, plane } = triangle(corners, z)?;
+        if !edges.narrow {
             return None;
         }
         let (stride, mut depth) = empty_band();
         let mut band = DepthBand { y0: BAND.0, rows: BAND.1, width: SIZE, stride, first: 1, depth: &mut depth };
-        fill_triangle(
-            &TriangleSetup { narrow, ..setup },
-            &planes[DEPTH / LANES],
-            &mut [0; TILE_HEIGHT as usize],
-            &mut band,
-        );
+        let triangle = DepthTriangle { edges: Edges { narrow, ..edges }, plane };
+        fill_triangle(&triangle, &mut [0; TILE_HEIGHT as usize], &mut band);
         Some(depth)
     }
 
+    /// Checks that drawing `corners` at depths `z` one window a row or several (as its width
+    /// asks) draws the texels the tile walk draws (whose pixels the tile tests check against
+    /// the edge functions' definition), with the same depths, and leaves the borders alone.
+    fn windows_match_the_walk(corners: [(i32, i32); 3], z: [f32; 3]) -> Result<(), TestCaseError> {
+        let Some(windows) = draw(corners, z, true) else { return Ok(()) };
+        let walked = draw(corners, z, false).expect("the same triangle");
+        let (stride, empty) = empty_band();
+        for (i, ((&w, &t), &e)) in windows.iter().zip(&walked).zip(&empty).enumerate() {
+            let (row, column) = (i / stride, i % stride);
+            prop_assert_eq!(w == e, t == e, "texel {} of row {}: {} against {}", column, row, w, t);
+            prop_assert!(w == t || (w - t).abs() <= 1e-5, "texel {} of row {}: {} against {}", column, row, w, t);
+            if !(1..=SIZE as usize).contains(&column) {
+                prop_assert_eq!(w, f32::INFINITY, "border texel {} of row {}", column, row);
+            }
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn depths_are_pushed_back_by_the_slope_scaled_bias() {
+        let steps = SUBPIXEL_STEPS as i32;
+        // Depth grows by 0.01 per texel to the right, not at all downwards.
+        let corners = [(0, 0), (0, 100 * steps), (100 * steps, 0)];
+        let plane = triangle(corners, [0.2, 0.2, 1.2]).expect("a visible triangle").plane;
+        assert!((plane.dx - 0.01).abs() < 1e-6 && plane.dy.abs() < 1e-6, "{plane:?}");
+        // At the centre of texel (0, 0) the plane's depth is 0.2 + 0.005, plus the bias.
+        let bias = CONSTANT_BIAS + SLOPE_BIAS * 0.01;
+        assert!((plane.origin - (0.205 + bias)).abs() < 1e-6, "{}", plane.origin);
+    }
+
     proptest! {
-        /// The windows of a narrow triangle draw the texels the tile walk draws (whose pixels
-        /// the tile tests check against the edge functions' definition), with the same depths,
-        /// and leave the borders alone.
+        /// Triangles up to a hundred texels wide: several windows a row.
         #[test]
         fn windows_draw_what_the_tile_walk_draws(
             corners in prop::array::uniform3((-4 * 256..100 * 256i32, 20 * 256..84 * 256i32)),
             z in prop::array::uniform3(0.0f32..1.0),
         ) {
-            let Some(windows) = draw(corners, z, true) else { return Ok(()) };
-            let walked = draw(corners, z, false).expect("the same setup");
-            let (stride, empty) = empty_band();
-            for (i, ((&w, &t), &e)) in windows.iter().zip(&walked).zip(&empty).enumerate() {
-                let (row, column) = (i / stride, i % stride);
-                prop_assert_eq!(w == e, t == e, "texel {} of row {}: {} against {}", column, row, w, t);
-                prop_assert!(w == t || (w - t).abs() <= 1e-5, "texel {} of row {}: {} against {}", column, row, w, t);
-                if !(1..=SIZE as usize).contains(&column) {
-                    prop_assert_eq!(w, f32::INFINITY, "border texel {} of row {}", column, row);
-                }
-            }
+            windows_match_the_walk(corners, z)?;
+        }
+
+        /// Triangles a few texels across, as most of a shadow map's: one window a row.
+        #[test]
+        fn one_window_a_row_draws_what_the_tile_walk_draws(
+            origin in (-4 * 256..96 * 256i32, 20 * 256..84 * 256i32),
+            offsets in prop::array::uniform3((0..9 * 256i32, 0..9 * 256i32)),
+            z in prop::array::uniform3(0.0f32..1.0),
+        ) {
+            windows_match_the_walk(offsets.map(|(x, y)| (origin.0 + x, origin.1 + y)), z)?;
         }
     }
 }

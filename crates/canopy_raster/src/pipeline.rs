@@ -559,25 +559,23 @@ pub(crate) fn edge(a: (i64, i64), b: (i64, i64), p: (i64, i64)) -> i64 {
     (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
 }
 
-/// The pixels whose centres lie in the bounding box of `corners` (sub-pixel units), clipped to
-/// a `width` x `height` target.
-pub(crate) fn pixel_bounds(corners: [(i64, i64); 3], width: u32, height: u32) -> Option<PixelBounds> {
-    let (min_x, max_x) = pixel_span(corners.map(|c| c.0), width)?;
-    let (min_y, max_y) = pixel_span(corners.map(|c| c.1), height)?;
-    Some(PixelBounds { min_x, max_x, min_y, max_y })
+/// The least and the greatest of three coordinates.
+#[inline(always)]
+pub(crate) fn range_of([a, b, c]: [i64; 3]) -> (i64, i64) {
+    (a.min(b).min(c), a.max(b).max(c))
 }
 
-/// The first and last of `size` pixel columns (or rows) whose centres lie between the least
-/// and the greatest of `coordinates` (sub-pixel units); `None` when there is none.
+/// The first and last of `size` pixel columns (or rows) whose centres lie between `least` and
+/// `greatest` (sub-pixel units); `None` when there is none.
 #[inline(always)]
-pub(crate) fn pixel_span(coordinates: [i64; 3], size: u32) -> Option<(u32, u32)> {
+pub(crate) fn pixel_span((least, greatest): (i64, i64), size: u32) -> Option<(u32, u32)> {
     // Pixel p is sampled at its centre, p + 1/2.
     let half = SUBPIXEL_STEPS / 2;
-    let [a, b, c] = coordinates;
-    let first = (a.min(b).min(c) - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS).max(0);
-    let last = (a.max(b).max(c) - half).div_euclid(SUBPIXEL_STEPS).min(i64::from(size) - 1);
+    let first = (least - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS).max(0);
+    let last = (greatest - half).div_euclid(SUBPIXEL_STEPS).min(i64::from(size) - 1);
     (first <= last).then_some((first as u32, last as u32))
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;

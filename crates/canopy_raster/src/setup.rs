@@ -14,11 +14,11 @@
 //! plane of `1/w`. A triangle whose `w` varies too little for that to move any value beyond its
 //! tolerance (a sixteenth of what a pixel shows of it) is interpolated in screen space.
 
-use crate::pipeline::{MAX_TARGET_SIZE, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, edge, pixel_bounds};
-use crate::shade::{Compiled, CompiledPass, Pass, VARYINGS, Varyings};
-use crate::shadow::{CONSTANT_BIAS, SLOPE_BIAS};
+use crate::pipeline::{MAX_TARGET_SIZE, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, edge, pixel_span, range_of};
+use crate::shade::{CompiledPass, Pass, VARYINGS, Varyings};
 use crate::tile::MASK_PIXELS;
 use bevy_math::Vec4;
+use std::ops::{Add, Mul, Sub};
 
 /// Values interpolated together, one per SIMD lane; also the pixels of a run.
 pub(crate) const LANES: usize = 4;
@@ -54,24 +54,6 @@ pub(crate) struct Viewport {
     pub cull_back_faces: bool,
 }
 
-/// What a triangle's pixels interpolate, fixed at compile time: `None` for depth alone, pushed
-/// back by the shadow map's slope-scaled bias; otherwise the packs the pass reads of the
-/// vertices' varyings, then depth and `1/w`.
-pub(crate) trait Interpolated {
-    const PASS: Option<Pass>;
-}
-
-/// The [`Interpolated`] values of the shadow map: depth alone.
-pub(crate) struct BiasedDepth;
-
-impl Interpolated for BiasedDepth {
-    const PASS: Option<Pass> = None;
-}
-
-impl<const MODE: u8, const TEXTURED: bool, const SHADOWED: bool> Interpolated for Compiled<MODE, TEXTURED, SHADOWED> {
-    const PASS: Option<Pass> = Some(<Self as CompiledPass>::PASS);
-}
-
 /// What a triangle is drawn with.
 #[derive(Clone, Copy)]
 pub(crate) struct Surface<'a> {
@@ -82,24 +64,25 @@ pub(crate) struct Surface<'a> {
     pub flat_diffuse: f32,
 }
 
-/// Four values' plane over the screen: their values at the centre of the first pixel of a
-/// triangle's bounds and their change per pixel right and down.
+/// A plane of values over the screen: their values at the centre of the first pixel of a
+/// triangle's bounds and their change per pixel right and down. `T` is [`Vec4`] for four values
+/// at once (the colour passes' packs) or `f32` for one (the shadow map's depth).
 ///
 /// Depth and `1/w` are linear in screen space; the other values are too when the triangle is
 /// drawn affinely, and otherwise their planes hold the values divided by `w`, to be multiplied
 /// by the pixel's `w` (the reciprocal of the interpolated `1/w`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct Plane {
-    pub origin: Vec4,
-    pub dx: Vec4,
-    pub dy: Vec4,
+pub(crate) struct Plane<T = Vec4> {
+    pub origin: T,
+    pub dx: T,
+    pub dy: T,
 }
 
-impl Plane {
+impl<T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>> Plane<T> {
     /// The plane through `values` at the three vertices, given each vertex's barycentric
     /// weight at the origin and its steps (vertex 0's weight is what the other two leave).
     #[inline(always)]
-    fn through(values: [Vec4; 3], weights: &Weights) -> Self {
+    pub(crate) fn through(values: [T; 3], weights: &Weights) -> Self {
         let [v0, v1, v2] = values;
         let (to_1, to_2) = (v1 - v0, v2 - v0);
         let [o, x, y] = weights.0;
@@ -108,10 +91,12 @@ impl Plane {
 
     /// The values at pixel offset (`x`, `y`) from the first pixel of the triangle's bounds.
     #[inline(always)]
-    pub fn at(&self, x: f32, y: f32) -> Vec4 {
+    pub fn at(&self, x: f32, y: f32) -> T {
         self.origin + self.dx * x + self.dy * y
     }
+}
 
+impl Plane {
     /// Value `lane`'s change from a run's first pixel to each of its pixels.
     #[inline(always)]
     pub fn lane_steps(&self, lane: usize) -> Vec4 {
@@ -121,7 +106,23 @@ impl Plane {
 
 /// The barycentric weights of vertices 1 and 2 at the origin, and their steps per pixel right
 /// and down.
-struct Weights([[f32; 2]; 3]);
+pub(crate) struct Weights([[f32; 2]; 3]);
+
+impl Weights {
+    /// The weights of the triangle of `edges`, whose area (twice it, in squared sub-pixel units)
+    /// is `area`: its edge functions over the area.
+    #[inline(always)]
+    pub(crate) fn new(edges: &Edges, area: i64) -> Self {
+        let inv_area = 1.0 / area.abs() as f32;
+        let weight = |e: i64| e as f32 * inv_area;
+        let Edges { start, step_x, step_y, .. } = edges;
+        Self([
+            [weight(start[1]), weight(start[2])],
+            [weight(step_x[1].into()), weight(step_x[2].into())],
+            [weight(step_y[1].into()), weight(step_y[2].into())],
+        ])
+    }
+}
 
 /// Which packs `pass` reads (the depth pack always).
 pub(crate) const fn packs_read(pass: Pass) -> [bool; PACKS] {
@@ -143,25 +144,70 @@ pub(crate) const fn packs_read(pass: Pass) -> [bool; PACKS] {
 /// are zero.
 pub(crate) type Planes = [Plane; PACKS];
 
-/// A triangle ready for every tile it touches.
+/// Which pixels a triangle covers: its pixel bounds and its exact integer edge functions.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct TriangleSetup {
+pub(crate) struct Edges {
     /// The pixels whose centres its bounding box holds, within the target.
     pub bounds: PixelBounds,
     /// Edge functions at the centre of the first pixel of `bounds`, top-left bias included;
     /// edge `k` is opposite vertex `k` (in the positive-area order) and weighs it.
     pub start: [i64; 3],
-    /// Edge function steps per pixel to the right (they fit `i32`, see [`TriangleSetup::new`]).
+    /// Edge function steps per pixel to the right (they fit `i32`, see [`MAX_STEP`]).
     pub step_x: [i32; 3],
     /// Edge function steps per pixel down.
     pub step_y: [i32; 3],
+    /// Whether the edge functions fit `i32` over any walk inside `bounds` (see
+    /// [`fits_narrow`]).
+    pub narrow: bool,
+}
+
+impl Edges {
+    /// The edges of the triangle with corners `p` (sub-pixel units, in positive-area order) on
+    /// `viewport`; `None` when it covers no pixel centre of the target.
+    #[inline(always)]
+    pub(crate) fn new(p: [(i64, i64); 3], viewport: Viewport) -> Option<Self> {
+        let (x_range, y_range) = (range_of(p.map(|c| c.0)), range_of(p.map(|c| c.1)));
+        let (min_x, max_x) = pixel_span(x_range, viewport.width)?;
+        let (min_y, max_y) = pixel_span(y_range, viewport.height)?;
+        let bounds = PixelBounds { min_x, max_x, min_y, max_y };
+        let sample = (
+            i64::from(bounds.min_x) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+            i64::from(bounds.min_y) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
+        );
+        let [a, b, c] = p;
+        // Edge k runs between the two vertices other than k.
+        let edges = [(b, c), (c, a), (a, b)];
+        let start = edges.map(|(from, to)| edge(from, to, sample) - i64::from(!is_top_left(from, to)));
+        let step_x = edges.map(|(from, to)| ((from.1 - to.1) * SUBPIXEL_STEPS) as i32);
+        let step_y = edges.map(|(from, to)| ((to.0 - from.0) * SUBPIXEL_STEPS) as i32);
+        let narrow = fits_narrow(x_range.1 - x_range.0, y_range.1 - y_range.0);
+        Some(Self { bounds, start, step_x, step_y, narrow })
+    }
+}
+
+/// The order of a projected triangle's corners that gives it a positive area (`area` is
+/// twice its signed area on the screen, see [`edge`]); `None` when it is culled: zero area,
+/// or facing away when `viewport` culls back faces.
+#[inline(always)]
+pub(crate) fn positive_order(area: i64, viewport: Viewport) -> Option<[usize; 3]> {
+    // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the screen.
+    // Swapping two vertices makes the area positive, as the inside test expects.
+    match area {
+        0 => None,
+        a if a < 0 => Some([0, 2, 1]),
+        _ if viewport.cull_back_faces => None,
+        _ => Some([0, 1, 2]),
+    }
+}
+
+/// A triangle ready for every tile it touches.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TriangleSetup {
+    pub edges: Edges,
     /// The least depth of its vertices.
     pub nearest: f32,
     /// The flat-shading diffuse term of the triangle (or of the one it was clipped from).
     pub flat_diffuse: f32,
-    /// Whether the edge functions fit `i32` over any walk inside `bounds` (see
-    /// [`fits_narrow`]).
-    pub narrow: bool,
     /// Whether its values are interpolated in screen space.
     pub affine: bool,
 }
@@ -173,10 +219,10 @@ const _: () = assert!(MAX_STEP <= i32::MAX as i64, "edge steps must fit i32");
 
 impl TriangleSetup {
     /// Sets a projected triangle with vertex `varyings` up for `viewport`, with the planes of
-    /// the values `I` interpolates; `None` when it is culled (zero area, or facing away when the
-    /// viewport culls back faces) or covers no pixel centre of the target.
+    /// the values pass `C` interpolates; `None` when it is culled (see [`positive_order`]) or
+    /// covers no pixel centre of the target.
     #[inline(always)]
-    pub fn new<I: Interpolated>(
+    pub fn new<C: CompiledPass>(
         vertices: [&ScreenVertex; 3],
         varyings: [&Varyings; 3],
         viewport: Viewport,
@@ -184,82 +230,32 @@ impl TriangleSetup {
     ) -> Option<(Self, Planes)> {
         let p = vertices.map(|v| (i64::from(v.x), i64::from(v.y)));
         let area = edge(p[0], p[1], p[2]);
-        // Front faces wind counter-clockwise in NDC (y up): clockwise, negative, on the
-        // screen. Swapping two vertices makes the area positive, as the inside test expects.
-        let order = match area {
-            0 => return None,
-            a if a < 0 => [0, 2, 1],
-            _ if viewport.cull_back_faces => return None,
-            _ => [0, 1, 2],
-        };
-        let p = order.map(|k| p[k]);
-        let bounds = pixel_bounds(p, viewport.width, viewport.height)?;
-        let sample = (
-            i64::from(bounds.min_x) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
-            i64::from(bounds.min_y) * SUBPIXEL_STEPS + SUBPIXEL_STEPS / 2,
-        );
-        let [a, b, c] = p;
-        // Edge k runs between the two vertices other than k.
-        let edges = [(b, c), (c, a), (a, b)];
-        let start = edges.map(|(from, to)| edge(from, to, sample) - i64::from(!is_top_left(from, to)));
-        let step_x = edges.map(|(from, to)| ((from.1 - to.1) * SUBPIXEL_STEPS) as i32);
-        let step_y = edges.map(|(from, to)| ((to.0 - from.0) * SUBPIXEL_STEPS) as i32);
-
-        let inv_area = 1.0 / area.abs() as f32;
-        let weight = |e: i64| e as f32 * inv_area;
-        let weights = Weights([
-            [weight(start[1]), weight(start[2])],
-            [weight(step_x[1].into()), weight(step_x[2].into())],
-            [weight(step_y[1].into()), weight(step_y[2].into())],
-        ]);
+        let order = positive_order(area, viewport)?;
+        let edges = Edges::new(order.map(|k| p[k]), viewport)?;
+        let weights = Weights::new(&edges, area);
         let z = order.map(|k| vertices[k].z);
         let inv_w = order.map(|k| vertices[k].inv_w);
+        let read = const { packs_read(C::PASS) };
+        let varyings = order.map(|k| varyings[k]);
+        // Small or distant triangles skip the per-pixel division.
+        let affine = affine_is_close(inv_w, varyings, surface.tolerance, read);
         let mut planes = Planes::default();
-        let affine = match I::PASS {
-            None => {
-                let plane = &mut planes[DEPTH / LANES];
-                *plane = Plane::through(z.map(|z| Vec4::new(z, 0.0, 0.0, 0.0)), &weights);
-                plane.origin.x += CONSTANT_BIAS + SLOPE_BIAS * plane.dx.x.abs().max(plane.dy.x.abs());
-                true
+        for (pack, plane) in planes.iter_mut().enumerate() {
+            if !read[pack] {
+                continue;
             }
-            Some(_) => {
-                let read = const {
-                    match I::PASS {
-                        Some(pass) => packs_read(pass),
-                        None => [false; PACKS],
-                    }
-                };
-                let varyings = order.map(|k| varyings[k]);
-                // Small or distant triangles skip the per-pixel division.
-                let affine = affine_is_close(inv_w, varyings, surface.tolerance, read);
-                for (pack, plane) in planes.iter_mut().enumerate() {
-                    if !read[pack] {
-                        continue;
-                    }
-                    let values = std::array::from_fn(|vertex| {
-                        let scale = if affine { 1.0 } else { inv_w[vertex] };
-                        let mut values = pack_of(varyings[vertex], pack) * scale;
-                        if pack == DEPTH / LANES {
-                            values[DEPTH % LANES] = z[vertex];
-                            values[INV_W % LANES] = inv_w[vertex];
-                        }
-                        values
-                    });
-                    *plane = Plane::through(values, &weights);
+            let values = std::array::from_fn(|vertex| {
+                let scale = if affine { 1.0 } else { inv_w[vertex] };
+                let mut values = pack_of(varyings[vertex], pack) * scale;
+                if pack == DEPTH / LANES {
+                    values[DEPTH % LANES] = z[vertex];
+                    values[INV_W % LANES] = inv_w[vertex];
                 }
-                affine
-            }
-        };
-        let setup = Self {
-            bounds,
-            start,
-            step_x,
-            step_y,
-            nearest: z[0].min(z[1]).min(z[2]),
-            flat_diffuse: surface.flat_diffuse,
-            narrow: fits_narrow(p),
-            affine,
-        };
+                values
+            });
+            *plane = Plane::through(values, &weights);
+        }
+        let setup = Self { edges, nearest: z[0].min(z[1]).min(z[2]), flat_diffuse: surface.flat_diffuse, affine };
         Some((setup, planes))
     }
 }
@@ -271,18 +267,16 @@ pub(crate) fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
     (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
 }
 
-/// Whether every edge function value a walk inside the bounds of the triangle `p` (sub-pixel
-/// units) computes fits an `i32`.
+/// Whether every edge function value a walk inside the bounds of a triangle whose bounding box
+/// is `w` by `h` (sub-pixel units) computes fits an `i32`.
 ///
 /// A value at pixel centre `s` is `(b - a) x (s - a)` for two corners `a`, `b`: at most
 /// `w h + h |s.x - a.x|` for the triangle's bounding box `w` by `h`. A walk reads up to two
 /// mask widths past its last pixel (the last mask's lanes, then one more step) and one row
 /// past its last row, all inside the bounding box widened by [`NARROW_MARGIN`] pixels.
-fn fits_narrow(p: [(i64, i64); 3]) -> bool {
-    let extent = |c: [i64; 3]| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]);
+fn fits_narrow(w: i64, h: i64) -> bool {
     let margin = NARROW_MARGIN * SUBPIXEL_STEPS;
-    let (w, h) = (extent(p.map(|c| c.0)), extent(p.map(|c| c.1)) + margin);
-    h * (2 * w + margin) + 1 < i64::from(i32::MAX)
+    (h + margin) * (2 * w + margin) + 1 < i64::from(i32::MAX)
 }
 
 /// Pixels past a triangle's bounding box that a narrow walk may evaluate edge functions at.
@@ -315,7 +309,7 @@ fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyin
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shade::{Shading, mode};
+    use crate::shade::{Compiled, Shading, mode};
     use proptest::prelude::*;
 
     /// A screen vertex at whole sub-pixel position `(x, y)` with depth `z`.
@@ -327,12 +321,11 @@ mod tests {
 
     const SURFACE: Surface = Surface { tolerance: &[0.001; VARYINGS], flat_diffuse: 0.25 };
 
-    const NO_VARYINGS: Varyings = [0.0; VARYINGS];
-
-    fn depth_setup(corners: [(i32, i32); 3], z: [f32; 3]) -> (TriangleSetup, Planes) {
-        let vertices = [0, 1, 2].map(|k| vertex(corners[k], z[k]));
-        let varyings = [&NO_VARYINGS; 3];
-        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, TARGET, SURFACE).expect("a visible triangle")
+    /// The edges of the triangle with corners `corners` (sub-pixel units).
+    fn edges(corners: [(i32, i32); 3]) -> Edges {
+        let p = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
+        let order = positive_order(edge(p[0], p[1], p[2]), TARGET).expect("a triangle with an area");
+        Edges::new(order.map(|k| p[k]), TARGET).expect("a visible triangle")
     }
 
     #[test]
@@ -340,21 +333,18 @@ mod tests {
         let steps = SUBPIXEL_STEPS as i32;
         let small = [(70, 35), (90, 40), (75, 60)].map(|(x, y)| (x * steps, y * steps));
         let large = [(0, 0), (900, 40), (100, 600)].map(|(x, y)| (x * steps, y * steps));
-        assert!(depth_setup(small, [0.5; 3]).0.narrow);
-        assert!(!depth_setup(large, [0.5; 3]).0.narrow);
+        assert!(edges(small).narrow);
+        assert!(!edges(large).narrow);
     }
 
     #[test]
-    fn shadow_depths_are_pushed_back_by_the_slope_scaled_bias() {
-        let steps = SUBPIXEL_STEPS as i32;
-        // Depth grows by 0.01 per pixel to the right, not at all downwards.
-        let corners = [(0, 0), (0, 100 * steps), (100 * steps, 0)];
-        let (_, planes) = depth_setup(corners, [0.2, 0.2, 1.2]);
-        let plane = planes[DEPTH / LANES];
-        assert!((plane.dx.x - 0.01).abs() < 1e-6 && plane.dy.x.abs() < 1e-6, "{plane:?}");
-        // At the centre of pixel (0, 0) the plane's depth is 0.2 + 0.005, plus the bias.
-        let bias = CONSTANT_BIAS + SLOPE_BIAS * 0.01;
-        assert!((plane.origin.x - (0.205 + bias)).abs() < 1e-6, "{}", plane.origin.x);
+    fn back_faces_are_culled_only_where_the_viewport_says() {
+        let culling = Viewport { cull_back_faces: true, ..TARGET };
+        // Clockwise on a y-down screen: negative area, a front face.
+        assert_eq!(positive_order(-5, culling), Some([0, 2, 1]));
+        assert_eq!(positive_order(5, culling), None);
+        assert_eq!(positive_order(5, TARGET), Some([0, 1, 2]));
+        assert_eq!(positive_order(0, TARGET), None);
     }
 
     #[test]

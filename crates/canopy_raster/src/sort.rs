@@ -9,7 +9,7 @@
 //! strip sets its triangles up right before drawing them, while they are in the core's cache.
 
 use crate::clip::outside;
-use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, runs, triangle_count};
+use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, range_of, runs, triangle_count};
 use bevy_tasks::TaskPool;
 
 /// The vertex indices of one triangle, in the frame's global numbering.
@@ -70,7 +70,9 @@ fn sort<const ROWS: u32>(corners: Corners, view: View, sorted: &mut [Vec<Corners
         0..sorted.len()
     } else {
         // Columns are left to the setup, which drops a triangle covering none.
-        let Some((first, last)) = pixel_span([a, b, c].map(|v| i64::from(v.y)), view.viewport.height) else { return };
+        let Some((first, last)) = pixel_span(range_of([a, b, c].map(|v| i64::from(v.y))), view.viewport.height) else {
+            return;
+        };
         (first / ROWS) as usize..(last / ROWS) as usize + 1
     };
     for strip in &mut sorted[strips] {

@@ -16,7 +16,7 @@ use crate::camera::Light;
 use crate::clip::outside;
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
-use crate::setup::{DEPTH, INV_W, Interpolated, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup};
+use crate::setup::{DEPTH, Edges, INV_W, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup};
 use crate::shade::{
     BYTE_TO_UNIT, CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, bytes_of, lanes_of,
     slot, with_compiled_pass,
@@ -171,7 +171,7 @@ struct Draw<'a> {
 /// Draws the triangles of `entries` into `band` in order, for as long as they belong to
 /// `draw`'s instance, with the setup and pixel loop compiled for its pass; returns how many
 /// triangles were set up with their first row in the band.
-fn draw_instance<'a, C: CompiledPass + Interpolated>(
+fn draw_instance<'a, C: CompiledPass>(
     entries: &mut Peekable<impl Iterator<Item = &'a Corners>>,
     draw: &Draw,
     scratch: &mut BandScratch,
@@ -206,7 +206,7 @@ fn draw_instance<'a, C: CompiledPass + Interpolated>(
 /// farthest depth is nearer than all of it; returns 1 when it was set up and its first row is
 /// in the band (so that each triangle is counted once), 0 otherwise.
 #[inline(always)]
-fn draw_triangle<C: CompiledPass + Interpolated>(
+fn draw_triangle<C: CompiledPass>(
     vertices: [&ScreenVertex; 3],
     varyings: [&Varyings; 3],
     surface: Surface,
@@ -217,7 +217,7 @@ fn draw_triangle<C: CompiledPass + Interpolated>(
 ) -> usize {
     let viewport = draw.context.view.viewport;
     let Some((setup, planes)) = TriangleSetup::new::<C>(vertices, varyings, viewport, surface) else { return 0 };
-    let bounds = setup.bounds;
+    let bounds = setup.edges.bounds;
     let last_row = band.y0 + band.rows - 1;
     if bounds.max_y < band.y0 || bounds.min_y > last_row {
         // Part of a clipped triangle that reaches other bands.
@@ -229,7 +229,7 @@ fn draw_triangle<C: CompiledPass + Interpolated>(
             tile.occluded += 1;
             continue;
         }
-        let Some(walk) = Walk::new(&setup, tile.rect) else { continue };
+        let Some(walk) = Walk::new(&setup.edges, tile.rect) else { continue };
         let covered = fill_pass::<C>(&walk, masks, &triangle, draw.context, band);
         tile.fragments += covered;
         tile.covered_since_refresh += covered;
@@ -263,15 +263,15 @@ pub(crate) struct Walk {
     start: [i64; 3],
     step_x: [i32; 3],
     step_y: [i32; 3],
-    /// Whether the edge functions fit `i32` (see [`TriangleSetup::narrow`]).
+    /// Whether the edge functions fit `i32` (see [`Edges::narrow`]).
     narrow: bool,
 }
 
 impl Walk {
-    /// The walk of `setup` over `tile`; `None` when its bounds miss the tile.
+    /// The walk of a triangle's `edges` over `tile`; `None` when its bounds miss the tile.
     #[inline(always)]
-    pub(crate) fn new(setup: &TriangleSetup, tile: PixelBounds) -> Option<Self> {
-        let bounds = setup.bounds;
+    pub(crate) fn new(edges: &Edges, tile: PixelBounds) -> Option<Self> {
+        let bounds = edges.bounds;
         let rect = PixelBounds {
             min_x: bounds.min_x.max(tile.min_x),
             max_x: bounds.max_x.min(tile.max_x),
@@ -283,8 +283,8 @@ impl Walk {
         }
         let (dx, dy) = (i64::from(rect.min_x - bounds.min_x), i64::from(rect.min_y - bounds.min_y));
         let start =
-            std::array::from_fn(|k| setup.start[k] + dx * i64::from(setup.step_x[k]) + dy * i64::from(setup.step_y[k]));
-        Some(Self { rect, start, step_x: setup.step_x, step_y: setup.step_y, narrow: setup.narrow })
+            std::array::from_fn(|k| edges.start[k] + dx * i64::from(edges.step_x[k]) + dy * i64::from(edges.step_y[k]));
+        Some(Self { rect, start, step_x: edges.step_x, step_y: edges.step_y, narrow: edges.narrow })
     }
 
     /// Walks each row's covered span in runs of up to [`LANES`] pixels, calling
@@ -369,7 +369,7 @@ impl Walk {
 pub(crate) const MASK_PIXELS: u32 = 8;
 
 /// An integer type edge functions are stepped in: `i32` for the triangles whose values fit
-/// (see [`TriangleSetup::narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
+/// (see [`Edges::narrow`]), eight pixels to a SIMD coverage mask; `i64` for the rest.
 trait EdgeValue: Copy + Add<Output = Self> + Mul<Output = Self> {
     /// Each edge's steps to the pixels of a mask, prepared once per triangle.
     type MaskSteps;
@@ -464,7 +464,7 @@ fn fill_pass<C: CompiledPass>(
         lane_steps: std::array::from_fn(|k| if uses(k) { planes[k / LANES].lane_steps(k % LANES) } else { Vec4::ZERO }),
         planes,
         affine: triangle.setup.affine,
-        origin: (triangle.setup.bounds.min_x, triangle.setup.bounds.min_y),
+        origin: (triangle.setup.edges.bounds.min_x, triangle.setup.edges.bounds.min_y),
         triangle,
         context,
     };
@@ -760,19 +760,19 @@ pub(crate) fn covered(lanes: u32) -> f32x4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::{SUBPIXEL_STEPS, ScreenVertex, edge};
-    use crate::setup::{BiasedDepth, Surface, Viewport, is_top_left};
+    use crate::pipeline::{SUBPIXEL_STEPS, edge};
+    use crate::setup::{Viewport, is_top_left, positive_order};
     use proptest::prelude::*;
 
     const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
 
-    /// The setup of the triangle with corners at whole sub-pixel positions, if it is not culled.
-    fn setup(corners: [(i32, i32); 3]) -> Option<TriangleSetup> {
-        let vertices = corners.map(|(x, y)| ScreenVertex { code: 0, x, y, z: 0.5, inv_w: 1.0 });
+    /// The edges of the triangle with corners at whole sub-pixel positions, if it covers a
+    /// pixel centre.
+    fn edges(corners: [(i32, i32); 3]) -> Option<Edges> {
+        let p = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
         let viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
-        let surface = Surface { tolerance: &[0.0; VARYINGS], flat_diffuse: 0.0 };
-        let varyings = [&[0.0; VARYINGS]; 3];
-        TriangleSetup::new::<BiasedDepth>(vertices.each_ref(), varyings, viewport, surface).map(|(setup, _)| setup)
+        let order = positive_order(edge(p[0], p[1], p[2]), viewport)?;
+        Edges::new(order.map(|k| p[k]), viewport)
     }
 
     /// Whether the pixel centre `(x, y)` is inside the triangle `corners` under the top-left
@@ -820,7 +820,7 @@ mod tests {
         fn narrow_walks_match_wide_ones(
             corners in prop::array::uniform3((40 * 256..150 * 256i32, 20 * 256..80 * 256i32)),
         ) {
-            let Some(narrow) = setup(corners).and_then(|setup| Walk::new(&setup, TILE)) else { return Ok(()) };
+            let Some(narrow) = edges(corners).and_then(|edges| Walk::new(&edges, TILE)) else { return Ok(()) };
             prop_assume!(narrow.narrow);
             let wide = Walk { narrow: false, ..narrow };
             prop_assert_eq!(runs(&Walk { ..narrow }), runs(&wide));
@@ -832,18 +832,18 @@ mod tests {
         fn walks_cover_exactly_the_inside_pixels(
             corners in prop::array::uniform3((-20 * 256..300 * 256i32, -20 * 256..150 * 256i32)),
         ) {
-            let Some(setup) = setup(corners) else { return Ok(()) };
+            let Some(edges) = edges(corners) else { return Ok(()) };
             let mut visited = Vec::new();
             for ty in 0..=150 / TILE_HEIGHT {
                 for tx in 0..=300 / TILE_WIDTH {
-                    let Some(walk) = Walk::new(&setup, tile_rect(tx, ty * TILE_HEIGHT, 4096, TILE_HEIGHT)) else { continue };
+                    let Some(walk) = Walk::new(&edges, tile_rect(tx, ty * TILE_HEIGHT, 4096, TILE_HEIGHT)) else { continue };
                     for (y, x, lanes) in runs(&walk) {
                         visited.extend((0..LANES as u32).filter(|k| lanes & 1 << k != 0).map(|k| (x + k, y)));
                     }
                 }
             }
             visited.sort_unstable_by_key(|&(x, y)| (y, x));
-            let bounds = setup.bounds;
+            let bounds = edges.bounds;
             let expected: Vec<(u32, u32)> = (bounds.min_y..=bounds.max_y)
                 .flat_map(|y| (bounds.min_x..=bounds.max_x).map(move |x| (x, y)))
                 .filter(|&pixel| inside(corners, pixel))
