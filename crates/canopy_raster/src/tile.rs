@@ -130,7 +130,11 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &m
             with_compiled_pass!(pass, draw_instance(&mut entries, &draw, scratch, &mut masks, &mut target));
     }
     if let Some(shadow) = &context.shadow {
-        light_band(&mut target, &scratch.tiles, shadow);
+        // Compiled once per lookup kind, so that the loops do not test it per run.
+        match shadow.filtered {
+            true => light_band::<true>(&mut target, &scratch.tiles, shadow),
+            false => light_band::<false>(&mut target, &scratch.tiles, shadow),
+        }
     }
     for tile in &scratch.tiles {
         counts.fragments += tile.fragments;
@@ -612,7 +616,7 @@ fn colors_of(words: u32x4) -> [[u8; 4]; LANES] {
 /// runs wait on memory together. Kept out of line: a pass of its own after the triangles, it
 /// does not belong in their loops' code.
 #[inline(never)]
-fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
+fn light_band<const FILTERED: bool>(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
     let width = band.width as usize;
     // A tile row's whole runs, and the pixels left at the end of the band's last tile.
     let mut pending = [PendingRun::default(); TILE_WIDTH as usize / LANES + 1];
@@ -633,7 +637,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
                 if drawn.any() {
                     let x = Vec4::splat((x0 + run * LANES) as f32) + LANE_OFFSETS;
                     let [tx, ty, light_depth] = shadow.pixels.locate(in_map, x, depth);
-                    let taps = shadow.map.taps(tx, ty, light_depth, shadow.filtered);
+                    let taps = shadow.map.taps(tx, ty, light_depth, FILTERED);
                     pending[count] = PendingRun { run, drawn, taps };
                     count += 1;
                 }
@@ -649,7 +653,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
             let mut left = 0;
             for k in 0..count {
                 let PendingRun { run, drawn, ref taps } = pending[k];
-                if (shadow.map.lit_in_full(taps, shadow.filtered) | !drawn).all() {
+                if (shadow.map.lit_in_full(taps, FILTERED) | !drawn).all() {
                     shade_colors(color_runs, color_rest, run, |colors| opaque(colors, drawn));
                 } else {
                     pending[left] = pending[k];
@@ -657,7 +661,7 @@ fn light_band(band: &mut Band, tiles: &[TileState], shadow: &BandShadow) {
                 }
             }
             for (run, visibility) in pending[..left].iter().zip(&mut visibility) {
-                *visibility = shadow.map.read(&run.taps, shadow.filtered);
+                *visibility = shadow.map.read(&run.taps, FILTERED);
             }
             for (run, &visibility) in pending[..left].iter().zip(&visibility) {
                 // A filtered lookup may still find the light in full (its shadowing texels
