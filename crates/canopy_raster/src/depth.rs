@@ -181,7 +181,7 @@ fn fill_column(triangle: &DepthTriangle, (first, last): (u32, u32), band: &mut D
     let mut depth = beyond(past_bounds, window_depths(plane, bounds, first));
     let depth_step = f32x8::splat(plane.dy);
     let mut at = (first - band.y0) as usize * band.stride + band.first + bounds.min_x as usize;
-    for _ in first..=last {
+    for _ in 0..last - first + 1 {
         fill_window(band, at, beyond(row_edges[0] | row_edges[1] | row_edges[2], depth));
         row_edges = each_edge(|k| row_edges[k] + row_step[k]);
         depth += depth_step;

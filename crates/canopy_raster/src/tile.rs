@@ -303,7 +303,9 @@ impl Walk {
             let valid = u32::MAX >> (u32::BITS - width);
             let mut edges = self.start.map(|e| e as i32);
             let mut fragments = 0;
-            for y in self.rect.min_y..=self.rect.max_y {
+            // Pixel coordinates are far below `u32::MAX`: the exclusive range, cheaper to step
+            // than an inclusive one, reaches the last row.
+            for y in self.rect.min_y..self.rect.max_y + 1 {
                 let coverage = i32::coverage(edges, &steps) & valid;
                 edges = add(edges, self.step_y);
                 fragments += self.visit_row(y, coverage.into(), &mut visit);
@@ -316,7 +318,7 @@ impl Walk {
         } else {
             self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), rows);
         }
-        let rows = (self.rect.min_y..=self.rect.max_y).zip(rows.iter());
+        let rows = (self.rect.min_y..self.rect.max_y + 1).zip(rows.iter());
         rows.map(|(y, &coverage)| self.visit_row(y, coverage, &mut visit)).sum()
     }
 
