@@ -3,7 +3,9 @@
 //!
 //! Run with `cargo bench --profile dev --bench peers` (the rasterizer and the peers are built
 //! optimized in that profile); `-- --rounds N` sets the frames timed per renderer and camera
-//! (default 40). The Mesa llvmpipe peer needs `libegl1 libegl-mesa0 libgl1-mesa-dri`; without
+//! (default 40), `--workers N` Canopy's pool workers beside the calling thread (default one per
+//! other core; 0 draws on the calling thread alone), and `--canopy-only` leaves the peers out of
+//! the rounds. The Mesa llvmpipe peer needs `libegl1 libegl-mesa0 libgl1-mesa-dri`; without
 //! them its rows say why they are missing.
 //!
 //! Canopy draws each round's frame three times: without shadows, with shadows read at the
@@ -113,18 +115,24 @@ fn median_ratio(samples: &[f64], base: &[f64]) -> f64 {
 }
 
 fn main() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut rounds = 40;
+    // The thread that calls `render` works through the frame's tasks too, so one worker per
+    // other core keeps every core busy without two of Canopy's threads sharing one.
+    let mut workers = (cores - 1).max(1);
+    let mut canopy_only = false;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
-        if arg == "--rounds" {
-            rounds = args.next().and_then(|n| n.parse().ok()).filter(|&n| n > 0).expect("--rounds takes a count");
+        match arg.as_str() {
+            "--rounds" => {
+                rounds = args.next().and_then(|n| n.parse().ok()).filter(|&n| n > 0).expect("--rounds takes a count")
+            }
+            "--workers" => workers = args.next().and_then(|n| n.parse().ok()).expect("--workers takes a count"),
+            "--canopy-only" => canopy_only = true,
+            _ => {}
         }
     }
 
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    // The thread that calls `render` works through the frame's tasks too, so one worker per
-    // other core keeps every core busy without two of Canopy's threads sharing one.
-    let workers = (cores - 1).max(1);
     let mut canopy = Canopy {
         renderer: Renderer::default(),
         target: Framebuffer::new(WIDTH, HEIGHT),
@@ -171,6 +179,9 @@ fn main() {
         let mut samples: Vec<Vec<f64>> = vec![Vec::with_capacity(rounds); Contender::ALL.len()];
         for round in 0..WARM_UP + rounds {
             for (index, contender) in Contender::ALL.into_iter().enumerate() {
+                if canopy_only && matches!(contender, Contender::Euc | Contender::Llvmpipe) {
+                    continue;
+                }
                 let started = Instant::now();
                 match contender {
                     Contender::Canopy => canopy.render(camera, RenderSettings::default()),
