@@ -132,10 +132,12 @@ impl DepthTriangle {
         let p = vertices.map(|v| (i64::from(v.x), i64::from(v.y)));
         let area = edge(p[0], p[1], p[2]);
         let z = vertices.map(|v| v.z);
-        // Written out rather than indexed by the order: the corners stay in registers.
+        // The two orders there are, written out rather than indexed: the corners stay in
+        // registers.
         let (p, depths) = match positive_order(area, viewport)? {
             [0, 1, 2] => (p, z),
-            _ => ([p[0], p[2], p[1]], [z[0], z[2], z[1]]),
+            [0, 2, 1] => ([p[0], p[2], p[1]], [z[0], z[2], z[1]]),
+            order => (order.map(|k| p[k]), order.map(|k| z[k])),
         };
         let edges = Edges::new(p, viewport)?;
         let mut plane = Plane::through(depths, &Weights::new(&edges, area));
@@ -225,12 +227,12 @@ fn fill_wide(triangle: &DepthTriangle, (first, last): (u32, u32), masks: &mut Ro
     let window_depth_step = f32x8::splat(plane.dx * WINDOW as f32);
     let mut at = (first - band.y0) as usize * band.stride + band.first + bounds.min_x as usize;
     for y in first..=last {
-        let (mut edges, mut depths) = (row_edges, window_depths(plane, bounds, y));
+        let (mut lanes, mut depths) = (row_edges, window_depths(plane, bounds, y));
         for last in (1..=windows).map(|window| window == windows) {
-            let outside = edges[0] | edges[1] | edges[2] | if last { past_bounds } else { i32x8::ZERO };
+            let outside = lanes[0] | lanes[1] | lanes[2] | if last { past_bounds } else { i32x8::ZERO };
             fill_window(band, at, beyond(outside, depths));
             at += WINDOW;
-            edges = each_edge(|k| edges[k] + window_step[k]);
+            lanes = each_edge(|k| lanes[k] + window_step[k]);
             depths += window_depth_step;
         }
         row_edges = each_edge(|k| row_edges[k] + row_step[k]);
@@ -278,8 +280,8 @@ fn each_edge<T>(value: impl Fn(usize) -> T) -> [T; 3] {
     [value(0), value(1), value(2)]
 }
 
-/// The depth-only pixel loop of the tile walk; `plane` starts at the first pixel of `bounds`
-/// and holds the biased depth in its first lane.
+/// The depth-only pixel loop of the tile walk; `plane`, the biased depth, starts at the first
+/// pixel of `bounds`.
 #[inline(never)]
 fn fill_runs(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plane<f32>, band: &mut DepthBand) {
     let lane_steps = LANE_OFFSETS * plane.dx;
