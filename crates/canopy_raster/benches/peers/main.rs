@@ -12,6 +12,9 @@
 //! nearest texel, and with shadows filtered over four texels (PCF, its default); the shadowed
 //! frames' ratios are over the unshadowed frame of the same round.
 //!
+//! Each round draws every renderer's frame once, in an order shuffled from a fixed seed, so that
+//! no renderer always follows the same one.
+//!
 //! Every renderer draws the same mesh with the same matrices; the coverage column (the share
 //! of pixels not left at the background) shows that they drew the same picture. The ratio
 //! column is the median over rounds of each frame's time over Canopy's frame of the same
@@ -89,6 +92,34 @@ impl Canopy {
 }
 
 /// Canopy's settings with shadows, filtered (`pcf`) or read at the nearest texel.
+/// The order of the renderers in each round, shuffled from a fixed seed: what ran just before a
+/// frame (how it left the caches and the cores) changes the frame's time, so no renderer always
+/// follows the same one, and runs stay repeatable.
+struct RoundOrder(u64);
+
+/// The first state of [`RoundOrder`]'s generator (any non-zero value).
+const ORDER_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
+
+impl RoundOrder {
+    /// The next round's order: a permutation of the renderers' indices (Fisher-Yates).
+    fn next(&mut self) -> [usize; Contender::ALL.len()] {
+        let mut order = std::array::from_fn(|index| index);
+        for last in (1..order.len()).rev() {
+            // The slight bias of a remainder over so few choices does not matter here.
+            order.swap(last, (self.random() % (last as u64 + 1)) as usize);
+        }
+        order
+    }
+
+    /// A xorshift64 step.
+    fn random(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+}
+
 fn shadowed(pcf: bool) -> RenderSettings {
     RenderSettings { shadows: true, pcf, ..RenderSettings::default() }
 }
@@ -174,11 +205,13 @@ fn main() {
          ms / frame (fastest tenth) | faster by (fastest tenths) |"
     );
     println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    let mut order = RoundOrder(ORDER_SEED);
     for camera in &CAMERAS {
         let clip = camera.camera().view_projection(WIDTH as f32 / HEIGHT as f32).to_cols_array();
         let mut samples: Vec<Vec<f64>> = vec![Vec::with_capacity(rounds); Contender::ALL.len()];
         for round in 0..WARM_UP + rounds {
-            for (index, contender) in Contender::ALL.into_iter().enumerate() {
+            for index in order.next() {
+                let contender = Contender::ALL[index];
                 if canopy_only && matches!(contender, Contender::Euc | Contender::Llvmpipe) {
                     continue;
                 }
