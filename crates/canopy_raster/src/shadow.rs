@@ -177,7 +177,7 @@ impl ShadowMap {
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
         let first = row * i32x4::splat(self.stride() as i32) + column;
-        Taps { first, right: x - floats_of(column), down: y - floats_of(row), depth }
+        Taps { first, x, y, depth }
     }
 
     /// Which of the four points of `taps` the light reaches in full, found with one read each:
@@ -210,7 +210,10 @@ impl ShadowMap {
             let texels = Vec4::from_array(std::array::from_fn(|lane| quads[lane][k]));
             Vec4::select(taps.depth.cmpgt(texels), weight, Vec4::ZERO)
         };
-        let (tx, ty) = (taps.right, taps.down);
+        // The weights of the right and the lower texels: the positions' fractions, found only
+        // for the lookups the one-read test leaves.
+        let fraction = |at: Vec4| at - floats_of(lanes_of(at).fast_trunc_int());
+        let (tx, ty) = (fraction(taps.x), fraction(taps.y));
         let (sx, sy) = (Vec4::ONE - tx, Vec4::ONE - ty);
         // What the shadowed texels take away from full light: a point no texel shadows gets
         // exactly 1.
@@ -279,9 +282,11 @@ pub(crate) struct Taps {
     /// Each lane's texel, the top-left one of its two-by-two when filtered, as an index into
     /// the stored depths.
     first: i32x4,
-    /// The weights of the right and the lower texels of a two-by-two.
-    right: Vec4,
-    down: Vec4,
+    /// The points' clamped positions in texels, counted from the border's first texel (not
+    /// negative): their whole parts are the stored column and row, their fractions the weights
+    /// of a two-by-two's right and lower texels.
+    x: Vec4,
+    y: Vec4,
     /// The points' light depths.
     depth: Vec4,
 }
