@@ -91,7 +91,6 @@ impl Canopy {
     }
 }
 
-/// Canopy's settings with shadows, filtered (`pcf`) or read at the nearest texel.
 /// The order of the renderers in each round, shuffled from a fixed seed: what ran just before a
 /// frame (how it left the caches and the cores) changes the frame's time, so no renderer always
 /// follows the same one, and runs stay repeatable.
@@ -120,6 +119,7 @@ impl RoundOrder {
     }
 }
 
+/// Canopy's settings with shadows, filtered (`pcf`) or read at the nearest texel.
 fn shadowed(pcf: bool) -> RenderSettings {
     RenderSettings { shadows: true, pcf, ..RenderSettings::default() }
 }
