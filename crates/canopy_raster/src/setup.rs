@@ -185,6 +185,17 @@ impl Edges {
     }
 }
 
+#[cfg(test)]
+impl Edges {
+    /// The edges of the triangle with corners `corners` (whole sub-pixel units) on `viewport`;
+    /// `None` when it is culled or covers no pixel centre.
+    pub(crate) fn of_corners(corners: [(i32, i32); 3], viewport: Viewport) -> Option<Self> {
+        let p = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
+        let order = positive_order(edge(p[0], p[1], p[2]), viewport)?;
+        Self::new(order.map(|k| p[k]), viewport)
+    }
+}
+
 /// The order of a projected triangle's corners that gives it a positive area (`area` is
 /// twice its signed area on the screen, see [`edge`]); `None` when it is culled: zero area,
 /// or facing away when `viewport` culls back faces.
@@ -323,9 +334,7 @@ mod tests {
 
     /// The edges of the triangle with corners `corners` (sub-pixel units).
     fn edges(corners: [(i32, i32); 3]) -> Edges {
-        let p = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
-        let order = positive_order(edge(p[0], p[1], p[2]), TARGET).expect("a triangle with an area");
-        Edges::new(order.map(|k| p[k]), TARGET).expect("a visible triangle")
+        Edges::of_corners(corners, TARGET).expect("a visible triangle")
     }
 
     #[test]

@@ -767,7 +767,7 @@ pub(crate) fn covered(lanes: u32) -> f32x4 {
 mod tests {
     use super::*;
     use crate::pipeline::{SUBPIXEL_STEPS, edge};
-    use crate::setup::{Viewport, is_top_left, positive_order};
+    use crate::setup::{Viewport, is_top_left};
     use proptest::prelude::*;
 
     const TILE: PixelBounds = PixelBounds { min_x: 64, max_x: 127, min_y: 32, max_y: 63 };
@@ -775,10 +775,7 @@ mod tests {
     /// The edges of the triangle with corners at whole sub-pixel positions, if it covers a
     /// pixel centre.
     fn edges(corners: [(i32, i32); 3]) -> Option<Edges> {
-        let p = corners.map(|(x, y)| (i64::from(x), i64::from(y)));
-        let viewport = Viewport { width: 4096, height: 4096, cull_back_faces: false };
-        let order = positive_order(edge(p[0], p[1], p[2]), viewport)?;
-        Edges::new(order.map(|k| p[k]), viewport)
+        Edges::of_corners(corners, Viewport { width: 4096, height: 4096, cull_back_faces: false })
     }
 
     /// Whether the pixel centre `(x, y)` is inside the triangle `corners` under the top-left
