@@ -31,7 +31,7 @@ use std::sync::Arc;
 pub const TILE_WIDTH: u32 = 64;
 
 /// Tile height in pixels; a row of tiles is one unit of parallel work.
-pub const TILE_HEIGHT: u32 = 32;
+pub const TILE_HEIGHT: u32 = 64;
 
 /// Sub-pixel positions per pixel along each axis (8 bits of sub-pixel precision).
 pub const SUBPIXEL_STEPS: i64 = 256;
