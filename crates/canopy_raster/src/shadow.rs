@@ -54,6 +54,7 @@ const BORDER_AFTER: usize = WINDOW - 1;
 
 /// Border texels before plus after each row (and above plus below the map).
 const BORDER: usize = BORDER_BEFORE + BORDER_AFTER;
+const _: () = assert!(crate::MAX_TARGET_SIZE as usize + BORDER <= i16::MAX as usize, "map positions fit 16 bits");
 
 impl ShadowMap {
     /// Edge length of the square map in texels.
@@ -176,7 +177,11 @@ impl ShadowMap {
         // whole part is the stored column and row, found four at a time by truncation.
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
-        let first = row * i32x4::splat(self.stride() as i32) + column;
+        // Column, row and stride all fit 16 bits (the map is at most `MAX_TARGET_SIZE` a side):
+        // each lane's (column, row) pair times (1, stride), summed, in one multiply-add.
+        let stride = self.stride() as i16;
+        let first = bytemuck::cast::<_, i16x8>(row << 16 | column)
+            .dot(i16x8::from([1, stride, 1, stride, 1, stride, 1, stride]));
         Taps { first, x, y, depth }
     }
 
