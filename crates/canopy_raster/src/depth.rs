@@ -10,7 +10,7 @@
 
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
-use crate::pipeline::{Instance, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, edge};
+use crate::pipeline::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, View, edge};
 use crate::schedule::Schedule;
 use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, positive_order};
 use crate::shade::{VARYINGS, lanes_of};
@@ -22,7 +22,7 @@ use bevy_tasks::TaskPool;
 use wide::{f32x4, f32x8, i32x8};
 
 /// Map rows one strip task draws.
-const STRIP_ROWS: u32 = 64;
+pub(crate) const STRIP_ROWS: u32 = 64;
 
 /// Texels of a row one step of the depth pass covers.
 pub(crate) const WINDOW: usize = 8;
@@ -31,16 +31,16 @@ pub(crate) const WINDOW: usize = 8;
 /// allocate.
 #[derive(Debug, Default)]
 pub(crate) struct DepthPass {
-    /// The triangles reaching each strip.
-    sorted: Sorted,
+    /// The triangles reaching each strip: sorted for the light's view into strips of
+    /// [`STRIP_ROWS`] rows before [`DepthPass::draw`] (together with the image's triangles).
+    pub sorted: Sorted,
     schedule: Schedule,
 }
 
-/// What the depth pass draws: the frame's instances and their vertices as the light sees them.
+/// What the depth pass draws its sorted triangles with: the frame's vertices as the light sees
+/// them.
 #[derive(Clone, Copy)]
 pub(crate) struct DepthScene<'a> {
-    pub spans: &'a [Span],
-    pub instances: &'a [Instance],
     /// World positions, for the triangles that need clipping.
     pub world: &'a [Vec3],
     /// The light's view: its projection, the projected vertices and the map as viewport.
@@ -49,10 +49,10 @@ pub(crate) struct DepthScene<'a> {
 
 impl DepthPass {
     /// Clears `map` and draws the depths of every triangle of `scene` into it, spreading the
-    /// work over `pool`. Returns how many triangles were drawn (after clipping and culling).
+    /// work over `pool`; the triangles are those of [`DepthPass::sorted`], sorted for `scene`'s
+    /// view. Returns how many triangles were drawn (after clipping and culling).
     pub fn draw(&mut self, pool: &TaskPool, scene: DepthScene, map: &mut ShadowMap) -> usize {
         let size = map.size();
-        self.sorted.sort::<STRIP_ROWS>(pool, scene.spans, scene.instances, scene.view);
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
         let strips = map.strips_mut(STRIP_ROWS as usize);

@@ -13,7 +13,7 @@
 
 use crate::camera::{Camera, Light};
 use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
-use crate::depth::{DepthPass, DepthScene};
+use crate::depth::{DepthPass, DepthScene, STRIP_ROWS};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
 use crate::schedule::Schedule;
@@ -248,28 +248,39 @@ impl Renderer {
 
         let view_projection = frame.camera.view_projection(aspect);
         self.vertex_stage(pool, frame, view_projection, width, height, light_clip);
-        if let Some(light_clip) = light_clip {
-            let size = settings.shadow_map_size;
-            let view = View {
-                clip_from_world: light_clip,
-                vertices: &self.light_vertices,
-                viewport: Viewport { width: size, height: size, cull_back_faces: false },
-            };
-            let scene = DepthScene { spans: &self.spans, instances: frame.instances, world: &self.world, view };
-            stats.shadow_triangles = self.depth_pass.draw(pool, scene, &mut self.shadow);
-        }
         let view = View {
             clip_from_world: view_projection,
             vertices: &self.vertices,
             viewport: Viewport { width, height, cull_back_faces: true },
         };
+        let light_view = light_clip.map(|clip_from_world| View {
+            clip_from_world,
+            vertices: &self.light_vertices,
+            viewport: Viewport {
+                width: settings.shadow_map_size,
+                height: settings.shadow_map_size,
+                cull_back_faces: false,
+            },
+        });
+        // The image's and the shadow map's triangles are sorted in one pass over them.
+        let light_sorting = light_view.map(|view| (&mut self.depth_pass.sorted, view));
+        Sorted::sort_for::<TILE_HEIGHT, STRIP_ROWS>(
+            pool,
+            &self.spans,
+            frame.instances,
+            (&mut self.sorted, view),
+            light_sorting,
+        );
+        if let Some(view) = light_view {
+            let scene = DepthScene { world: &self.world, view };
+            stats.shadow_triangles = self.depth_pass.draw(pool, scene, &mut self.shadow);
+        }
         let shadow = self.shadow.is_active().then(|| BandShadow {
             map: &self.shadow,
             pixels: PixelsInMap::new(&self.shadow, view_projection, width, height),
             light: frame.light,
             filtered: settings.pcf,
         });
-        self.sorted.sort::<TILE_HEIGHT>(pool, &self.spans, frame.instances, view);
         let context = TileContext {
             frame,
             spans: &self.spans,
@@ -806,5 +817,38 @@ mod tests {
         assert_eq!(first, second);
         assert_eq!(a.color(), b.color());
         assert_eq!(a.depth(), b.depth());
+    }
+
+    #[test]
+    fn one_sorting_pass_for_the_image_and_the_shadow_map_sorts_each_as_alone() {
+        use crate::sort::Corners;
+        use crate::standard;
+        let pool = TaskPool::new();
+        let instances = [standard::instance()];
+        let settings = RenderSettings { shadows: true, ..RenderSettings::default() };
+        let frame = standard::frame(&standard::CAMERAS[1], &instances, settings);
+        let (width, height, map) = (standard::WIDTH, standard::HEIGHT, settings.shadow_map_size);
+        // A frame drawn leaves the vertices as the camera and the light see them.
+        let mut renderer = Renderer::default();
+        renderer.render(&mut Framebuffer::new(width, height), &pool, &frame);
+        let view = |vertices, width, height| View {
+            clip_from_world: Mat4::IDENTITY,
+            vertices,
+            viewport: Viewport { width, height, cull_back_faces: width != map },
+        };
+        let (image_view, light_view) =
+            (view(&renderer.vertices, width, height), view(&renderer.light_vertices, map, map));
+        let spans = &renderer.spans;
+        let [mut image, mut light, mut image_alone, mut light_alone] = std::array::from_fn(|_| Sorted::default());
+        Sorted::sort_for::<64, 32>(&pool, spans, &instances, (&mut image, image_view), Some((&mut light, light_view)));
+        Sorted::sort_for::<64, 64>(&pool, spans, &instances, (&mut image_alone, image_view), None);
+        Sorted::sort_for::<32, 32>(&pool, spans, &instances, (&mut light_alone, light_view), None);
+        let strips = |sorted: &Sorted, count: u32| -> Vec<Vec<Corners>> {
+            (0..count as usize).map(|strip| sorted.strip(strip).copied().collect()).collect()
+        };
+        let (image_strips, light_strips) = (height.div_ceil(64), map.div_ceil(32));
+        assert_eq!(strips(&image, image_strips), strips(&image_alone, image_strips));
+        assert_eq!(strips(&light, light_strips), strips(&light_alone, light_strips));
+        assert!(strips(&light, light_strips).iter().all(|strip| !strip.is_empty()), "the light sees the whole grid");
     }
 }

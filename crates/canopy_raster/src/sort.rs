@@ -11,6 +11,7 @@
 use crate::clip::outside;
 use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, range_of, runs, triangle_count};
 use bevy_tasks::TaskPool;
+use std::ops::Range;
 
 /// The vertex indices of one triangle, in the frame's global numbering.
 pub(crate) type Corners = [u32; 3];
@@ -28,34 +29,70 @@ pub(crate) struct Sorted {
 
 impl Sorted {
     /// Sorts every triangle of `instances` (whose vertex and triangle numbering `spans` give)
-    /// into strips of `ROWS` rows of `view`'s target, spreading the work over `pool`.
+    /// into strips of `ROWS` rows of `first`'s view and, when there is a `second`, into strips
+    /// of `SECOND_ROWS` rows of its view, spreading the work over `pool`: one pass over the
+    /// triangles, and one wait for the pool's threads, serves both (the image and the shadow
+    /// map).
     ///
-    /// `ROWS` is a constant so that finding a row's strip is a shift, not a division per
+    /// The rows are constants so that finding a row's strip is a shift, not a division per
     /// triangle.
-    pub fn sort<const ROWS: u32>(&mut self, pool: &TaskPool, spans: &[Span], instances: &[Instance], view: View) {
-        let strips = view.viewport.height.div_ceil(ROWS) as usize;
+    pub fn sort_for<const ROWS: u32, const SECOND_ROWS: u32>(
+        pool: &TaskPool,
+        spans: &[Span],
+        instances: &[Instance],
+        (first, first_view): (&mut Self, View),
+        second: Option<(&mut Self, View)>,
+    ) {
         let parts = pool.thread_num().max(1) * RUNS_PER_THREAD;
+        first.prepare(parts, first_view.viewport.height.div_ceil(ROWS) as usize);
+        pool.scope(|scope| {
+            let ranges = runs(triangle_count(spans, instances), parts).zip(first.runs.iter_mut());
+            match second {
+                None => {
+                    for (range, sorted) in ranges {
+                        scope.spawn(async move {
+                            each_triangle(spans, instances, range, |corners| sort::<ROWS>(corners, first_view, sorted));
+                        });
+                    }
+                }
+                Some((second, second_view)) => {
+                    second.prepare(parts, second_view.viewport.height.div_ceil(SECOND_ROWS) as usize);
+                    for ((range, sorted), second_sorted) in ranges.zip(second.runs.iter_mut()) {
+                        scope.spawn(async move {
+                            each_triangle(spans, instances, range, |corners| {
+                                sort::<ROWS>(corners, first_view, sorted);
+                                sort::<SECOND_ROWS>(corners, second_view, second_sorted);
+                            });
+                        });
+                    }
+                }
+            }
+        });
+    }
+
+    /// Makes room for `parts` runs of `strips` empty strips each, keeping what was allocated.
+    fn prepare(&mut self, parts: usize, strips: usize) {
         self.runs.resize_with(parts, Vec::new);
         for run in &mut self.runs {
             run.resize_with(strips, Vec::new);
             run.iter_mut().for_each(Vec::clear);
         }
-        pool.scope(|scope| {
-            for (range, sorted) in runs(triangle_count(spans, instances), parts).zip(self.runs.iter_mut()) {
-                scope.spawn(async move {
-                    for run in instance_runs(spans, instances, range) {
-                        for triangle in &run.instance.mesh.triangles[run.triangles] {
-                            sort::<ROWS>(triangle.map(|i| (run.span.first_vertex + i as usize) as u32), view, sorted);
-                        }
-                    }
-                });
-            }
-        });
     }
 
     /// The triangles reaching strip `index`, in draw order.
     pub fn strip(&self, index: usize) -> impl Iterator<Item = &Corners> {
         self.runs.iter().flat_map(move |run| &run[index])
+    }
+}
+
+/// Calls `visit` with the corners (global vertex indices) of each of the global triangles
+/// `range` of `instances`, in order.
+#[inline(always)]
+fn each_triangle(spans: &[Span], instances: &[Instance], range: Range<usize>, mut visit: impl FnMut(Corners)) {
+    for run in instance_runs(spans, instances, range) {
+        for triangle in &run.instance.mesh.triangles[run.triangles] {
+            visit(triangle.map(|i| (run.span.first_vertex + i as usize) as u32));
+        }
     }
 }
 
