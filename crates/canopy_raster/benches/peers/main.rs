@@ -249,7 +249,7 @@ fn main() {
             let [ratio, fastest_ratio] = [ratio, fastest_ratio].map(|ratio| match contender {
                 Contender::Canopy => "-".to_string(),
                 Contender::CanopyShadowed | Contender::CanopyShadowedPcf => format!("shadows cost {ratio:.2}x"),
-                _ => format!("{ratio:.1}x"),
+                _ => format!("{ratio:.2}x"),
             });
             println!(
                 "| {} | {} | {ms:.2} | {:.1} M | {coverage} | {ratio} | {fastest:.2} | {fastest_ratio} |",
