@@ -831,13 +831,14 @@ mod tests {
         // A frame drawn leaves the vertices as the camera and the light see them.
         let mut renderer = Renderer::default();
         renderer.render(&mut Framebuffer::new(width, height), &pool, &frame);
-        let view = |vertices, width, height| View {
+        // Sorting reads only the projected vertices and the viewport.
+        let view = |vertices, width, height, cull_back_faces| View {
             clip_from_world: Mat4::IDENTITY,
             vertices,
-            viewport: Viewport { width, height, cull_back_faces: width != map },
+            viewport: Viewport { width, height, cull_back_faces },
         };
-        let (image_view, light_view) =
-            (view(&renderer.vertices, width, height), view(&renderer.light_vertices, map, map));
+        let image_view = view(&renderer.vertices, width, height, true);
+        let light_view = view(&renderer.light_vertices, map, map, false);
         let spans = &renderer.spans;
         let [mut image, mut light, mut image_alone, mut light_alone] = std::array::from_fn(|_| Sorted::default());
         Sorted::sort_for::<64, 32>(&pool, spans, &instances, (&mut image, image_view), Some((&mut light, light_view)));
