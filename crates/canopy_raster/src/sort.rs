@@ -47,6 +47,8 @@ impl Sorted {
         first.prepare(parts, first_view.viewport.height.div_ceil(ROWS) as usize);
         pool.scope(|scope| {
             let ranges = runs(triangle_count(spans, instances), parts).zip(first.runs.iter_mut());
+            // Without a second view, a loop of its own: testing for one at every triangle made
+            // unshadowed frames about 1% slower.
             match second {
                 None => {
                     for (range, sorted) in ranges {
