@@ -97,17 +97,18 @@ fn draw_strip<'a>(
     let mut triangles = 0;
     let mut draw = |vertices: [&ScreenVertex; 3], band: &mut DepthBand| {
         if let Some(triangle) = DepthTriangle::new(vertices, view.viewport) {
-            fill_triangle(&triangle, &mut masks, band);
-            triangles += usize::from((band.y0..band.y0 + band.rows).contains(&triangle.edges.bounds.min_y));
+            let first_row = triangle.edges.bounds.min_y;
+            fill_triangle(triangle, &mut masks, band);
+            triangles += usize::from((band.y0..band.y0 + band.rows).contains(&first_row));
         }
     };
     for corners in sorted {
-        let indices = corners.map(|i| i as usize);
-        let vertices = indices.map(|i| &view.vertices[i]);
+        let vertices = corners.map(|i| &view.vertices[i as usize]);
         if (vertices[0].code | vertices[1].code | vertices[2].code) & outside::CLIPPED == 0 {
             draw(vertices, &mut band);
         } else {
             let no_varyings = |_| &[0.0; VARYINGS];
+            let indices = corners.map(|i| i as usize);
             view.clip(scene.world, indices, no_varyings, |vertices, _| draw(vertices, &mut band));
         }
     }
@@ -141,21 +142,26 @@ impl DepthTriangle {
         };
         let edges = Edges::new(p, viewport)?;
         let mut plane = Plane::through(depths, &Weights::new(&edges, area));
-        plane.origin += CONSTANT_BIAS + SLOPE_BIAS * plane.dx.abs().max(plane.dy.abs());
+        // A plain comparison: the slopes are finite, so `f32::max`'s NaN handling is not needed.
+        let (dx, dy) = (plane.dx.abs(), plane.dy.abs());
+        plane.origin += CONSTANT_BIAS + SLOPE_BIAS * if dx > dy { dx } else { dy };
         Some(Self { edges, plane })
     }
 }
 
 /// Draws the depths of `triangle` into the rows of `band` it covers.
+///
+/// Taken by value: only the out-of-line call for wide triangles then needs it in memory, and
+/// the common ones' setup stays in registers (a reference made every setup store it).
 #[inline(always)]
-fn fill_triangle(triangle: &DepthTriangle, masks: &mut RowMasks, band: &mut DepthBand) {
+fn fill_triangle(triangle: DepthTriangle, masks: &mut RowMasks, band: &mut DepthBand) {
     let bounds = triangle.edges.bounds;
     let rows = (bounds.min_y.max(band.y0), bounds.max_y.min(band.y0 + band.rows - 1));
     if rows.0 > rows.1 {
         return;
     }
     if triangle.edges.narrow && bounds.max_x - bounds.min_x < WINDOW as u32 {
-        fill_column(triangle, rows, band);
+        fill_column(&triangle, rows, band);
     } else {
         fill_wide(triangle, rows, masks, band);
     }
@@ -195,8 +201,8 @@ fn fill_column(triangle: &DepthTriangle, (first, last): (u32, u32), band: &mut D
 /// do not fit `i32` (both rare in a shadow map). Kept out of line, so that the loops of the
 /// common triangles keep their values in registers.
 #[inline(never)]
-fn fill_wide(triangle: &DepthTriangle, (first, last): (u32, u32), masks: &mut RowMasks, band: &mut DepthBand) {
-    let DepthTriangle { edges, plane } = triangle;
+fn fill_wide(triangle: DepthTriangle, (first, last): (u32, u32), masks: &mut RowMasks, band: &mut DepthBand) {
+    let DepthTriangle { edges, plane } = &triangle;
     let bounds = edges.bounds;
     if !edges.narrow {
         // Edge functions beyond `i32` (large triangles): the colour tiles' walk, one
@@ -339,7 +345,7 @@ mod tests {
         let (stride, mut depth) = empty_band();
         let mut band = DepthBand { y0: BAND.0, rows: BAND.1, width: SIZE, stride, first: 1, depth: &mut depth };
         let triangle = DepthTriangle { edges: Edges { narrow, ..edges }, plane };
-        fill_triangle(&triangle, &mut [0; TILE_HEIGHT as usize], &mut band);
+        fill_triangle(triangle, &mut [0; TILE_HEIGHT as usize], &mut band);
         Some(depth)
     }
 
