@@ -177,7 +177,7 @@ impl Edges {
         let [a, b, c] = p;
         // Edge k runs between the two vertices other than k.
         let edges = [(b, c), (c, a), (a, b)];
-        let start = edges.map(|(from, to)| edge(from, to, sample) - i64::from(!is_top_left(from, to)));
+        let start = edges.map(|(from, to)| edge(from, to, sample) + top_left_bias(from, to));
         let step_x = edges.map(|(from, to)| ((from.1 - to.1) * SUBPIXEL_STEPS) as i32);
         let step_y = edges.map(|(from, to)| ((to.0 - from.0) * SUBPIXEL_STEPS) as i32);
         let narrow = fits_narrow(x_range.1 - x_range.0, y_range.1 - y_range.0);
@@ -266,14 +266,30 @@ impl TriangleSetup {
             });
             *plane = Plane::through(values, &weights);
         }
-        let setup = Self { edges, nearest: z[0].min(z[1]).min(z[2]), flat_diffuse: surface.flat_diffuse, affine };
+        // Plain comparisons: depths are never NaN, so `f32::min`'s NaN handling is not needed.
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let setup = Self { edges, nearest: min(min(z[0], z[1]), z[2]), flat_diffuse: surface.flat_diffuse, affine };
         Some((setup, planes))
     }
 }
 
-/// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
-/// pixels are drawn (the top-left fill rule).
+/// What the fill rule adds to the edge function of the edge `a -> b` of a positive-area
+/// triangle: nothing for a top or a left edge (see [`is_top_left`]), whose pixels on the edge
+/// are drawn, and -1 for the others, whose pixels on the edge are not.
+///
+/// Found with arithmetic instead of comparisons: the edge is top or left exactly when
+/// `(a.y - b.y, b.x - a.x)` is lexicographically positive, and, the second difference being far
+/// below 2^32 in size, exactly when the first times 2^32 plus the second is positive.
 #[inline(always)]
+fn top_left_bias(a: (i64, i64), b: (i64, i64)) -> i64 {
+    let key = ((a.1 - b.1) << 32) + (b.0 - a.0);
+    (key - 1) >> 63
+}
+
+/// Whether the edge `a -> b` of a positive-area triangle is a top or a left edge, whose
+/// pixels are drawn (the top-left fill rule): the definition [`top_left_bias`] is tested
+/// against.
+#[cfg(test)]
 pub(crate) fn is_top_left(a: (i64, i64), b: (i64, i64)) -> bool {
     (a.1 == b.1 && b.0 > a.0) || b.1 < a.1
 }
@@ -390,6 +406,27 @@ mod tests {
     }
 
     proptest! {
+        /// Over the whole range of projected coordinates (three target sizes either side of
+        /// the origin), the arithmetic bias is -1 exactly for the edges that are neither top nor
+        /// left. Often drawn: a shared coordinate, where the rule looks at the other one, and
+        /// nearly level edges, whose long horizontal difference must not outweigh a step in y.
+        #[test]
+        fn the_top_left_bias_follows_the_fill_rule(
+            a in prop::array::uniform2(-COORDINATE..=COORDINATE),
+            b in prop::array::uniform2(-COORDINATE..=COORDINATE),
+            kind in 0..5usize,
+        ) {
+            let (a, mut b) = ((a[0], a[1]), (b[0], b[1]));
+            match kind {
+                0 => b.0 = a.0,
+                1 => b.1 = a.1,
+                2 => b.1 = a.1 + 1,
+                3 => b.1 = a.1 - 1,
+                _ => {}
+            }
+            prop_assert_eq!(top_left_bias(a, b), -i64::from(!is_top_left(a, b)), "{:?} -> {:?}", a, b);
+        }
+
         /// When a triangle is judged close enough to affine, every value at every point inside
         /// it is within its tolerance of the perspective-correct value.
         #[test]
@@ -411,6 +448,9 @@ mod tests {
             }
         }
     }
+
+    /// The largest projected coordinate, in sub-pixel units: three of the largest targets.
+    const COORDINATE: i64 = 3 * MAX_TARGET_SIZE as i64 * SUBPIXEL_STEPS;
 
     /// How far the perspective-correct weights of vertices 1 and 2 are from the screen-space
     /// weights `b`.
