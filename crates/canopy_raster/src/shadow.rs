@@ -42,6 +42,13 @@ pub struct ShadowMap {
     nearest_of_quads: Vec<QuadDepth>,
     clip_from_world: Mat4,
     active: bool,
+    /// What every lookup multiplies a texel's (column, row) pair by to find its index: (1,
+    /// stride) in each lane's pair. Kept with the map, so that lookups read it instead of
+    /// building it.
+    index_steps: i16x8,
+    /// The side in texels as a float in every lane, the far border's position: kept for the
+    /// same reason.
+    far_border: Vec4,
 }
 
 /// Border texels before each row and above the first row.
@@ -95,6 +102,10 @@ impl ShadowMap {
         if self.size != size || self.depth.is_empty() {
             self.size = size;
             let stride = self.stride();
+            // Column, row and stride all fit 16 bits (the map is at most `MAX_TARGET_SIZE` a side).
+            let stride_i16 = stride as i16;
+            self.index_steps = i16x8::from([1, stride_i16, 1, stride_i16, 1, stride_i16, 1, stride_i16]);
+            self.far_border = Vec4::splat(size as f32);
             self.depth.clear();
             self.depth.resize(stride * stride, f32::INFINITY);
             self.nearest_of_quads.clear();
@@ -172,16 +183,13 @@ impl ShadowMap {
         let (x, y) = if filtered { (x - 0.5, y - 0.5) } else { (x, y) };
         // Clamped into the border: a point off the map reads only border texels (with a zero
         // weight on the second texel of a pair when it sits on the far border).
-        let (low, high) = (Vec4::splat(-1.0), Vec4::splat(self.size as f32));
+        let (low, high) = (Vec4::splat(-1.0), self.far_border);
         // Counted from the border's first texel, the clamped positions are not negative: their
         // whole part is the stored column and row, found four at a time by truncation.
         let (x, y) = (x.max(low).min(high) + 1.0, y.max(low).min(high) + 1.0);
         let (column, row) = (lanes_of(x).fast_trunc_int(), lanes_of(y).fast_trunc_int());
-        // Column, row and stride all fit 16 bits (the map is at most `MAX_TARGET_SIZE` a side):
-        // each lane's (column, row) pair times (1, stride), summed, in one multiply-add.
-        let stride = self.stride() as i16;
-        let first = bytemuck::cast::<_, i16x8>(row << 16 | column)
-            .dot(i16x8::from([1, stride, 1, stride, 1, stride, 1, stride]));
+        // Each lane's (column, row) pair times (1, stride), summed, in one multiply-add.
+        let first = bytemuck::cast::<_, i16x8>(row << 16 | column).dot(self.index_steps);
         Taps { first, x, y, depth }
     }
 

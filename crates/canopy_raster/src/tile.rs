@@ -633,22 +633,25 @@ fn light_band<const FILTERED: bool>(band: &mut Band, tiles: &[TileState], shadow
             let (depth_runs, depth_rest) = band.depth[pixels.clone()].as_chunks::<LANES>();
             let (color_runs, color_rest) = band.color[pixels].as_chunks_mut::<LANES>();
             let mut count = 0;
-            let mut find = |run: usize, depths: [f32; LANES]| {
+            // Run `run`, its pixels' depths and columns (`x`, as floats).
+            let mut find = |run: usize, depths: [f32; LANES], x: Vec4| {
                 let depth = Vec4::from_array(depths);
                 let drawn = lanes_of(depth).simd_lt(f32x4::splat(FAR_DEPTH));
                 if drawn.any() {
-                    let x = Vec4::splat((x0 + run * LANES) as f32) + LANE_OFFSETS;
                     let [tx, ty, light_depth] = shadow.pixels.locate(in_map, x, depth);
                     let taps = shadow.map.taps(tx, ty, light_depth, FILTERED);
                     pending[count] = PendingRun { run, drawn, taps };
                     count += 1;
                 }
             };
+            // Whole columns are exact as floats: stepped, not converted per run.
+            let mut x = Vec4::splat(x0 as f32) + LANE_OFFSETS;
             for (run, depths) in depth_runs.iter().enumerate() {
-                find(run, *depths);
+                find(run, *depths, x);
+                x += LANES as f32;
             }
             if !depth_rest.is_empty() {
-                find(depth_runs.len(), run_of(depth_rest, FAR_DEPTH));
+                find(depth_runs.len(), run_of(depth_rest, FAR_DEPTH), x);
             }
             // Runs the light reaches in full (most) keep their colours and only become opaque.
             // The others move to the front of `pending`, read in place (not copied whole).
