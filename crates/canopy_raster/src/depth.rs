@@ -12,7 +12,7 @@ use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
 use crate::pipeline::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, View, edge};
 use crate::schedule::Schedule;
-use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, positive_order};
+use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, greater, positive_order};
 use crate::shade::{VARYINGS, lanes_of};
 use crate::shadow::{CONSTANT_BIAS, QuadDepth, SLOPE_BIAS, ShadowMap, nearest_of_quads};
 use crate::sort::{Corners, Sorted};
@@ -142,9 +142,8 @@ impl DepthTriangle {
         };
         let edges = Edges::new(p, viewport)?;
         let mut plane = Plane::through(depths, &Weights::new(&edges, area));
-        // A plain comparison: the slopes are finite, so `f32::max`'s NaN handling is not needed.
-        let (dx, dy) = (plane.dx.abs(), plane.dy.abs());
-        plane.origin += CONSTANT_BIAS + SLOPE_BIAS * if dx > dy { dx } else { dy };
+        // The slopes are finite.
+        plane.origin += CONSTANT_BIAS + SLOPE_BIAS * greater(plane.dx.abs(), plane.dy.abs());
         Some(Self { edges, plane })
     }
 }

@@ -266,11 +266,24 @@ impl TriangleSetup {
             });
             *plane = Plane::through(values, &weights);
         }
-        // Plain comparisons: depths are never NaN, so `f32::min`'s NaN handling is not needed.
-        let min = |a: f32, b: f32| if a < b { a } else { b };
-        let setup = Self { edges, nearest: min(min(z[0], z[1]), z[2]), flat_diffuse: surface.flat_diffuse, affine };
+        // Depths are never NaN.
+        let nearest = lesser(lesser(z[0], z[1]), z[2]);
+        let setup = Self { edges, nearest, flat_diffuse: surface.flat_diffuse, affine };
         Some((setup, planes))
     }
+}
+
+/// The lesser of two numbers that are not NaN: one comparison, where `f32::min` also handles
+/// NaN and compiles to several instructions more.
+#[inline(always)]
+pub(crate) fn lesser(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The greater of two numbers that are not NaN (see [`lesser`]).
+#[inline(always)]
+pub(crate) fn greater(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
 }
 
 /// What the fill rule adds to the edge function of the edge `a -> b` of a positive-area
@@ -321,9 +334,8 @@ const NARROW_MARGIN: i64 = 2 * MASK_PIXELS as i64;
 /// most `spread / 2` times half the value's range over the three vertices (Popoviciu).
 #[inline(always)]
 fn affine_is_close(inv_w: [f32; 3], varyings: [&Varyings; 3], tolerance: &Varyings, read: [bool; PACKS]) -> bool {
-    // Plain comparisons: `1/w` is finite, so the NaN handling of `f32::max` is not needed.
-    let (max, min) = (|a: f32, b: f32| if a > b { a } else { b }, |a: f32, b: f32| if a < b { a } else { b });
-    let spread = max(max(inv_w[0], inv_w[1]), inv_w[2]) / min(min(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
+    // `1/w` is finite.
+    let spread = greater(greater(inv_w[0], inv_w[1]), inv_w[2]) / lesser(lesser(inv_w[0], inv_w[1]), inv_w[2]) - 1.0;
     let quarter_spread = Vec4::splat(spread * 0.25);
     (0..VARYINGS.div_ceil(LANES)).filter(|&pack| read[pack]).all(|pack| {
         let [v0, v1, v2] = varyings.map(|v| pack_of(v, pack));
