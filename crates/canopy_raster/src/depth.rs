@@ -11,13 +11,14 @@
 use crate::clip::outside;
 use crate::framebuffer::FAR_DEPTH;
 use crate::pipeline::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, View, edge};
-use crate::schedule::{FrameThreads, Schedule};
+use crate::schedule::Schedule;
 use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, greater, positive_order};
 use crate::shade::{VARYINGS, lanes_of};
 use crate::shadow::{CONSTANT_BIAS, QuadDepth, SLOPE_BIAS, ShadowMap, nearest_of_quads};
 use crate::sort::{Corners, Sorted};
 use crate::tile::{RowMasks, Walk, covered, lane_multiples};
 use bevy_math::{Vec3, Vec4};
+use bevy_tasks::TaskPool;
 use wide::{f32x4, f32x8, i32x8};
 
 /// Map rows one strip task draws.
@@ -48,9 +49,9 @@ pub(crate) struct DepthScene<'a> {
 
 impl DepthPass {
     /// Clears `map` and draws the depths of every triangle of `scene` into it, spreading the
-    /// work over `threads`; the triangles are those of [`DepthPass::sorted`], sorted for `scene`'s
+    /// work over `pool`; the triangles are those of [`DepthPass::sorted`], sorted for `scene`'s
     /// view. Returns how many triangles were drawn (after clipping and culling).
-    pub fn draw(&mut self, threads: &FrameThreads, scene: DepthScene, map: &mut ShadowMap) -> usize {
+    pub fn draw(&mut self, pool: &TaskPool, scene: DepthScene, map: &mut ShadowMap) -> usize {
         let size = map.size();
         let (stride, first) = map.row_layout();
         let sorted = &self.sorted;
@@ -60,7 +61,7 @@ impl DepthPass {
             let band = DepthBand { y0: index as u32 * STRIP_ROWS, rows, width: size, stride, first, depth };
             draw_strip(scene, sorted.strip(index), band, quads)
         };
-        let triangles = self.schedule.run(threads, strips, draw, |total, strip| *total += strip);
+        let triangles = self.schedule.run(pool, strips, draw, |total, strip| *total += strip);
         map.join_strips(STRIP_ROWS as usize);
         triangles
     }

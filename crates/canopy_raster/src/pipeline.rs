@@ -16,7 +16,7 @@ use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
 use crate::depth::{DepthPass, DepthScene, STRIP_ROWS};
 use crate::framebuffer::Framebuffer;
 use crate::mesh::MeshData;
-use crate::schedule::{FrameThreads, KeepAwake, MAX_PARTS, Schedule};
+use crate::schedule::Schedule;
 use crate::setup::Viewport;
 use crate::shade::{Material, Shading, VARYINGS, Varyings, floor_lanes, slot};
 use crate::shadow::{PixelsInMap, ShadowMap, fit_light};
@@ -212,11 +212,9 @@ pub struct Renderer {
     /// The triangles reaching each band of the image.
     sorted: Sorted,
     bands: Vec<BandScratch>,
-    vertex_schedule: Schedule,
     band_schedule: Schedule,
     depth_pass: DepthPass,
     shadow: ShadowMap,
-    keep_awake: KeepAwake,
 }
 
 impl Renderer {
@@ -236,8 +234,6 @@ impl Renderer {
             settings.shadow_map_size > 0 && settings.shadow_map_size.is_multiple_of(TILE_HEIGHT),
             "the shadow map size must be a positive multiple of {TILE_HEIGHT}"
         );
-        // The pool's threads, kept awake until the frame is drawn.
-        let threads = self.keep_awake.start(pool);
         let mut stats = RenderStats {
             triangles_submitted: frame.instances.iter().map(|i| i.mesh.triangle_count()).sum(),
             ..RenderStats::default()
@@ -251,7 +247,7 @@ impl Renderer {
         self.shadow.reset(settings.shadow_map_size, light_clip, settings.pcf);
 
         let view_projection = frame.camera.view_projection(aspect);
-        self.vertex_stage(&threads, frame, view_projection, width, height, light_clip);
+        self.vertex_stage(pool, frame, view_projection, width, height, light_clip);
         let view = View {
             clip_from_world: view_projection,
             vertices: &self.vertices,
@@ -269,7 +265,7 @@ impl Renderer {
         // The image's and the shadow map's triangles are sorted in one pass over them.
         let light_sorting = light_view.map(|view| (&mut self.depth_pass.sorted, view));
         Sorted::sort_for::<TILE_HEIGHT, STRIP_ROWS>(
-            &threads,
+            pool,
             &self.spans,
             frame.instances,
             (&mut self.sorted, view),
@@ -277,7 +273,7 @@ impl Renderer {
         );
         if let Some(view) = light_view {
             let scene = DepthScene { world: &self.world, view };
-            stats.shadow_triangles = self.depth_pass.draw(&threads, scene, &mut self.shadow);
+            stats.shadow_triangles = self.depth_pass.draw(pool, scene, &mut self.shadow);
         }
         let shadow = self.shadow.is_active().then(|| BandShadow {
             map: &self.shadow,
@@ -297,7 +293,7 @@ impl Renderer {
         self.bands.resize_with(height.div_ceil(TILE_HEIGHT) as usize, BandScratch::default);
         let bands = target.bands_mut(TILE_HEIGHT).zip(&mut self.bands);
         let draw = |row: usize, (band, scratch)| tile::draw_band(&context, row as u32, band, scratch);
-        let counts = self.band_schedule.run(&threads, bands, draw, BandCounts::add);
+        let counts = self.band_schedule.run(pool, bands, draw, BandCounts::add);
         RenderStats {
             fragments: counts.fragments,
             occluded: counts.occluded,
@@ -314,7 +310,7 @@ impl Renderer {
     /// Transforms, lights and projects every vertex, in parallel runs.
     fn vertex_stage(
         &mut self,
-        threads: &FrameThreads,
+        pool: &TaskPool,
         frame: &Frame,
         view_projection: Mat4,
         width: u32,
@@ -338,8 +334,8 @@ impl Renderer {
         self.varyings.resize(vertices, [0.0; VARYINGS]);
         self.light_vertices.resize(if light_clip.is_some() { vertices } else { 0 }, ScreenVertex::default());
 
-        let parts = (threads.pool_threads().max(1) * CHUNKS_PER_THREAD).min(MAX_PARTS);
-        let run = vertices.div_ceil(parts).max(1024);
+        let threads = pool.thread_num().max(1);
+        let run = vertices.div_ceil(threads * CHUNKS_PER_THREAD).max(1024);
         let lit = frame.settings.shading == Shading::Gouraud;
         let stage = VertexStage {
             frame,
@@ -351,14 +347,14 @@ impl Renderer {
             lit,
         };
         let mut light_runs = self.light_vertices.chunks_mut(run);
-        let runs = self.world.chunks_mut(run).zip(self.vertices.chunks_mut(run)).zip(self.varyings.chunks_mut(run));
-        let outputs = runs.map(|((world, screen), varyings)| VertexOutputs {
-            world,
-            screen,
-            varyings,
-            light: light_runs.next().unwrap_or_default(),
+        pool.scope(|scope| {
+            let runs = self.world.chunks_mut(run).zip(self.vertices.chunks_mut(run)).zip(self.varyings.chunks_mut(run));
+            for (index, ((world, screen), varyings)) in runs.enumerate() {
+                let outputs = VertexOutputs { world, screen, varyings, light: light_runs.next().unwrap_or_default() };
+                let stage = &stage;
+                scope.spawn(async move { stage.run(index * run, outputs) });
+            }
         });
-        self.vertex_schedule.run(threads, outputs, |index, outputs| stage.run(index * run, outputs), |_, ()| ());
     }
 }
 
@@ -845,11 +841,9 @@ mod tests {
         let light_view = view(&renderer.light_vertices, map, map, false);
         let spans = &renderer.spans;
         let [mut image, mut light, mut image_alone, mut light_alone] = std::array::from_fn(|_| Sorted::default());
-        let threads = KeepAwake::default().start(&pool);
-        let both = Some((&mut light, light_view));
-        Sorted::sort_for::<64, 32>(&threads, spans, &instances, (&mut image, image_view), both);
-        Sorted::sort_for::<64, 64>(&threads, spans, &instances, (&mut image_alone, image_view), None);
-        Sorted::sort_for::<32, 32>(&threads, spans, &instances, (&mut light_alone, light_view), None);
+        Sorted::sort_for::<64, 32>(&pool, spans, &instances, (&mut image, image_view), Some((&mut light, light_view)));
+        Sorted::sort_for::<64, 64>(&pool, spans, &instances, (&mut image_alone, image_view), None);
+        Sorted::sort_for::<32, 32>(&pool, spans, &instances, (&mut light_alone, light_view), None);
         let strips = |sorted: &Sorted, count: u32| -> Vec<Vec<Corners>> {
             (0..count as usize).map(|strip| sorted.strip(strip).copied().collect()).collect()
         };

@@ -10,7 +10,7 @@
 
 use crate::clip::outside;
 use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, range_of, runs, triangle_count};
-use crate::schedule::{FrameThreads, MAX_PARTS, Schedule};
+use bevy_tasks::TaskPool;
 use std::ops::Range;
 
 /// The vertex indices of one triangle, in the frame's global numbering.
@@ -25,51 +25,51 @@ const RUNS_PER_THREAD: usize = 4;
 pub(crate) struct Sorted {
     /// Per run of triangles, per strip, the triangles reaching the strip, in order.
     runs: Vec<Vec<Vec<Corners>>>,
-    /// How the runs are handed to the threads.
-    schedule: Schedule,
 }
 
 impl Sorted {
     /// Sorts every triangle of `instances` (whose vertex and triangle numbering `spans` give)
     /// into strips of `ROWS` rows of `first`'s view and, when there is a `second`, into strips
-    /// of `SECOND_ROWS` rows of its view, spreading the work over `threads`: one pass over the
+    /// of `SECOND_ROWS` rows of its view, spreading the work over `pool`: one pass over the
     /// triangles, and one wait for the pool's threads, serves both (the image and the shadow
     /// map).
     ///
     /// The rows are constants so that finding a row's strip is a shift, not a division per
     /// triangle.
     pub fn sort_for<const ROWS: u32, const SECOND_ROWS: u32>(
-        threads: &FrameThreads,
+        pool: &TaskPool,
         spans: &[Span],
         instances: &[Instance],
         (first, first_view): (&mut Self, View),
         second: Option<(&mut Self, View)>,
     ) {
-        let parts = (threads.pool_threads().max(1) * RUNS_PER_THREAD).min(MAX_PARTS);
+        let parts = pool.thread_num().max(1) * RUNS_PER_THREAD;
         first.prepare(parts, first_view.viewport.height.div_ceil(ROWS) as usize);
-        let ranges = runs(triangle_count(spans, instances), parts);
-        let Self { runs: first_runs, schedule } = first;
-        // Without a second view, a loop of its own: testing for one at every triangle made
-        // unshadowed frames about 1% slower.
-        match second {
-            None => {
-                let work = |_, (range, sorted): (Range<usize>, &mut Vec<_>)| {
-                    each_triangle(spans, instances, range, |corners| sort::<ROWS>(corners, first_view, sorted));
-                };
-                schedule.run(threads, ranges.zip(first_runs.iter_mut()), work, |_, ()| ());
+        pool.scope(|scope| {
+            let ranges = runs(triangle_count(spans, instances), parts).zip(first.runs.iter_mut());
+            // Without a second view, a loop of its own: testing for one at every triangle made
+            // unshadowed frames about 1% slower.
+            match second {
+                None => {
+                    for (range, sorted) in ranges {
+                        scope.spawn(async move {
+                            each_triangle(spans, instances, range, |corners| sort::<ROWS>(corners, first_view, sorted));
+                        });
+                    }
+                }
+                Some((second, second_view)) => {
+                    second.prepare(parts, second_view.viewport.height.div_ceil(SECOND_ROWS) as usize);
+                    for ((range, sorted), second_sorted) in ranges.zip(second.runs.iter_mut()) {
+                        scope.spawn(async move {
+                            each_triangle(spans, instances, range, |corners| {
+                                sort::<ROWS>(corners, first_view, sorted);
+                                sort::<SECOND_ROWS>(corners, second_view, second_sorted);
+                            });
+                        });
+                    }
+                }
             }
-            Some((second, second_view)) => {
-                second.prepare(parts, second_view.viewport.height.div_ceil(SECOND_ROWS) as usize);
-                let work = |_, ((range, sorted), second_sorted): ((Range<usize>, &mut Vec<_>), &mut Vec<_>)| {
-                    each_triangle(spans, instances, range, |corners| {
-                        sort::<ROWS>(corners, first_view, sorted);
-                        sort::<SECOND_ROWS>(corners, second_view, second_sorted);
-                    });
-                };
-                let parts = ranges.zip(first_runs.iter_mut()).zip(second.runs.iter_mut());
-                schedule.run(threads, parts, work, |_, ()| ());
-            }
-        }
+        });
     }
 
     /// Makes room for `parts` runs of `strips` empty strips each, keeping what was allocated.
