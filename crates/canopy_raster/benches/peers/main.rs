@@ -139,10 +139,24 @@ const FASTEST_TENTH: f64 = 0.1;
 
 /// The median over rounds of `samples[round] / base[round]`: each frame is compared with
 /// Canopy's frame of the same round, so that the machine's slow and fast stretches, which
-/// last many rounds, cancel out of the ratio.
+/// last many rounds, cancel out of the ratio as far as they slow every renderer alike. A stall
+/// that adds the same time to every frame still lowers the ratio of the fastest renderer most.
 fn median_ratio(samples: &[f64], base: &[f64]) -> f64 {
     let mut ratios: Vec<f64> = samples.iter().zip(base).map(|(sample, base)| sample / base).collect();
     median(&mut ratios)
+}
+
+/// The count given after `flag` on the command line; when it is missing, not a whole number or
+/// below `least`, says so and exits.
+fn count_arg(flag: &str, value: Option<String>, least: usize) -> usize {
+    match value.as_deref().map(str::parse::<usize>) {
+        Some(Ok(count)) if count >= least => count,
+        _ => {
+            let given = value.map_or("nothing".to_string(), |value| format!("{value:?}"));
+            eprintln!("{flag} takes a whole number of at least {least}, not {given}");
+            std::process::exit(2);
+        }
+    }
 }
 
 fn main() {
@@ -155,10 +169,8 @@ fn main() {
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
-            "--rounds" => {
-                rounds = args.next().and_then(|n| n.parse().ok()).filter(|&n| n > 0).expect("--rounds takes a count")
-            }
-            "--workers" => workers = args.next().and_then(|n| n.parse().ok()).expect("--workers takes a count"),
+            "--rounds" => rounds = count_arg("--rounds", args.next(), 1),
+            "--workers" => workers = count_arg("--workers", args.next(), 0),
             "--canopy-only" => canopy_only = true,
             _ => {}
         }
