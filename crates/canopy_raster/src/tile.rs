@@ -26,7 +26,7 @@ use crate::sort::{Corners, Sorted};
 use bevy_math::{Vec3, Vec4};
 use std::iter::Peekable;
 use std::ops::{Add, Mul};
-use wide::{f32x4, i32x4, i32x8, u32x4};
+use wide::{f32x4, i16x8, i32x4, i32x8, u8x16, u32x4};
 
 /// A tile's farthest depth is read anew once this many pixels have been covered in it since the
 /// last reading, times the tile's area: the reading then costs at most one depth read per
@@ -465,9 +465,13 @@ fn fill_pass<C: CompiledPass>(
     let pass = C::PASS;
     // The packs the pass does not read are zero, and the code reading them folds away.
     let planes = triangle.planes;
-    let uses = |k: usize| k >= VARYINGS || pass.uses(k);
+    let uses = |k: usize| k >= VARYINGS || pass.uses(k) && !colors_per_pixel(pass);
+    let color_pack = &planes[slot::COLOR / LANES];
     let shading = TriangleShading {
         lane_steps: std::array::from_fn(|k| if uses(k) { planes[k / LANES].lane_steps(k % LANES) } else { Vec4::ZERO }),
+        pixel_steps: std::array::from_fn(
+            |k| if colors_per_pixel(pass) { color_pack.dx * k as f32 } else { Vec4::ZERO },
+        ),
         planes,
         affine: triangle.setup.affine,
         origin: (triangle.setup.edges.bounds.min_x, triangle.setup.edges.bounds.min_y),
@@ -484,8 +488,12 @@ fn fill_pass<C: CompiledPass>(
 /// What the runs of a triangle share.
 struct TriangleShading<'a> {
     planes: &'a Planes,
-    /// Each value's change from a run's first pixel to its lanes.
+    /// Each value's change from a run's first pixel to its lanes (only depth's and `1/w`'s
+    /// when [`colors_per_pixel`]).
     lane_steps: [Vec4; VARYINGS + 2],
+    /// The colour pack's change from a run's first pixel to each of its pixels, when
+    /// [`colors_per_pixel`].
+    pixel_steps: [Vec4; LANES],
     /// Whether the values are interpolated in screen space.
     affine: bool,
     /// The first pixel of the triangle's bounds, where its planes start.
@@ -532,10 +540,8 @@ struct Run<'a> {
 /// Depth-tests, shades and stores the pixels of `run`, from `(x, y)`, of `lanes`' set bits.
 #[inline(always)]
 fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lanes: u32, run: Run) {
-    let TriangleShading { planes, lane_steps, affine, origin, triangle, context } = shading;
-    let Pass { shading: mode, textured, shadowed } = C::PASS;
-    let light = &context.frame.light;
-    let material = triangle.material;
+    let TriangleShading { planes, lane_steps, pixel_steps, affine, origin, .. } = shading;
+    let shadowed = C::PASS.shadowed;
     let (px, py) = ((x - origin.0) as f32, (y - origin.1) as f32);
     let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at(px, py));
     let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
@@ -548,7 +554,26 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
     }
     *run.depths = drawn.bitselect(z, depth).to_array();
     let w = if *affine { Vec4::ONE } else { lane_value(INV_W).recip() };
-    let value = |k: usize| if *affine { lane_value(k) } else { lane_value(k) * w };
+    let pixels = match colors_per_pixel(C::PASS) {
+        true => pixel_colors(at_run[slot::COLOR / LANES], pixel_steps, (!*affine).then_some(w), shadowed),
+        false => lane_colors::<C>(shading, &at_run, w),
+    };
+    *run.colors = colors_of(drawn.to_bits().bitselect(pixels, words_of(*run.colors)));
+}
+
+/// The RGBA8 words of a run whose values start at `at_run` and reach the pixel's `w` when
+/// interpolated perspective-correctly, shaded value by value: each value's lanes (its pixels)
+/// are lit, textured and turned into bytes together.
+#[inline(always)]
+fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS], w: Vec4) -> u32x4 {
+    let TriangleShading { lane_steps, affine, triangle, context, .. } = shading;
+    let Pass { shading: mode, textured, shadowed } = C::PASS;
+    let light = &context.frame.light;
+    let material = triangle.material;
+    let value = |k: usize| {
+        let lanes = Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
+        if *affine { lanes } else { lanes * w }
+    };
     let diffuse = match mode {
         Shading::Flat => Vec4::splat(triangle.setup.flat_diffuse),
         Shading::Gouraud if !shadowed => Vec4::ZERO,
@@ -578,8 +603,36 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lane
     }
     let [r, g, b] = rgb.map(unit_bytes);
     let alpha = if shadowed { unit_bytes(diffuse) } else { u32x4::splat(0xff) };
-    let pixels = r | g << 8 | b << 16 | alpha << 24;
-    *run.colors = colors_of(drawn.to_bits().bitselect(pixels, words_of(*run.colors)));
+    r | g << 8 | b << 16 | alpha << 24
+}
+
+/// Whether `pass` stores each pixel's interpolated colour pack (red, green, blue and the
+/// diffuse term) as it is: Gouraud shading without a texture, whose colours were lit at the
+/// vertices. Its runs then turn each pixel's pack into bytes at once (see [`pixel_colors`])
+/// instead of each value's lanes.
+const fn colors_per_pixel(pass: Pass) -> bool {
+    matches!(pass.shading, Shading::Gouraud) && !pass.textured
+}
+
+/// The RGBA8 words of a run whose colour pack is `first` at its first pixel and steps by
+/// `steps` to each pixel, times the pixel's `w` (lane `k` for pixel `k`) when interpolated
+/// perspective-correctly: red, green and blue, and in alpha the diffuse term with shadows
+/// (see [`light_band`]) or opaque without.
+///
+/// The same bytes as [`unit_bytes`] of each value: the conversion rounds to the nearest whole
+/// number (ties to even) and the narrowing to bytes saturates at 0 and 255, so only values
+/// too large to convert need clamping first.
+#[inline(always)]
+fn pixel_colors(first: Vec4, steps: &[Vec4; LANES], w: Option<Vec4>, shadowed: bool) -> u32x4 {
+    let words: [i32x4; LANES] = std::array::from_fn(|k| {
+        let pack = first + steps[k];
+        let pack = w.map_or(pack, |w| pack * w[k]);
+        lanes_of((pack * 255.0).min(Vec4::splat(255.0))).fast_round_int()
+    });
+    let narrow = |a: i32x4, b: i32x4| i16x8::from_i32x8_saturate(bytemuck::cast([a, b]));
+    let bytes = u8x16::narrow_i16x8(narrow(words[0], words[1]), narrow(words[2], words[3]));
+    let pixels = words_of(bytemuck::cast(bytes));
+    if shadowed { pixels } else { pixels | u32x4::splat(0xff << 24) }
 }
 
 /// Each lane of `v`, clamped to `[0, 1]`, as a byte (0 to 255) in the low bits of its lane.
@@ -820,7 +873,30 @@ mod tests {
         assert_eq!(farthest_depth(&depth, width, y0, rect), 0.75, "in the rest of a row");
     }
 
+    /// A colour value: mostly within a channel's range or near it, sometimes far outside.
+    fn color_value() -> impl Strategy<Value = f32> {
+        prop_oneof![4 => -0.5f32..1.5, 1 => -1e12f32..1e12]
+    }
+
     proptest! {
+        /// A run's colours made pixel by pixel are the bytes the value-by-value conversion
+        /// makes of each value, in and out of range, with and without a pixel's `w`.
+        #[test]
+        fn pixel_colors_are_the_bytes_of_each_value(
+            packs in prop::array::uniform4(prop::array::uniform4(color_value())),
+            w in prop::option::of(prop::array::uniform4(0.01f32..100.0)),
+            shadowed: bool,
+        ) {
+            let steps = packs.map(Vec4::from_array);
+            let pixels = pixel_colors(Vec4::ZERO, &steps, w.map(Vec4::from_array), shadowed).to_array();
+            for (k, (&pixel, pack)) in pixels.iter().zip(steps).enumerate() {
+                let value = pack * w.map_or(1.0, |w| w[k]);
+                let byte = |v: f32| unit_bytes(Vec4::splat(v)).to_array()[0];
+                let alpha = if shadowed { byte(value.w) } else { 0xff };
+                prop_assert_eq!(pixel, byte(value.x) | byte(value.y) << 8 | byte(value.z) << 16 | alpha << 24);
+            }
+        }
+
         /// The `i32` walk visits exactly the pixels of the `i64` one.
         #[test]
         fn narrow_walks_match_wide_ones(
