@@ -92,7 +92,14 @@ impl<T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>> Plane<T
     /// The values at pixel offset (`x`, `y`) from the first pixel of the triangle's bounds.
     #[inline(always)]
     pub fn at(&self, x: f32, y: f32) -> T {
-        self.origin + self.dx * x + self.dy * y
+        self.at_row(x, self.dy * y)
+    }
+
+    /// [`Plane::at`] in a row whose offset's share, `dy * y`, is `row`: the same values, with
+    /// the row's share worked out once for all its pixels.
+    #[inline(always)]
+    pub fn at_row(&self, x: f32, row: T) -> T {
+        self.origin + self.dx * x + row
     }
 }
 

@@ -25,6 +25,7 @@ use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
 use bevy_math::{Vec3, Vec4};
 use std::iter::Peekable;
+use std::marker::PhantomData;
 use std::ops::{Add, Mul};
 use wide::{f32x4, i16x8, i32x4, i32x8, u8x16, u32x4};
 
@@ -295,7 +296,14 @@ impl Walk {
     /// `visit(y, x, lanes)` for each: `x` is the run's first pixel and bit `k` of `lanes` is
     /// set when pixel `x + k` is covered. Returns the pixels covered.
     #[inline(always)]
-    pub(crate) fn covered_runs(&self, rows: &mut RowMasks, mut visit: impl FnMut(u32, u32, u32)) -> u64 {
+    pub(crate) fn covered_runs(&self, rows: &mut RowMasks, visit: impl FnMut(u32, u32, u32)) -> u64 {
+        self.visit_runs(rows, &mut EachRun { visit, y: 0, x: 0 })
+    }
+
+    /// Walks each row's covered span as [`Walk::covered_runs`] does, telling `visitor` where
+    /// each row's runs start and then each run's covered pixels. Returns the pixels covered.
+    #[inline(always)]
+    pub(crate) fn visit_runs(&self, rows: &mut RowMasks, visitor: &mut impl RunVisitor) -> u64 {
         let width = self.rect.max_x - self.rect.min_x + 1;
         if self.narrow && width <= MASK_PIXELS {
             // Most walks: a row's pixels fit one mask, found and visited at once.
@@ -308,7 +316,7 @@ impl Walk {
             for y in self.rect.min_y..self.rect.max_y + 1 {
                 let coverage = i32::coverage(edges, &steps) & valid;
                 edges = add(edges, self.step_y);
-                fragments += self.visit_row(y, coverage.into(), &mut visit);
+                fragments += self.visit_row(y, coverage.into(), visitor);
             }
             return fragments;
         }
@@ -319,24 +327,24 @@ impl Walk {
             self.coverage(self.start, self.step_x.map(i64::from), self.step_y.map(i64::from), rows);
         }
         let rows = (self.rect.min_y..self.rect.max_y + 1).zip(rows.iter());
-        rows.map(|(y, &coverage)| self.visit_row(y, coverage, &mut visit)).sum()
+        rows.map(|(y, &coverage)| self.visit_row(y, coverage, visitor)).sum()
     }
 
     /// Visits the runs of row `y`, whose covered pixels are the set bits of `coverage` (bit
-    /// `k` for the rect's pixel `k`), as [`Walk::covered_runs`] does; returns how many pixels
+    /// `k` for the rect's pixel `k`), as [`Walk::visit_runs`] does; returns how many pixels
     /// are covered.
     #[inline(always)]
-    fn visit_row(&self, y: u32, coverage: u64, visit: &mut impl FnMut(u32, u32, u32)) -> u64 {
+    fn visit_row(&self, y: u32, coverage: u64, visitor: &mut impl RunVisitor) -> u64 {
         if coverage == 0 {
             return 0;
         }
-        let mut x = coverage.trailing_zeros();
-        let covered = u64::from(u64::BITS - coverage.leading_zeros() - x);
-        let mut rest = coverage >> x;
+        let first = coverage.trailing_zeros();
+        let covered = u64::from(u64::BITS - coverage.leading_zeros() - first);
+        visitor.row(y, self.rect.min_x + first);
+        let mut rest = coverage >> first;
         while rest != 0 {
-            visit(y, self.rect.min_x + x, (rest & RUN_MASK) as u32);
+            visitor.run((rest & RUN_MASK) as u32);
             rest >>= LANES;
-            x += LANES as u32;
         }
         covered
     }
@@ -368,6 +376,35 @@ impl Walk {
             *row = coverage & valid;
             row_edges = add(row_edges, step_y);
         }
+    }
+}
+
+/// What a [`Walk`] hands its covered pixels to, row by row.
+pub(crate) trait RunVisitor {
+    /// The runs that follow, up to the next call, are in row `y`: the first starts at pixel
+    /// `x`, each of the others [`LANES`] pixels after the one before.
+    fn row(&mut self, y: u32, x: u32);
+    /// The next run: bit `k` of `lanes` is set when its pixel `k` is covered.
+    fn run(&mut self, lanes: u32);
+}
+
+/// A [`RunVisitor`] calling `visit(y, x, lanes)` with each run's row and first pixel.
+struct EachRun<F> {
+    visit: F,
+    y: u32,
+    x: u32,
+}
+
+impl<F: FnMut(u32, u32, u32)> RunVisitor for EachRun<F> {
+    #[inline(always)]
+    fn row(&mut self, y: u32, x: u32) {
+        (self.y, self.x) = (y, x);
+    }
+
+    #[inline(always)]
+    fn run(&mut self, lanes: u32) {
+        (self.visit)(self.y, self.x, lanes);
+        self.x += LANES as u32;
     }
 }
 
@@ -478,10 +515,9 @@ fn fill_pass<C: CompiledPass>(
         triangle,
         context,
     };
-    walk.covered_runs(
+    walk.visit_runs(
         rows,
-        #[inline(always)]
-        |py, run, lanes| shade_run::<C>(&shading, band, py, run, lanes),
+        &mut RunShader::<C> { shading: &shading, band, at: 0, px: 0.0, row: [Vec4::ZERO; PACKS], pass: PhantomData },
     )
 }
 
@@ -502,31 +538,65 @@ struct TriangleShading<'a> {
     context: &'a TileContext<'a>,
 }
 
-/// Depth-tests, shades and stores one run of [`LANES`] pixels from `(x, y)`, those of `lanes`'
-/// set bits.
-///
-/// A run reaching past the end of its row covers the first pixels of the next row too, which
-/// its clear lanes leave as they are; only in the band's last row may fewer than [`LANES`]
-/// pixels be left.
-#[inline(always)]
-fn shade_run<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32) {
-    let at = (y - band.y0) as usize * band.width as usize + x as usize;
-    match (band.depth.get_mut(at..at + LANES), band.color.get_mut(at..at + LANES)) {
-        (Some(depths), Some(colors)) => {
-            let run = Run { depths: depths.try_into().expect("a run"), colors: colors.try_into().expect("a run") };
-            shade_pixels::<C>(shading, y, x, lanes, run);
+/// Depth-tests, shades and stores a triangle's runs into a band, stepping from run to run
+/// along a row.
+struct RunShader<'a, 'b, C> {
+    shading: &'a TriangleShading<'a>,
+    band: &'a mut Band<'b>,
+    /// The next run's first pixel, as an index into the band.
+    at: usize,
+    /// The next run's first pixel, in pixels right of the triangle's bounds.
+    px: f32,
+    /// What the row adds to each plane's values (see [`Plane::at`]).
+    row: [Vec4; PACKS],
+    pass: PhantomData<C>,
+}
+
+impl<C: CompiledPass> RunVisitor for RunShader<'_, '_, C> {
+    #[inline(always)]
+    fn row(&mut self, y: u32, x: u32) {
+        let (origin, planes) = (self.shading.origin, self.shading.planes);
+        self.at = (y - self.band.y0) as usize * self.band.width as usize + x as usize;
+        self.px = (x - origin.0) as f32;
+        let py = (y - origin.1) as f32;
+        self.row = std::array::from_fn(|p| planes[p].dy * py);
+    }
+
+    /// A run reaching past the end of its row covers the first pixels of the next row too,
+    /// which its clear lanes leave as they are; only in the band's last row may fewer than
+    /// [`LANES`] pixels be left.
+    #[inline(always)]
+    fn run(&mut self, lanes: u32) {
+        let (at, px) = (self.at, self.px);
+        self.at += LANES;
+        // Whole numbers far below 2^24: the float steps exactly.
+        self.px += LANES as f32;
+        let band = &mut *self.band;
+        match (band.depth.get_mut(at..at + LANES), band.color.get_mut(at..at + LANES)) {
+            (Some(depths), Some(colors)) => {
+                let run = Run { depths: depths.try_into().expect("a run"), colors: colors.try_into().expect("a run") };
+                shade_pixels::<C>(self.shading, px, &self.row, lanes, run);
+            }
+            _ => shade_band_end::<C>(self.shading, band, px, &self.row, lanes, at),
         }
-        _ => shade_band_end::<C>(shading, band, y, x, lanes, at),
     }
 }
 
-/// [`shade_run`] of a run reaching past the end of the band, through a copy of its pixels.
+/// [`RunShader::run`] of a run reaching past the end of the band, through a copy of its
+/// pixels.
 #[cold]
 #[inline(never)]
-fn shade_band_end<C: CompiledPass>(shading: &TriangleShading, band: &mut Band, y: u32, x: u32, lanes: u32, at: usize) {
+fn shade_band_end<C: CompiledPass>(
+    shading: &TriangleShading,
+    band: &mut Band,
+    px: f32,
+    row: &[Vec4; PACKS],
+    lanes: u32,
+    at: usize,
+) {
     let (mut depths, mut colors) = (run_of(&band.depth[at..], FAR_DEPTH), run_of(&band.color[at..], [0; 4]));
     let valid = band.depth.len() - at;
-    shade_pixels::<C>(shading, y, x, lanes, Run { depths: &mut depths, colors: &mut colors });
+    shade_pixels::<C>(shading, px, row, lanes, Run { depths: &mut depths, colors: &mut colors });
     band.depth[at..].copy_from_slice(&depths[..valid]);
     band.color[at..].copy_from_slice(&colors[..valid]);
 }
@@ -537,13 +607,13 @@ struct Run<'a> {
     colors: &'a mut [[u8; 4]; LANES],
 }
 
-/// Depth-tests, shades and stores the pixels of `run`, from `(x, y)`, of `lanes`' set bits.
+/// Depth-tests, shades and stores the pixels of `run` of `lanes`' set bits; the run starts `px`
+/// pixels right of the triangle's bounds, in a row adding `row` to the planes' values.
 #[inline(always)]
-fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, y: u32, x: u32, lanes: u32, run: Run) {
-    let TriangleShading { planes, lane_steps, pixel_steps, affine, origin, .. } = shading;
+fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, px: f32, row: &[Vec4; PACKS], lanes: u32, run: Run) {
+    let TriangleShading { planes, lane_steps, pixel_steps, affine, .. } = shading;
     let shadowed = C::PASS.shadowed;
-    let (px, py) = ((x - origin.0) as f32, (y - origin.1) as f32);
-    let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at(px, py));
+    let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at_row(px, row[p]));
     let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
     let z = lanes_of(lane_value(DEPTH));
     let depth = f32x4::new(*run.depths);
