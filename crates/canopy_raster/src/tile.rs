@@ -16,7 +16,7 @@ use crate::camera::Light;
 use crate::clip::outside;
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::pipeline::{Frame, PixelBounds, ScreenVertex, Span, TILE_HEIGHT, TILE_WIDTH, View, flat_diffuse};
-use crate::setup::{DEPTH, Edges, INV_W, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup};
+use crate::setup::{DEPTH, Edges, INV_W, LANE_OFFSETS, LANES, PACKS, Planes, Surface, TriangleSetup, packs_read};
 use crate::shade::{
     BYTE_TO_UNIT, CompiledPass, Material, Pass, Shading, VARYINGS, Varyings, affine_tolerances, bytes_of, lanes_of,
     slot, with_compiled_pass,
@@ -538,6 +538,14 @@ struct TriangleShading<'a> {
     context: &'a TileContext<'a>,
 }
 
+impl TriangleShading<'_> {
+    /// Value `k`'s lanes in a run whose packs of values start at `at_run`.
+    #[inline(always)]
+    fn lane_value(&self, at_run: &[Vec4; PACKS], k: usize) -> Vec4 {
+        Vec4::splat(at_run[k / LANES][k % LANES]) + self.lane_steps[k]
+    }
+}
+
 /// Depth-tests, shades and stores a triangle's runs into a band, stepping from run to run
 /// along a row.
 struct RunShader<'a, 'b, C> {
@@ -559,7 +567,8 @@ impl<C: CompiledPass> RunVisitor for RunShader<'_, '_, C> {
         self.at = (y - self.band.y0) as usize * self.band.width as usize + x as usize;
         self.px = (x - origin.0) as f32;
         let py = (y - origin.1) as f32;
-        self.row = std::array::from_fn(|p| planes[p].dy * py);
+        let read = const { packs_read(C::PASS) };
+        self.row = std::array::from_fn(|p| if read[p] { planes[p].dy * py } else { Vec4::ZERO });
     }
 
     /// A run reaching past the end of its row covers the first pixels of the next row too,
@@ -611,10 +620,10 @@ struct Run<'a> {
 /// pixels right of the triangle's bounds, in a row adding `row` to the planes' values.
 #[inline(always)]
 fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, px: f32, row: &[Vec4; PACKS], lanes: u32, run: Run) {
-    let TriangleShading { planes, lane_steps, pixel_steps, affine, .. } = shading;
+    let TriangleShading { planes, pixel_steps, affine, .. } = shading;
     let shadowed = C::PASS.shadowed;
     let at_run: [Vec4; PACKS] = std::array::from_fn(|p| planes[p].at_row(px, row[p]));
-    let lane_value = |k: usize| Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
+    let lane_value = |k: usize| shading.lane_value(&at_run, k);
     let z = lanes_of(lane_value(DEPTH));
     let depth = f32x4::new(*run.depths);
     let drawn = z.simd_lt(depth) & covered(lanes);
@@ -636,12 +645,12 @@ fn shade_pixels<C: CompiledPass>(shading: &TriangleShading, px: f32, row: &[Vec4
 /// are lit, textured and turned into bytes together.
 #[inline(always)]
 fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS], w: Vec4) -> u32x4 {
-    let TriangleShading { lane_steps, affine, triangle, context, .. } = shading;
+    let TriangleShading { affine, triangle, context, .. } = shading;
     let Pass { shading: mode, textured, shadowed } = C::PASS;
     let light = &context.frame.light;
     let material = triangle.material;
     let value = |k: usize| {
-        let lanes = Vec4::splat(at_run[k / LANES][k % LANES]) + lane_steps[k];
+        let lanes = shading.lane_value(at_run, k);
         if *affine { lanes } else { lanes * w }
     };
     let diffuse = match mode {
