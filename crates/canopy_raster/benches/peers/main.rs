@@ -209,8 +209,6 @@ fn main() {
     );
     match &gl {
         Ok(gl) => {
-            // llvmpipe reads its rendering thread count from the environment, one per core
-            // without it.
             let threads = std::env::var("LP_NUM_THREADS")
                 .map_or_else(|_| format!("one per core ({cores})"), |n| format!("LP_NUM_THREADS={n}"));
             println!("llvmpipe: {} (rendering threads: {threads})", gl.renderer_name());
