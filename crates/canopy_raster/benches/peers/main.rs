@@ -15,7 +15,15 @@
 //! frames' ratios are over the unshadowed frame of the same round.
 //!
 //! Each round draws every renderer's frame once, in an order shuffled from a fixed seed, so that
-//! no renderer always follows the same one.
+//! no renderer always follows the same one. A frame that follows another renderer's starts with
+//! caches and threads left as that renderer left them, which costs llvmpipe more than Canopy;
+//! `--back-to-back` draws each renderer's frame twice in a row and times the second, as in an
+//! app that draws every frame with one renderer.
+//!
+//! The process keeps the memory it frees (glibc's heap is not trimmed, see
+//! [`keep_freed_memory`]): otherwise whether llvmpipe's per-frame allocations land in memory
+//! already mapped depends on the heap's layout, and its frames took 2-3 ms longer in some
+//! processes than in others.
 //!
 //! Every renderer draws the same mesh with the same matrices; the coverage column (the share
 //! of pixels not left at the background) shows that they drew the same picture. The ratio
@@ -161,19 +169,44 @@ fn count_arg(flag: &str, value: Option<String>, least: usize) -> usize {
     }
 }
 
+/// Stops glibc from returning freed memory at the top of the heap to the kernel, so that a
+/// renderer that allocates and frees its working memory every frame (llvmpipe bins its
+/// triangles in memory allocated per frame) reuses mapped pages instead of faulting fresh ones
+/// in. With trimming, this process took about 1,300 more page faults a round, and llvmpipe's
+/// frames 2-3 ms longer, in the processes whose heap happened to end in llvmpipe's memory.
+/// Canopy allocates nothing per frame, so this changes nothing for it. Returns what the header
+/// says about the heap.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn keep_freed_memory() -> &'static str {
+    // SAFETY: `mallopt` only changes a setting of the allocator, under the allocator's own locks.
+    match unsafe { libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX) } {
+        1 => "freed memory kept (glibc's heap trimming off)",
+        _ => "glibc refused to keep freed memory: llvmpipe's frames may fault pages in",
+    }
+}
+
+/// See the glibc version: other allocators are left as they are.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn keep_freed_memory() -> &'static str {
+    "the system allocator's defaults"
+}
+
 fn main() {
+    let heap = keep_freed_memory();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut rounds = 40;
     // The thread that calls `render` works through the frame's tasks too, so one worker per
     // other core keeps every core busy without two of Canopy's threads sharing one.
     let mut workers = (cores - 1).max(1);
     let mut canopy_only = false;
+    let mut back_to_back = false;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--rounds" => rounds = count_arg("--rounds", args.next(), 1),
             "--workers" => workers = count_arg("--workers", args.next(), 0),
             "--canopy-only" => canopy_only = true,
+            "--back-to-back" => back_to_back = true,
             _ => {}
         }
     }
@@ -215,6 +248,12 @@ fn main() {
         }
         Err(reason) => println!("llvmpipe: not measured: {reason}"),
     }
+    let frames = if back_to_back {
+        "each timed right after an untimed one of the same renderer (--back-to-back)"
+    } else {
+        "each timed after the previous renderer's in the round"
+    };
+    println!("Heap: {heap}; frames: {frames}");
     println!("Ratios: median over rounds of a frame's time over Canopy's (unshadowed) frame of the same round;");
     println!("fastest tenths: the frame a tenth of the way up each renderer's sorted times, over Canopy's");
     println!();
@@ -227,22 +266,32 @@ fn main() {
     for camera in &CAMERAS {
         let clip = camera.camera().view_projection(WIDTH as f32 / HEIGHT as f32).to_cols_array();
         let mut samples: Vec<Vec<f64>> = vec![Vec::with_capacity(rounds); Contender::ALL.len()];
+        // Draws `contender`'s frame; false when it cannot draw (llvmpipe missing).
+        let mut draw = |contender| {
+            match contender {
+                Contender::Canopy => canopy.render(camera, RenderSettings::default()),
+                Contender::CanopyShadowed => canopy.render(camera, shadowed(false)),
+                Contender::CanopyShadowedPcf => canopy.render(camera, shadowed(true)),
+                Contender::Euc => euc.render(&scene, clip),
+                Contender::Llvmpipe => match &mut gl {
+                    Ok(gl) => gl.render(clip),
+                    Err(_) => return false,
+                },
+            }
+            true
+        };
         for round in 0..WARM_UP + rounds {
             for index in order.next() {
                 let contender = Contender::ALL[index];
                 if canopy_only && matches!(contender, Contender::Euc | Contender::Llvmpipe) {
                     continue;
                 }
+                if back_to_back && !draw(contender) {
+                    continue;
+                }
                 let started = Instant::now();
-                match contender {
-                    Contender::Canopy => canopy.render(camera, RenderSettings::default()),
-                    Contender::CanopyShadowed => canopy.render(camera, shadowed(false)),
-                    Contender::CanopyShadowedPcf => canopy.render(camera, shadowed(true)),
-                    Contender::Euc => euc.render(&scene, clip),
-                    Contender::Llvmpipe => match &mut gl {
-                        Ok(gl) => gl.render(clip),
-                        Err(_) => continue,
-                    },
+                if !draw(contender) {
+                    continue;
                 }
                 if round >= WARM_UP {
                     samples[index].push(started.elapsed().as_secs_f64() * 1e3);
