@@ -7,8 +7,8 @@
 //! other core; 0 draws on the calling thread alone), and `--canopy-only` leaves the peers out of
 //! the rounds. The Mesa llvmpipe peer needs `libegl1 libegl-mesa0 libgl1-mesa-dri`; without
 //! them its rows say why they are missing. It draws with one thread per core unless
-//! `LP_NUM_THREADS` says otherwise (on a two-core machine it drew 10-20% faster with three to
-//! eight).
+//! `LP_NUM_THREADS` says otherwise (on a two-core machine its median frames took 20-35% less
+//! time with eight).
 //!
 //! Canopy draws each round's frame three times: without shadows, with shadows read at the
 //! nearest texel, and with shadows filtered over four texels (PCF, its default); the shadowed
