@@ -20,10 +20,8 @@
 //! `--back-to-back` draws each renderer's frame twice in a row and times the second, as in an
 //! app that draws every frame with one renderer.
 //!
-//! The process keeps the memory it frees (glibc's heap is not trimmed, see
-//! [`keep_freed_memory`]): otherwise whether llvmpipe's per-frame allocations land in memory
-//! already mapped depends on the heap's layout, and its frames took 2-3 ms longer in some
-//! processes than in others.
+//! The process keeps the memory it frees (see [`keep_freed_memory`]), so that llvmpipe's
+//! frames do not depend on how its heap happens to be laid out.
 //!
 //! Every renderer draws the same mesh with the same matrices; the coverage column (the share
 //! of pixels not left at the background) shows that they drew the same picture. The ratio
@@ -173,12 +171,14 @@ fn count_arg(flag: &str, value: Option<String>, least: usize) -> usize {
 /// renderer that allocates and frees its working memory every frame (llvmpipe bins its
 /// triangles in memory allocated per frame) reuses mapped pages instead of faulting fresh ones
 /// in. With trimming, this process took about 1,300 more page faults a round, and llvmpipe's
-/// frames 2-3 ms longer, in the processes whose heap happened to end in llvmpipe's memory.
+/// frames took 2-3 ms longer in some processes than in others, depending on the heap's layout.
 /// Canopy allocates nothing per frame, so this changes nothing for it. Returns what the header
 /// says about the heap.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn keep_freed_memory() -> &'static str {
-    // SAFETY: `mallopt` only changes a setting of the allocator, under the allocator's own locks.
+    // SAFETY: `mallopt` only changes a setting of the allocator; it is called first thing in
+    // `main`, before any other thread exists, as glibc asks (it must not race other threads'
+    // first use of the allocator).
     match unsafe { libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX) } {
         1 => "freed memory kept (glibc's heap trimming off)",
         _ => "glibc refused to keep freed memory: llvmpipe's frames may fault pages in",
