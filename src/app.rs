@@ -1,13 +1,15 @@
-//! Assembly of the app, windowed or headless, in one place.
+//! Assembly of the app, windowed or headless, in one place: the list of entity kinds and the
+//! plugin group.
 
 use crate::controls::ControlsPlugin;
-use crate::muscle::MusclePlugin;
+use crate::foundation::FoundationPlugin;
+use crate::muscle::MuscleKind;
 use crate::raster::{RasterPlugin, RenderSettingsPlugin};
+use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
-use crate::schedule::SchedulePlugin;
-use crate::shape::ShapePlugin;
-use crate::sloth::SlothPlugin;
-use crate::tree::TreePlugin;
+use crate::shape::ShapeKind;
+use crate::sloth::SlothKind;
+use crate::tree::TreeKind;
 use crate::ui::{UiPlugin, WindowCapture};
 use crate::view::ViewPlugin;
 use bevy::app::PluginGroupBuilder;
@@ -15,6 +17,14 @@ use bevy::asset::AssetMetaCheck;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Every entity kind, in the order their keys are listed in messages and in which they are
+/// built (a kind's checks see what the kinds before it built). A new kind is its folder and
+/// one line here.
+pub fn entity_kinds() -> KindRegistry {
+    Kinds::new().with::<ShapeKind>().with::<MuscleKind>().with::<TreeKind>().with::<SlothKind>().build()
+}
 
 /// The fixed simulation rate, steps per second.
 pub const FIXED_HZ: f64 = 60.0;
@@ -32,8 +42,10 @@ pub enum Display {
 }
 
 /// Every Canopy plugin, for an app that already has Bevy's base plugins (and, for
-/// [`Display::Window`], a window and `bevy_egui`'s `EguiPlugin`). The scene's asset source
-/// must be registered first with [`register_scene_source`].
+/// [`Display::Window`], a window and `bevy_egui`'s `EguiPlugin`): the foundation, the scene,
+/// the camera and light, the render settings, each kind of [`entity_kinds`], the rasterizer
+/// and the window. The scene's asset source must be registered first with
+/// [`register_scene_source`].
 pub struct CanopyPlugins {
     /// The scene file to play.
     pub scene: PathBuf,
@@ -47,17 +59,14 @@ impl PluginGroup for CanopyPlugins {
             Display::Window => (UVec2::new(1280, 720), true),
             Display::Headless { size } => (size, false),
         };
+        let kinds = Arc::new(entity_kinds());
         let group = PluginGroupBuilder::start::<Self>()
-            .add(SchedulePlugin)
+            .add(FoundationPlugin)
             .add(ControlsPlugin)
-            .add(ScenePlugin { path: self.scene })
+            .add(ScenePlugin { path: self.scene, kinds: kinds.clone() })
             .add(ViewPlugin)
-            .add(RenderSettingsPlugin)
-            .add(ShapePlugin)
-            .add(MusclePlugin)
-            .add(TreePlugin)
-            .add(SlothPlugin)
-            .add(RasterPlugin { size, every_frame });
+            .add(RenderSettingsPlugin);
+        let group = kinds.add_plugins(group).add(RasterPlugin { size, every_frame });
         match self.display {
             Display::Window => group.add(UiPlugin),
             Display::Headless { .. } => group,

@@ -2,46 +2,79 @@
 //! rasterizer, plays scenes described in YAML files in a window with keyboard controls, and
 //! runs the same scenes headless for tests.
 //!
+//! # Layers
+//!
+//! Modules import only from the layers below them (a test, `tests/architecture.rs`, reads the
+//! `use crate::` lines and refuses a cycle):
+//!
+//! | layer | modules | what it holds |
+//! |---|---|---|
+//! | app | [`app`], [`run`], [`ui`], `main` | the plugin group and the list of kinds, headless runs, the window |
+//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
+//! | scene | [`scene`] | loading, checking, spawning and saving through the kind registry, naming no kind |
+//! | foundation | [`foundation`] | the entity marker, the kind trait, checked values, located errors, parameters, dumps, keys, panel sections, the schedule |
+//! | rasterizer | the `canopy_raster` crate | pixels from plain data |
+//!
+//! An entity kind is a folder (`def.rs` with its file format and its
+//! [`EntityKind`](foundation::kind::EntityKind), `plugin.rs`, its pure cores) and one line in
+//! [`app::entity_kinds`].
+//!
 //! | plugin | module | what it does |
 //! |---|---|---|
-//! | [`SchedulePlugin`](schedule::SchedulePlugin) | [`schedule`] | system sets, fixed-step clock, pause |
+//! | [`FoundationPlugin`](foundation::FoundationPlugin) | [`foundation`] | the phases of a frame, the simulated clock, app-wide messages |
+//! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`ScenePlugin`](scene::ScenePlugin) | [`scene`] | YAML scene assets, hot reload, spawning |
 //! | [`ViewPlugin`](view::ViewPlugin) | [`view`] | camera and light entities and their keys |
+//! | [`RenderSettingsPlugin`](raster::RenderSettingsPlugin) | [`raster`] | the `render` entity: shading and shadows |
 //! | [`ShapePlugin`](shape::ShapePlugin) | [`shape`] | the `shape` entity kind |
 //! | [`MusclePlugin`](muscle::MusclePlugin) | [`muscle`] | the `muscle` entity kind |
 //! | [`TreePlugin`](tree::TreePlugin) | [`tree`] | the `tree` entity kind: supports, queries, editing |
 //! | [`SlothPlugin`](sloth::SlothPlugin) | [`sloth`] | the `sloth` entity kind: rig, IK, gait, footholds |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
-//! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: framebuffer, egui panel, key help |
 //!
 //! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps.
+//!
+//! # Where each rule lives
+//!
+//! | rule | where |
+//! |---|---|
+//! | the muscle's frustum volume and the quadratic (its `A` coefficient) that keeps it when the length changes | [`muscle::model`] |
+//! | elbow flexion from muscle length and back, by the law of cosines | [`muscle::carcass`] |
+//! | a support tilted more than 70 degrees from horizontal is a trunk | [`tree::model`] |
+//! | the diagonal-sequence gait: footfall order and timing from speed | [`sloth::gait`] |
+//! | the leg order, "hind feet never ahead of fore feet", with the step lengths it works with | [`sloth::foothold`] |
+//! | joint limits from the animal's range of motion | [`sloth::rig`] |
+//! | trunks climbed head up; transfers between a branch and its trunk | [`sloth::transfer`] |
+//! | the top-left fill rule and the edge functions | `canopy_raster::setup` |
+//! | the shadow map fitted to the light's view, its biases and filtering | [`raster::shadow`] |
+//! | errors at file, line, column and field | [`foundation::yaml`] |
+//! | the phases of a frame | [`foundation::schedule`] |
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 pub mod app;
 pub mod controls;
-pub mod dump;
+pub mod foundation;
 pub mod muscle;
-pub mod params;
 pub mod raster;
 pub mod run;
 pub mod scene;
-pub mod schedule;
 pub mod shape;
 pub mod sloth;
 pub mod tree;
 pub mod ui;
 pub mod view;
-pub mod yaml;
 
 pub use app::CanopyPlugins;
 
 /// The types most users of the library need.
 pub mod prelude {
-    pub use crate::app::{CanopyPlugins, Display};
-    pub use crate::dump::{DumpState, RegisterDump};
-    pub use crate::params::{ParamValue, RegisterParams};
-    pub use crate::raster::{RasterMesh, RenderSystems};
-    pub use crate::scene::SceneEntity;
-    pub use crate::schedule::{ControlSystems, SimSystems};
+    pub use crate::app::{CanopyPlugins, Display, entity_kinds};
+    pub use crate::foundation::dump::{DumpState, RegisterDump};
+    pub use crate::foundation::entity::SceneEntity;
+    pub use crate::foundation::kind::EntityKind;
+    pub use crate::foundation::params::{ParamValue, RegisterParams};
+    pub use crate::foundation::schedule::{ControlSystems, RenderSystems, SimSystems, WriteBackSystems};
+    pub use crate::raster::RasterMesh;
 }

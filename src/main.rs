@@ -2,10 +2,9 @@
 //! generate tree scenes.
 
 use bevy::math::UVec2;
-use canopy::app::{FIXED_HZ, window_app};
+use canopy::app::{FIXED_HZ, entity_kinds, window_app};
 use canopy::raster::MAX_TARGET_SIZE;
 use canopy::run::{RunOptions, run_headless};
-use canopy::scene::schema::SceneDef;
 use canopy::tree::GeneratorSettings;
 use canopy::tree::generate::{generate, scene_text};
 use canopy::ui::WindowCapture;
@@ -172,7 +171,7 @@ fn play(scene: PathBuf, capture: Option<WindowCapture>) -> ExitCode {
             }
         };
     }
-    if let Err(error) = SceneDef::load(&scene) {
+    if let Err(error) = entity_kinds().load(&scene) {
         // The window opens anyway and shows the error until the file is fixed.
         eprintln!("{error}");
     }
@@ -250,10 +249,11 @@ fn generate_trees(args: &GenerateArgs) -> ExitCode {
 }
 
 fn check(scenes: &[PathBuf]) -> ExitCode {
+    let kinds = entity_kinds();
     let mut valid = true;
     for scene in scenes {
-        match SceneDef::load(scene) {
-            Ok(def) => println!("{}: ok ({} entities)", scene.display(), def.entities.len()),
+        match kinds.load(scene) {
+            Ok(loaded) => println!("{}: ok ({} entities)", scene.display(), loaded.def.entities.len()),
             Err(error) => {
                 eprintln!("{error}");
                 valid = false;

@@ -2,16 +2,15 @@
 //! return the state dump and the last frame. Used by `canopy run`, by the `play` fallback
 //! without a display, and by the system tests.
 
-use crate::app::headless_app;
+use crate::app::{entity_kinds, headless_app};
 use crate::controls::timeline::Timeline;
-use crate::dump::dump_state;
-use crate::params::ParamError;
+use crate::foundation::dump::dump_state;
+use crate::foundation::params::ParamError;
+use crate::foundation::schedule::SimControl;
+use crate::foundation::yaml::FileError;
 use crate::raster::Framebuffer;
 use crate::raster::plugin::{RasterTarget, RenderPolicy};
-use crate::scene::schema::SceneDef;
 use crate::scene::{ActiveScene, SceneStatus};
-use crate::schedule::SimControl;
-use crate::yaml::FileError;
 use bevy::math::UVec2;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -37,7 +36,7 @@ pub struct RunOptions {
 /// What a run produced.
 #[derive(Debug, Clone)]
 pub struct RunOutput {
-    /// The state dump after the last step (see [`crate::dump`]).
+    /// The state dump after the last step (see [`crate::foundation::dump`]).
     pub dump: serde_json::Value,
     /// The frame drawn after the last step.
     pub framebuffer: Framebuffer,
@@ -65,7 +64,7 @@ pub enum RunError {
 /// Runs a scene headless.
 pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
     // Check the files first, so that errors come out before any app is built.
-    SceneDef::load(&options.scene)?;
+    entity_kinds().load(&options.scene)?;
     let timeline = options.timeline.as_deref().map(Timeline::load).transpose()?;
 
     let mut app = headless_app(&options.scene, options.size, options.log)

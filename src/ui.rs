@@ -3,12 +3,15 @@
 //! key help and load errors. Dragging on the view orbits the camera, the wheel zooms; both
 //! go through the camera's parameters like every other edit.
 
-use crate::controls::{HelpVisible, KeyMap, ReloadScene, SelectEntity, ViewClicked};
-use crate::params::{ParamEntry, ParamValue, list_params, set_param};
-use crate::raster::RenderSystems;
+use crate::controls::HelpVisible;
+use crate::foundation::entity::SceneEntity;
+use crate::foundation::keys::KeyMap;
+use crate::foundation::messages::{ReloadScene, SelectEntity, ViewClicked};
+use crate::foundation::panel::{PanelSection, PanelSections};
+use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};
+use crate::foundation::schedule::{RenderSystems, SimClock, SimControl};
 use crate::raster::plugin::RasterTarget;
-use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneEntity, SceneStatus, save_live_scene};
-use crate::schedule::{SimClock, SimControl};
+use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneStatus, save_live_scene};
 use crate::view::CameraParams;
 use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
@@ -65,26 +68,6 @@ fn capture_window(mut commands: Commands, capture: Res<WindowCapture>, scene: Re
                 exit.write(AppExit::Success);
             },
         );
-    }
-}
-
-/// Draws a kind's own section of the panel for a selected entity, with access to the world.
-pub type PanelSection = fn(&mut egui::Ui, &mut World, Entity);
-
-/// The panel sections of entity kinds, drawn under the parameters of a selected entity.
-#[derive(Resource, Default)]
-pub struct PanelSections(Vec<(&'static str, PanelSection)>);
-
-/// Registration of panel sections on the app.
-pub trait RegisterPanel {
-    /// Draws `section` in the panel when an entity of `kind` is selected.
-    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self;
-}
-
-impl RegisterPanel for App {
-    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self {
-        self.world_mut().get_resource_or_init::<PanelSections>().0.push((kind, section));
-        self
     }
 }
 
@@ -226,7 +209,7 @@ fn draw_ui(world: &mut World) {
         egui::UiBuilder::new().layer_id(egui::LayerId::background()).max_rect(ctx.viewport_rect()),
     );
     let sections: Vec<PanelSection> = match (data.selected, world.get_resource::<PanelSections>()) {
-        (Some((_, kind)), Some(sections)) => sections.0.iter().filter(|(k, _)| *k == kind).map(|(_, s)| *s).collect(),
+        (Some((_, kind)), Some(sections)) => sections.of(kind).collect(),
         _ => Vec::new(),
     };
     egui::Panel::right("canopy-panel").default_size(300.0).show_inside(&mut root, |ui| {

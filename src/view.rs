@@ -8,13 +8,14 @@
 //! Parameters: `camera.{target.x|y|z, yaw_deg, pitch_deg, distance, fov_deg}` and
 //! `light.{azimuth_deg, elevation_deg, diffuse, ambient}`.
 
-use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
-use crate::dump::{DumpState, RegisterDump};
-use crate::params::RegisterParams;
-use crate::raster::{Camera, Light, RenderSystems, RenderView};
-use crate::scene::schema::{CameraDef, LightDef};
-use crate::schedule::ControlSystems;
-use bevy::color::{ColorToPacked, Srgba};
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
+use crate::foundation::params::RegisterParams;
+use crate::foundation::schedule::{ControlSystems, RenderSystems};
+use crate::foundation::values::wrap_degrees;
+use crate::raster::{Camera, Light, RenderView};
+use crate::scene::schema::{Background, CameraDef, LightDef};
+use bevy::color::ColorToPacked;
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 
@@ -165,32 +166,38 @@ impl DumpState for LightParams {
     }
 }
 
-/// The colour of pixels showing no surface.
-#[derive(Resource, Debug, Clone, Copy, PartialEq)]
-pub struct Background(pub Srgba);
-
-impl Default for Background {
-    fn default() -> Self {
-        Self(Srgba::BLACK)
-    }
-}
-
 /// Camera and light parameters, controls and the render view.
+#[derive(Default)]
 pub struct ViewPlugin;
 
 impl Plugin for ViewPlugin {
     fn build(&self, app: &mut App) {
         let camera_help = CAMERA_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Global });
         let light_help = LIGHT_KEYS.map(|(key, action, ..)| KeyHelp { key, action, scope: KeyScope::Global });
-        app.init_resource::<Background>()
-            .register_params::<CameraParams>()
+        app.register_params::<CameraParams>()
             .register_params::<LightParams>()
             .register_dump::<CameraParams>()
             .register_dump::<LightParams>()
             .register_keys(&camera_help)
             .register_keys(&light_help)
+            .add_observer(params_of_camera_section)
+            .add_observer(params_of_light_section)
             .add_systems(Update, (orbit_camera, turn_light).in_set(ControlSystems::Input))
             .add_systems(PostUpdate, write_render_view.in_set(RenderSystems::Collect));
+    }
+}
+
+/// Gives the scene's camera entity its parameters when it is spawned.
+fn params_of_camera_section(add: On<Add, CameraDef>, sections: Query<&CameraDef>, mut commands: Commands) {
+    if let Ok(def) = sections.get(add.entity) {
+        commands.entity(add.entity).insert(CameraParams::from(def));
+    }
+}
+
+/// Gives the scene's light entity its parameters when it is spawned.
+fn params_of_light_section(add: On<Add, LightDef>, sections: Query<&LightDef>, mut commands: Commands) {
+    if let Ok(def) = sections.get(add.entity) {
+        commands.entity(add.entity).insert(LightParams::from(def));
     }
 }
 
@@ -229,11 +236,6 @@ fn turn_light(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut lights: Quer
     }
 }
 
-/// An angle brought into `[-180, 180)` degrees.
-fn wrap_degrees(angle: f32) -> f32 {
-    (angle + 180.0).rem_euclid(360.0) - 180.0
-}
-
 fn write_render_view(
     cameras: Query<&CameraParams>,
     lights: Query<&LightParams>,
@@ -252,7 +254,7 @@ fn write_render_view(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::values::{FieldOfView, Point, PositiveMetres, UnitInterval};
+    use crate::foundation::values::{FieldOfView, Point, PositiveMetres, UnitInterval};
 
     #[test]
     fn camera_params_reproduce_the_file_camera() {

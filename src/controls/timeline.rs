@@ -12,10 +12,10 @@
 //! while the simulation is paused (and can resume it). Keys go through Bevy's input like real
 //! key presses, so scripts and the keyboard drive the same systems.
 
-use crate::params::{ParamError, ParamValue, check_param, set_param};
-use crate::scene::values::checked_number;
-use crate::schedule::{ControlSystems, SimControl};
-use crate::yaml::{FileError, deserialize_str_with, read_yaml_file};
+use crate::foundation::params::{ParamError, ParamValue, check_param, set_param};
+use crate::foundation::schedule::{ControlSystems, SimControl};
+use crate::foundation::values::checked_number;
+use crate::foundation::yaml::{FileError, deserialize_str_with, read_yaml_file};
 use bevy::input::ButtonState;
 use bevy::input::keyboard::{Key, KeyboardInput};
 use bevy::prelude::*;
@@ -61,7 +61,7 @@ pub struct TimelineEvent {
     /// Keys released.
     #[serde(default)]
     pub release: Vec<KeyName>,
-    /// Parameters set, by name (see [`crate::params`]).
+    /// Parameters set, by name (see [`crate::foundation::params`]).
     #[serde(default)]
     pub set: BTreeMap<String, ParamValue>,
 }
@@ -145,7 +145,7 @@ fn play_timeline(world: &mut World) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::yaml::parse_yaml;
+    use crate::foundation::yaml::parse_yaml;
 
     fn parse(text: &str) -> Result<Vec<TimelineEvent>, FileError> {
         parse_yaml(Path::new("t.yaml"), text.as_bytes(), "events")

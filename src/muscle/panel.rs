@@ -1,7 +1,7 @@
 //! The muscle's section of the window's panel: volume and its error, the radii, a node
 //! editor, and a plot of the model's radii against the real biceps measurements.
 
-use super::{MuscleBody, MuscleParams};
+use super::plugin::{MuscleBody, MuscleParams};
 use bevy::prelude::*;
 use bevy_egui::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints, Points};

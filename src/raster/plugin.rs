@@ -11,14 +11,15 @@
 //! Drawing runs every frame, or only when asked ([`RenderPolicy`]) in headless runs that need
 //! just their last frame.
 
+use super::primitives::PrimitiveMeshes;
 use super::{
     Camera, Framebuffer, Instance, Light, MAX_TARGET_SIZE, Material, MeshData, RenderSettings, RenderStats, Renderer,
 };
-use crate::controls::SaveScreenshot;
-use crate::schedule::ControlSystems;
+use crate::foundation::messages::SaveScreenshot;
+use crate::foundation::schedule::{ControlSystems, RenderSystems};
+use crate::foundation::values::first_free_path;
 use bevy::prelude::*;
 use bevy::tasks::{ComputeTaskPool, TaskPool};
-use bevy::transform::TransformSystems;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -37,21 +38,11 @@ pub struct RasterMesh {
 }
 
 impl RasterMesh {
-    /// A mesh drawn in a plain colour (linear RGB from 0 to 1).
+    /// A mesh drawn in a plain colour (sRGB channels from 0 to 1, see
+    /// [`srgb_channels`](crate::foundation::values::srgb_channels)).
     pub fn colored(mesh: Arc<MeshData>, color: Vec3) -> Self {
         Self { mesh, material: Material::colored(color) }
     }
-}
-
-/// The ordered sets of `PostUpdate` in which a frame is drawn.
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum RenderSystems {
-    /// Gather what to draw and from where.
-    Collect,
-    /// Draw the frame.
-    Raster,
-    /// Hand the frame to the window or to files.
-    Present,
 }
 
 /// The camera, light, background and settings of the next frame.
@@ -142,11 +133,10 @@ impl Plugin for RasterPlugin {
             .insert_resource(RasterTarget::new(self.size))
             .insert_resource(RenderPolicy { every_frame: self.every_frame, requested: false })
             .insert_resource(Screenshots { folder: PathBuf::from("screenshots"), pending: false })
+            .init_resource::<PrimitiveMeshes>()
             .configure_sets(
                 PostUpdate,
                 (RenderSystems::Collect, RenderSystems::Raster, RenderSystems::Present)
-                    .chain()
-                    .after(TransformSystems::Propagate)
                     .run_if(RenderPolicy::wants_frame),
             )
             .add_systems(Update, request_screenshots.in_set(ControlSystems::Apply))
@@ -209,10 +199,7 @@ fn save_screenshots(mut screenshots: ResMut<Screenshots>, target: Res<RasterTarg
     screenshots.pending = false;
     let saved = std::fs::create_dir_all(&screenshots.folder).map_err(|e| e.to_string()).and_then(|()| {
         // The first free name: an earlier screenshot is never overwritten.
-        let path = (1..)
-            .map(|n| screenshots.folder.join(format!("canopy-{n:04}.png")))
-            .find(|path| !path.exists())
-            .expect("an unbounded range always yields a free name");
+        let path = first_free_path(|n| screenshots.folder.join(format!("canopy-{n:04}.png")));
         target.framebuffer.save_png(&path).map(|()| path).map_err(|e| e.to_string())
     });
     match saved {

@@ -1,16 +1,16 @@
-//! The scene's `render` entity: shading mode and shadows as parameters, keys and a scene
-//! section, switched at run time.
+//! The scene's `render` entity: shading mode and shadows as parameters and keys, switched at
+//! run time.
 //!
 //! Parameters: `render.shading` (`flat`, `gouraud` or `phong`), `render.shadows` and
 //! `render.pcf` (true or false). Keys: V cycles the shading mode, H switches shadows.
 
-use super::{RenderSettings, RenderSystems, RenderView, Shading};
-use crate::controls::{KeyHelp, KeyScope, RegisterKeys};
-use crate::dump::{DumpState, RegisterDump};
-use crate::params::RegisterParams;
-use crate::schedule::ControlSystems;
+use super::{RenderSettings, RenderView, Shading};
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
+use crate::foundation::params::RegisterParams;
+use crate::foundation::schedule::{ControlSystems, RenderSystems};
+use crate::scene::schema::RenderDef;
 use bevy::prelude::*;
-use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 
 /// Key that cycles the shading mode.
@@ -18,63 +18,12 @@ const SHADING_KEY: KeyCode = KeyCode::KeyV;
 /// Key that switches shadows on and off.
 const SHADOWS_KEY: KeyCode = KeyCode::KeyH;
 
-/// The shading modes as a scene value and parameter.
-#[derive(Reflect, Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum ShadingMode {
-    /// One intensity per triangle.
-    Flat,
-    /// Intensity per vertex, interpolated.
-    #[default]
-    Gouraud,
-    /// Normal per pixel.
-    Phong,
-}
-
-impl ShadingMode {
-    /// The rasterizer's mode.
-    pub fn shading(self) -> Shading {
-        match self {
-            ShadingMode::Flat => Shading::Flat,
-            ShadingMode::Gouraud => Shading::Gouraud,
-            ShadingMode::Phong => Shading::Phong,
-        }
-    }
-
-    /// The mode after this one: flat, Gouraud, Phong, flat...
-    fn next(self) -> Self {
-        match self {
-            ShadingMode::Flat => ShadingMode::Gouraud,
-            ShadingMode::Gouraud => ShadingMode::Phong,
-            ShadingMode::Phong => ShadingMode::Flat,
-        }
-    }
-}
-
-/// The `render` section of a scene file.
-#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct RenderDef {
-    /// Shading mode: `flat`, `gouraud` (the default) or `phong`.
-    pub shading: ShadingMode,
-    /// Whether the light casts shadows (on by default).
-    pub shadows: bool,
-    /// Whether shadow edges are filtered (on by default).
-    pub pcf: bool,
-}
-
-impl Default for RenderDef {
-    fn default() -> Self {
-        Self { shading: ShadingMode::Gouraud, shadows: true, pcf: true }
-    }
-}
-
 /// How the scene is drawn; the parameters of the `render` entity.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Component)]
 pub struct RenderParams {
     /// The lighting computation.
-    pub shading: ShadingMode,
+    pub shading: Shading,
     /// Whether the light casts shadows.
     pub shadows: bool,
     /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
@@ -89,18 +38,14 @@ impl From<&RenderDef> for RenderParams {
 
 impl DumpState for RenderParams {
     fn dump(&self, out: &mut Map<String, Value>) {
-        let shading = match self.shading {
-            ShadingMode::Flat => "flat",
-            ShadingMode::Gouraud => "gouraud",
-            ShadingMode::Phong => "phong",
-        };
-        out.insert("shading".into(), json!(shading));
+        out.insert("shading".into(), json!(self.shading.key()));
         out.insert("shadows".into(), json!(self.shadows));
         out.insert("pcf".into(), json!(self.pcf));
     }
 }
 
 /// The `render` entity's parameters, keys and their effect on the [`RenderView`].
+#[derive(Default)]
 pub struct RenderSettingsPlugin;
 
 impl Plugin for RenderSettingsPlugin {
@@ -112,8 +57,16 @@ impl Plugin for RenderSettingsPlugin {
                 KeyHelp { key: SHADING_KEY, action: "next shading mode (flat, Gouraud, Phong)", scope },
                 KeyHelp { key: SHADOWS_KEY, action: "switch shadows on or off", scope },
             ])
+            .add_observer(params_of_render_section)
             .add_systems(Update, switch_render_settings.in_set(ControlSystems::Input))
             .add_systems(PostUpdate, write_render_settings.in_set(RenderSystems::Collect));
+    }
+}
+
+/// Gives the scene's `render` entity its parameters when it is spawned.
+fn params_of_render_section(add: On<Add, RenderDef>, sections: Query<&RenderDef>, mut commands: Commands) {
+    if let Ok(def) = sections.get(add.entity) {
+        commands.entity(add.entity).insert(RenderParams::from(def));
     }
 }
 
@@ -130,12 +83,8 @@ fn switch_render_settings(keys: Res<ButtonInput<KeyCode>>, mut params: Query<&mu
 
 fn write_render_settings(params: Query<&RenderParams>, mut view: ResMut<RenderView>) {
     if let Some(params) = params.iter().next() {
-        view.settings = RenderSettings {
-            shading: params.shading.shading(),
-            shadows: params.shadows,
-            pcf: params.pcf,
-            ..view.settings
-        };
+        view.settings =
+            RenderSettings { shading: params.shading, shadows: params.shadows, pcf: params.pcf, ..view.settings };
     }
 }
 
@@ -145,20 +94,20 @@ mod tests {
 
     #[test]
     fn shading_cycles_through_all_three_modes() {
-        let mut mode = ShadingMode::Flat;
+        let mut mode = Shading::Flat;
         let mut seen = vec![];
         for _ in 0..3 {
-            seen.push(mode.shading());
+            seen.push(mode);
             mode = mode.next();
         }
         assert_eq!(seen, Shading::ALL);
-        assert_eq!(mode, ShadingMode::Flat);
+        assert_eq!(mode, Shading::Flat);
     }
 
     #[test]
     fn the_section_defaults_to_gouraud_with_shadows() {
         let def: RenderDef = serde_yaml::from_str("pcf: false").unwrap();
-        assert_eq!(def, RenderDef { shading: ShadingMode::Gouraud, shadows: true, pcf: false });
+        assert_eq!(def, RenderDef { shading: Shading::Gouraud, shadows: true, pcf: false });
         let error = serde_yaml::from_str::<RenderDef>("shading: toon").unwrap_err().to_string();
         assert!(error.contains("unknown variant `toon`"), "{error}");
     }

@@ -1,37 +1,38 @@
 //! Scenes: YAML files loaded through Bevy's asset system (so they hot-reload), checked with
-//! errors that name the file, line, column and field, and spawned as ECS entities.
+//! errors that name the file, line, column and field, spawned as ECS entities and saved
+//! back, all through the [`KindRegistry`] of entity kinds.
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`schema`] | the file format: camera, light, background, entities and their kinds |
-//! | [`values`] | checked numbers, points, sizes and colours |
+//! | [`schema`] | the file format: camera, light, background, render settings, the entity list |
+//! | [`kinds`] | the registry of entity kinds: reading, checking, building, spawning, saving |
 //!
 //! The scene file is served by its own asset source, [`SCENE_SOURCE`], rooted at the file's
 //! folder, so any file on disk can be played and watched. A (re)load that fails keeps the
 //! last good scene running and records the error in [`ActiveScene`].
 
+pub mod kinds;
 pub mod schema;
-pub mod values;
 
-use crate::controls::ReloadScene;
-use crate::muscle::spawn_muscle;
-use crate::raster::RenderParams;
-use crate::schedule::{ControlSystems, SimClock, SimControl};
-use crate::shape::{PrimitiveMeshes, spawn_shape};
-use crate::sloth::spawn_sloth;
-use crate::tree::{TreeSource, spawn_tree};
-use crate::view::{Background, CameraParams, LightParams};
-use crate::yaml::FileError;
+use crate::foundation::entity::SceneEntity;
+use crate::foundation::messages::ReloadScene;
+use crate::foundation::schedule::{ControlSystems, SimClock, SimControl};
+use crate::foundation::values::first_free_path;
+use crate::foundation::yaml::FileError;
 use bevy::asset::io::{AssetSourceBuilder, Reader};
 use bevy::asset::{AssetLoadFailedEvent, AssetLoader, LoadContext};
 use bevy::prelude::*;
-use schema::{EntityKind, SceneDef};
+use kinds::{KindRegistry, LoadedScene, ReadFile};
+use schema::Background;
 use std::path::{Path, PathBuf};
-
-pub use schema::EntityDef;
+use std::sync::Arc;
 
 /// The asset source that serves the folder of the scene being played.
 pub const SCENE_SOURCE: &str = "scene";
+
+/// The [`SceneEntity::index`] of the file's first entity: the camera, the light and the render
+/// settings come before it.
+pub const FIRST_FILE_ENTITY: usize = 3;
 
 /// Registers [`SCENE_SOURCE`] at the folder of `scene_file`. Must be called before Bevy's
 /// `AssetPlugin` is added.
@@ -44,13 +45,17 @@ pub fn register_scene_source(app: &mut App, scene_file: &Path) -> std::io::Resul
     Ok(())
 }
 
-/// A loaded scene file.
+/// A loaded and checked scene file.
 #[derive(Asset, TypePath, Debug, Clone)]
-pub struct SceneAsset(pub SceneDef);
+pub struct SceneAsset(pub Arc<LoadedScene>);
+
+/// The kinds the app knows, shared by the loader and the systems.
+#[derive(Resource, Debug, Clone)]
+pub struct SceneKinds(pub Arc<KindRegistry>);
 
 /// Loads `.yaml` / `.yml` scene files.
-#[derive(Default, TypePath)]
-pub struct SceneLoader;
+#[derive(TypePath)]
+pub struct SceneLoader(Arc<KindRegistry>);
 
 impl AssetLoader for SceneLoader {
     type Asset = SceneAsset;
@@ -66,9 +71,11 @@ impl AssetLoader for SceneLoader {
         let path = load_context.path().path().to_path_buf();
         let mut bytes = Vec::new();
         reader.read_to_end(&mut bytes).await.map_err(|error| FileError::unreadable(&path, error))?;
-        let mut scene = SceneDef::parse_unresolved(&path, &bytes)?;
+        let kinds = &self.0;
+        let scene = kinds.parse_unresolved(&path, &bytes)?;
         let folder = path.parent().unwrap_or(Path::new(""));
-        for file in scene.references() {
+        let mut files = Vec::new();
+        for file in kinds.references(&scene) {
             let referenced = folder.join(&file);
             // Read through the asset server, so that editing the referenced file reloads too.
             let asset_path = format!("{SCENE_SOURCE}://{}", referenced.to_string_lossy());
@@ -76,26 +83,14 @@ impl AssetLoader for SceneLoader {
                 .read_asset_bytes(asset_path)
                 .await
                 .map_err(|error| FileError::unreadable(&referenced, error))?;
-            scene.resolve(&file, &referenced, &contents)?;
+            files.push(ReadFile { file, path: referenced, contents });
         }
-        scene.check(&path, &String::from_utf8_lossy(&bytes))?;
-        Ok(SceneAsset(scene))
+        Ok(SceneAsset(Arc::new(kinds.finish(scene, &path, &bytes, &files)?)))
     }
 
     fn extensions(&self) -> &[&str] {
         &["yaml", "yml"]
     }
-}
-
-/// Identifies a spawned scene entity: its place in the file, its name and its kind.
-#[derive(Component, Debug, Clone, PartialEq, Eq)]
-pub struct SceneEntity {
-    /// Order in the scene: the camera, the light, the render settings, then the file's entities.
-    pub index: usize,
-    /// The name parameters and dumps use.
-    pub name: String,
-    /// The kind (`camera`, `light`, `shape`, ...).
-    pub kind: &'static str,
 }
 
 /// Where the played scene is in its life.
@@ -133,16 +128,20 @@ impl ActiveScene {
     }
 }
 
-/// Loads, watches and spawns the scene file at `path`.
+/// Loads, watches and spawns the scene file at `path` with the entity kinds of `kinds`.
 pub struct ScenePlugin {
     /// The scene file.
     pub path: PathBuf,
+    /// The entity kinds.
+    pub kinds: Arc<KindRegistry>,
 }
 
 impl Plugin for ScenePlugin {
     fn build(&self, app: &mut App) {
         app.init_asset::<SceneAsset>()
-            .init_asset_loader::<SceneLoader>()
+            .register_asset_loader(SceneLoader(self.kinds.clone()))
+            .insert_resource(SceneKinds(self.kinds.clone()))
+            .init_resource::<Background>()
             .insert_resource(ActiveScene {
                 path: self.path.clone(),
                 status: SceneStatus::Loading,
@@ -174,8 +173,7 @@ fn track_scene_asset(
     mut loaded: MessageReader<AssetEvent<SceneAsset>>,
     mut failed: MessageReader<AssetLoadFailedEvent<SceneAsset>>,
     assets: Res<Assets<SceneAsset>>,
-    meshes: Res<PrimitiveMeshes>,
-    existing: Query<Entity, With<SceneEntity>>,
+    kinds: Res<SceneKinds>,
     mut scene: ResMut<ActiveScene>,
     mut control: ResMut<SimControl>,
     mut clock: ResMut<SimClock>,
@@ -183,7 +181,7 @@ fn track_scene_asset(
     let id = scene.handle.id();
     if failed.read().any(|event| event.id == id) {
         // Read the file again to report its error against the path the user gave.
-        let message = match SceneDef::load(&scene.path) {
+        let message = match kinds.0.load(&scene.path) {
             Err(error) => error.to_string(),
             Ok(_) => format!("{}: the scene changed while it was loading; press F5 to reload", scene.path.display()),
         };
@@ -195,15 +193,11 @@ fn track_scene_asset(
     }
     // Sent once per successful load, the first and every reload alike.
     let changed = loaded.read().any(|event| event.is_loaded_with_dependencies(id));
-    let Some(SceneAsset(def)) = changed.then(|| assets.get(id)).flatten() else {
+    let Some(SceneAsset(loaded)) = changed.then(|| assets.get(id)).flatten() else {
         return;
     };
-    for entity in &existing {
-        commands.entity(entity).despawn();
-    }
-    spawn_scene(&mut commands, def, &meshes);
-    commands.insert_resource(Background(def.background.0));
-    scene.kinds = def.entities.iter().map(|e| e.kind.key()).collect();
+    let def = &loaded.def;
+    scene.kinds = def.entities.iter().map(|e| e.key).collect();
     scene.kinds.dedup();
     scene.status = SceneStatus::Live;
     scene.error = None;
@@ -211,18 +205,40 @@ fn track_scene_asset(
     *clock = SimClock::default();
     control.live = true;
     info!("scene {} loaded ({} entities)", scene.path.display(), def.entities.len());
+    let (loaded, kinds) = (loaded.clone(), kinds.0.clone());
+    commands.queue(move |world: &mut World| respawn_scene(world, &loaded, &kinds));
+}
+
+/// Replaces every scene entity with those of `scene`: the camera, the light and the render
+/// settings (their sections as components, which their plugins complete), then each entity
+/// by its kind.
+pub fn respawn_scene(world: &mut World, scene: &LoadedScene, kinds: &KindRegistry) {
+    let existing: Vec<Entity> = world.query_filtered::<Entity, With<SceneEntity>>().iter(world).collect();
+    for entity in existing {
+        world.despawn(entity);
+    }
+    let def = &scene.def;
+    let scene_entity = |index: usize, name: &str, kind: &'static str| {
+        (SceneEntity { index, name: name.to_string(), kind }, Name::new(name.to_string()))
+    };
+    world.spawn((scene_entity(0, "camera", "camera"), def.camera));
+    world.spawn((scene_entity(1, "light", "light"), def.light));
+    world.spawn((scene_entity(2, "render", "render"), def.render));
+    for (index, (entity_def, built)) in def.entities.iter().zip(&scene.built).enumerate() {
+        let mut entity =
+            world.spawn(scene_entity(FIRST_FILE_ENTITY + index, entity_def.display_name(), entity_def.key));
+        kinds.spawn(entity_def, built, &mut entity);
+    }
+    world.insert_resource(Background(def.background.0));
 }
 
 /// Writes `scene` to `path`. An existing file there is first copied to the first free
 /// `<path>.<n>.bak`, whose path is returned: nothing the user wrote is lost, comments included.
-pub fn save_scene(scene: &SceneDef, path: &Path) -> std::io::Result<Option<PathBuf>> {
-    let text = scene.to_yaml().map_err(std::io::Error::other)?;
+pub fn save_scene(kinds: &KindRegistry, scene: &schema::SceneDef, path: &Path) -> std::io::Result<Option<PathBuf>> {
+    let text = kinds.to_yaml(scene).map_err(std::io::Error::other)?;
     let backup = if path.exists() {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let backup = (1..)
-            .map(|n| path.with_file_name(format!("{name}.{n}.bak")))
-            .find(|candidate| !candidate.exists())
-            .expect("an unbounded range always yields a free name");
+        let backup = first_free_path(|n| path.with_file_name(format!("{name}.{n}.bak")));
         std::fs::copy(path, &backup)?;
         Some(backup)
     } else {
@@ -232,46 +248,24 @@ pub fn save_scene(scene: &SceneDef, path: &Path) -> std::io::Result<Option<PathB
     Ok(backup)
 }
 
-/// Saves the playing scene to its file (see [`save_scene`]), with its trees as edited in the
-/// window. Returns the file and the backup of its previous contents.
+/// Saves the playing scene to its file (see [`save_scene`]), with what the user changed in
+/// its entities (the trees as edited in the window). Returns the file and the backup of its
+/// previous contents.
 pub fn save_live_scene(world: &mut World) -> Result<(PathBuf, Option<PathBuf>), String> {
     let active = world.resource::<ActiveScene>();
     let path = active.path.clone();
     let handle = active.handle.clone();
-    let mut def = world.resource::<Assets<SceneAsset>>().get(&handle).ok_or("no scene is loaded")?.0.clone();
-    let mut trees = world.query::<(&SceneEntity, &TreeSource)>();
-    for (scene_entity, source) in trees.iter(world) {
-        let entity = scene_entity.index.checked_sub(FIRST_FILE_ENTITY).and_then(|index| def.entities.get_mut(index));
-        if let Some(entity) = entity
-            && matches!(entity.kind, EntityKind::Tree(_))
+    let kinds = world.resource::<SceneKinds>().0.clone();
+    let mut def = world.resource::<Assets<SceneAsset>>().get(&handle).ok_or("no scene is loaded")?.0.def.clone();
+    let mut entities = world.query::<(EntityRef, &SceneEntity)>();
+    for (entity, scene_entity) in entities.iter(world) {
+        let index = scene_entity.index.checked_sub(FIRST_FILE_ENTITY);
+        if let Some(entity_def) = index.and_then(|index| def.entities.get_mut(index))
+            && entity_def.key == scene_entity.kind
         {
-            entity.kind = EntityKind::Tree(source.def.clone());
+            kinds.save_live(entity_def, entity);
         }
     }
-    let backup = save_scene(&def, &path).map_err(|error| format!("{}: {error}", path.display()))?;
+    let backup = save_scene(&kinds, &def, &path).map_err(|error| format!("{}: {error}", path.display()))?;
     Ok((path, backup))
-}
-
-/// The [`SceneEntity::index`] of the file's first entity: the camera, the light and the render
-/// settings come before it.
-pub const FIRST_FILE_ENTITY: usize = 3;
-
-/// Spawns the camera, the light, the render settings and every entity of `def`.
-pub fn spawn_scene(commands: &mut Commands, def: &SceneDef, meshes: &PrimitiveMeshes) {
-    let scene_entity = |index: usize, name: &str, kind: &'static str| {
-        (SceneEntity { index, name: name.to_string(), kind }, Name::new(name.to_string()))
-    };
-    commands.spawn((scene_entity(0, "camera", "camera"), CameraParams::from(&def.camera)));
-    commands.spawn((scene_entity(1, "light", "light"), LightParams::from(&def.light)));
-    commands.spawn((scene_entity(2, "render", "render"), RenderParams::from(&def.render)));
-    for (index, entity_def) in def.entities.iter().enumerate() {
-        let mut entity =
-            commands.spawn(scene_entity(FIRST_FILE_ENTITY + index, entity_def.display_name(), entity_def.kind.key()));
-        match &entity_def.kind {
-            EntityKind::Shape(shape) => spawn_shape(&mut entity, shape, meshes),
-            EntityKind::Muscle(muscle) => spawn_muscle(&mut entity, muscle, meshes),
-            EntityKind::Tree(tree) => spawn_tree(&mut entity, tree),
-            EntityKind::Sloth(sloth) => spawn_sloth(&mut entity, sloth),
-        }
-    }
 }

@@ -19,11 +19,20 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::locomotion::{END_MARGIN, Foot, GRIP_TOLERANCE, MIN_STEP, RETRY_STEP, Sloth, Step};
+use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step};
 use super::rig::{BodyFrame, Limb};
 use super::supports::{SupportPath, Supports};
 use crate::tree::SupportKind;
 use bevy::math::{Quat, Vec3};
+
+/// Shortest step, metres: a search that can only find shorter ones fails.
+pub const MIN_STEP: f32 = 0.02;
+
+/// How much closer each retry of the foothold search tries, metres.
+pub const RETRY_STEP: f32 = 0.01;
+
+/// How far the feet keep from a support's ends, metres.
+pub const END_MARGIN: f32 = 0.06;
 
 /// How far behind the leading foot on its side a trailing foot stays, metres.
 const ORDER_GAP: f32 = 0.05;
@@ -31,6 +40,15 @@ const ORDER_GAP: f32 = 0.05;
 /// How far, in strides, a leading foot may land ahead of its pair: enough for the usual
 /// half-stride stagger, little enough that the pair can always overtake it again.
 const MAX_LEAD: f32 = 0.75;
+
+/// The leg order: a leading foot (a forefoot walking forward, a hind foot walking back) never
+/// lands behind its pair, and a trailing foot stays [`ORDER_GAP`] behind the leading foot on
+/// its side, so hind feet never pass fore feet. `pair_lead` is how far the step lies ahead of
+/// the pair's foot, `side_lead` ahead of the foot on the same side, both in metres along the
+/// motion. While changing branch a leading foot may land beside its pair.
+fn keeps_leg_order(leading: bool, changing: bool, pair_lead: f32, side_lead: f32) -> bool {
+    if leading { changing || pair_lead >= 0.0 } else { side_lead <= -ORDER_GAP }
+}
 
 /// Below this cosine between a branch and the body, the branch runs across the body.
 const ACROSS: f32 = 0.3;
@@ -145,12 +163,9 @@ impl Sloth {
             return false;
         }
         let leading = limb.is_fore() == (motion.dot(self.frame.forward) > 0.0);
-        let ordered = if leading {
-            changing || ahead(step, &self.feet[limb.pair().index()], along, motion) >= 0.0
-        } else {
-            ahead(step, &self.feet[limb.same_side().index()], along, motion) <= -ORDER_GAP
-        };
-        if !ordered {
+        let pair_lead = ahead(step, &self.feet[limb.pair().index()], along, motion);
+        let side_lead = ahead(step, &self.feet[limb.same_side().index()], along, motion);
+        if !keeps_leg_order(leading, changing, pair_lead, side_lead) {
             return false;
         }
         // With the body where the feet will put it at touch-down, every foot must still reach
@@ -272,4 +287,23 @@ impl Sloth {
 /// are on the same one (round bends count in full), else along `motion`.
 fn ahead(step: &Step, foot: &Foot, along: f32, motion: Vec3) -> f32 {
     if step.support == foot.support { (step.s - foot.s) * along } else { (step.grip - foot.grip).dot(motion) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_leading_foot_never_lands_behind_its_pair_unless_changing_branch() {
+        assert!(keeps_leg_order(true, false, 0.0, 0.3));
+        assert!(!keeps_leg_order(true, false, -0.01, 0.3));
+        assert!(keeps_leg_order(true, true, -0.01, 0.3));
+    }
+
+    #[test]
+    fn a_trailing_foot_stays_the_gap_behind_the_leading_foot_on_its_side() {
+        assert!(keeps_leg_order(false, false, 1.0, -ORDER_GAP));
+        assert!(!keeps_leg_order(false, false, 1.0, -ORDER_GAP + 0.001));
+        assert!(!keeps_leg_order(false, true, -1.0, 0.0));
+    }
 }

@@ -105,15 +105,6 @@ pub enum PlaceError {
 /// holding on: the foothold search only accepts grips the limb reaches this closely.
 pub const GRIP_TOLERANCE: f32 = 0.004;
 
-/// Shortest step, metres: a search that can only find shorter ones fails.
-pub const MIN_STEP: f32 = 0.02;
-
-/// How much closer each retry of the foothold search tries, metres.
-pub const RETRY_STEP: f32 = 0.01;
-
-/// How far the feet keep from a support's ends, metres.
-pub const END_MARGIN: f32 = 0.06;
-
 /// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
 /// is about to lift.
 const PLACED_PHASE: f32 = 1.0 - 1e-4;

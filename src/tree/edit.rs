@@ -3,7 +3,7 @@
 //! edit that would break it is refused with the reason and changes nothing.
 
 use super::{SupportDef, TreeDef};
-use crate::scene::values::{Degrees, Length, Radius, UnitInterval};
+use crate::foundation::values::{Degrees, Length, Radius, UnitInterval};
 
 /// A number of a fork that the editor changes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

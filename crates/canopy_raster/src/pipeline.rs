@@ -1,8 +1,8 @@
 //! The frame pipeline: a parallel vertex stage, then (when shadows are on) the shadow map's
-//! depth pass (module `depth`), then the image: its triangles sorted into bands of tile rows
-//! (module `sort`), then the bands drawn in parallel (module `tile`) and, with shadows,
+//! depth pass (module `shadow_pass`), then the image: its triangles sorted into bands of tile rows
+//! (module `sort`), then the bands drawn in parallel (module `color_pass`) and, with shadows,
 //! darkened where the light does not reach. The bands and the map's strips are handed to the
-//! threads those that took longest in the last frame first (module `schedule`).
+//! threads those that took longest in the last frame first (module `work_queue`).
 //!
 //! A band takes the triangles reaching it in draw order, clips those crossing the near plane
 //! or the guard band, sets each up (module `setup`: culling, pixel bounds, edge functions and
@@ -11,194 +11,19 @@
 //! two bands is set up in each. Every buffer lives in the [`Renderer`] and is reused, so a
 //! frame of steady size allocates nothing of its own.
 
-use crate::camera::{Camera, Light};
-use crate::clip::{ClipLanes, ClipVertex, clip_triangle, outside};
-use crate::depth::{DepthPass, DepthScene, STRIP_ROWS};
+use crate::color_pass::{self, BandCounts, BandScratch, BandShadow, TileContext};
+use crate::frame::{Frame, RenderStats, Span, View, scene_bounds};
 use crate::framebuffer::Framebuffer;
-use crate::mesh::MeshData;
-use crate::schedule::Schedule;
+use crate::screen::{MAX_TARGET_SIZE, ScreenVertex, TILE_HEIGHT};
 use crate::setup::Viewport;
-use crate::shade::{Material, Shading, VARYINGS, Varyings, floor_lanes, slot};
+use crate::shade::{Shading, VARYINGS, Varyings};
 use crate::shadow::{PixelsInMap, ShadowMap, fit_light};
+use crate::shadow_pass::{DepthPass, DepthScene, STRIP_ROWS};
 use crate::sort::Sorted;
-use crate::tile::{self, BandCounts, BandScratch, BandShadow, TileContext};
-use bevy_math::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use crate::vertex::{CHUNKS_PER_THREAD, VertexOutputs, VertexStage};
+use crate::work_queue::Schedule;
+use bevy_math::{Mat3, Mat4, Vec3};
 use bevy_tasks::TaskPool;
-use std::ops::Range;
-use std::sync::Arc;
-
-/// Tile width in pixels.
-pub const TILE_WIDTH: u32 = 64;
-
-/// Tile height in pixels; a row of tiles is one unit of parallel work.
-pub const TILE_HEIGHT: u32 = 64;
-
-/// Sub-pixel positions per pixel along each axis (8 bits of sub-pixel precision).
-pub const SUBPIXEL_STEPS: i64 = 256;
-
-/// The largest framebuffer or shadow-map side, in pixels, for which the fixed-point edge
-/// functions are exact.
-pub const MAX_TARGET_SIZE: u32 = 4096;
-
-/// Contiguous runs of vertices transformed in parallel, per worker thread.
-const CHUNKS_PER_THREAD: usize = 4;
-
-/// One mesh placed in the world.
-#[derive(Debug, Clone)]
-pub struct Instance {
-    /// The geometry, shared between instances.
-    pub mesh: Arc<MeshData>,
-    /// Model-to-world matrix.
-    pub model: Mat4,
-    /// The surface it is drawn with.
-    pub material: Material,
-}
-
-/// Switches that change how a frame is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RenderSettings {
-    /// The lighting computation.
-    pub shading: Shading,
-    /// Whether the directional light casts shadows.
-    pub shadows: bool,
-    /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
-    pub pcf: bool,
-    /// Shadow map side in texels: a multiple of [`TILE_HEIGHT`], at most [`MAX_TARGET_SIZE`].
-    pub shadow_map_size: u32,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self { shading: Shading::Gouraud, shadows: false, pcf: true, shadow_map_size: 1024 }
-    }
-}
-
-/// Everything one frame is drawn from.
-#[derive(Debug, Clone, Copy)]
-pub struct Frame<'a> {
-    /// The viewpoint.
-    pub camera: Camera,
-    /// The directional light.
-    pub light: Light,
-    /// Colour of pixels no triangle covers, as RGBA8.
-    pub background: [u8; 4],
-    /// What to draw, in order (earlier instances win depth ties).
-    pub instances: &'a [Instance],
-    /// Shading mode and shadows.
-    pub settings: RenderSettings,
-}
-
-/// Counts from one frame, for the UI and for tests.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct RenderStats {
-    /// Triangles handed to the pipeline.
-    pub triangles_submitted: usize,
-    /// Triangles (after clipping) that survived culling and were drawn.
-    pub triangles_rasterized: usize,
-    /// Pixels covered by some rasterized triangle, counted once per triangle covering them
-    /// (before the depth test).
-    pub fragments: u64,
-    /// Triangle-tile pairs skipped because the tile was already nearer everywhere.
-    pub occluded: u64,
-    /// Triangles (after clipping) drawn into the shadow map.
-    pub shadow_triangles: usize,
-}
-
-/// A vertex projected to the screen: which planes it is outside of and (when it needs no
-/// clipping) its fixed-point screen position, depth and `1/w`. The rare triangle that needs
-/// clipping computes its clip positions again from the world positions.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct ScreenVertex {
-    /// [`outside`] bits.
-    pub code: u8,
-    /// Screen x in sub-pixel units.
-    pub x: i32,
-    /// Screen y (downwards) in sub-pixel units.
-    pub y: i32,
-    /// Normalized device depth.
-    pub z: f32,
-    /// `1/w`.
-    pub inv_w: f32,
-}
-
-impl ScreenVertex {
-    /// Projects four clip-space positions onto a `width` x `height` target.
-    #[inline(always)]
-    fn lanes(clip: &ClipLanes, width: u32, height: u32) -> [Self; 4] {
-        let codes = clip.outcodes();
-        let projected = Self::project(clip, width, height);
-        std::array::from_fn(|k| {
-            let code = codes[k];
-            let kept = if code & outside::CLIPPED == 0 { projected[k] } else { Self::default() };
-            Self { code, ..kept }
-        })
-    }
-
-    /// Projects a clip-space position known to be inside the near plane and the guard band
-    /// (up to rounding).
-    fn projected(clip: Vec4, width: u32, height: u32) -> Self {
-        Self::project(&ClipLanes::splat(clip), width, height)[0]
-    }
-
-    /// Projects four clip-space positions, each inside the near plane and the guard band up
-    /// to rounding.
-    #[inline(always)]
-    fn project(clip: &ClipLanes, width: u32, height: u32) -> [Self; 4] {
-        let inv_w = Vec4::ONE / clip.w;
-        let steps = SUBPIXEL_STEPS as f32;
-        // The limits only guard against rounding past the guard band after clipping; `max`
-        // comes first so that a position without a direction (on the eye point) lands on one.
-        let limit = Vec4::splat(3.0 * MAX_TARGET_SIZE as f32 * steps);
-        let fixed = |v: Vec4| floor_lanes(v.max(-limit).min(limit) + 0.5).to_array();
-        let x = fixed((clip.x * inv_w + 1.0) * 0.5 * width as f32 * steps);
-        let y = fixed((1.0 - clip.y * inv_w) * 0.5 * height as f32 * steps);
-        let (z, inv_w) = ((clip.z * inv_w).max(Vec4::ZERO).to_array(), inv_w.to_array());
-        std::array::from_fn(|k| Self { code: 0, x: x[k], y: y[k], z: z[k], inv_w: inv_w[k] })
-    }
-}
-
-/// Where an instance's vertices and triangles start in the frame's global numbering, and its
-/// transforms.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Span {
-    pub first_vertex: usize,
-    pub first_triangle: usize,
-    model: Mat4,
-    normal_matrix: Mat3,
-}
-
-/// A view triangles are drawn in: its projection, its projected vertices and its viewport.
-#[derive(Clone, Copy)]
-pub(crate) struct View<'a> {
-    pub clip_from_world: Mat4,
-    pub vertices: &'a [ScreenVertex],
-    pub viewport: Viewport,
-}
-
-impl View<'_> {
-    /// Clips the triangle of global vertices `indices` against the near plane and the guard
-    /// band, and hands each triangle of the clipped polygon's fan, projected, to `draw` with
-    /// its varyings.
-    pub(crate) fn clip<'v>(
-        &self,
-        world: &[Vec3],
-        indices: [usize; 3],
-        varyings: impl Fn(usize) -> &'v Varyings,
-        mut draw: impl FnMut([&ScreenVertex; 3], [&Varyings; 3]),
-    ) {
-        let clip = clip_triangle(&std::array::from_fn(|k| ClipVertex {
-            position: self.clip_from_world * world[indices[k]].extend(1.0),
-            varyings: *varyings(indices[k]),
-        }));
-        let polygon = clip.vertices();
-        let (width, height) = (self.viewport.width, self.viewport.height);
-        for i in 1..polygon.len().saturating_sub(1) {
-            let fan = [polygon[0], polygon[i], polygon[i + 1]];
-            let vertices = fan.map(|v| ScreenVertex::projected(v.position, width, height));
-            draw(vertices.each_ref(), fan.each_ref().map(|v| &v.varyings));
-        }
-    }
-}
 
 /// The CPU rasterizer. Keeps its working buffers between frames so that drawing a scene of
 /// steady size does not allocate.
@@ -292,7 +117,7 @@ impl Renderer {
         };
         self.bands.resize_with(height.div_ceil(TILE_HEIGHT) as usize, BandScratch::default);
         let bands = target.bands_mut(TILE_HEIGHT).zip(&mut self.bands);
-        let draw = |row: usize, (band, scratch)| tile::draw_band(&context, row as u32, band, scratch);
+        let draw = |row: usize, (band, scratch)| color_pass::draw_band(&context, row as u32, band, scratch);
         let counts = self.band_schedule.run(pool, bands, draw, BandCounts::add);
         RenderStats {
             fragments: counts.fragments,
@@ -358,239 +183,13 @@ impl Renderer {
     }
 }
 
-/// What the vertex stage reads: the frame, where each instance's vertices start and the
-/// projections they go through.
-struct VertexStage<'a> {
-    frame: &'a Frame<'a>,
-    spans: &'a [Span],
-    view_projection: Mat4,
-    width: u32,
-    height: u32,
-    /// The shadow map's projection and side in texels, when shadows are drawn.
-    light: Option<(Mat4, u32)>,
-    /// Whether the vertex colours are lit (Gouraud shading).
-    lit: bool,
-}
-
-/// One run of the vertex stage's outputs, from the same first vertex on.
-struct VertexOutputs<'a> {
-    world: &'a mut [Vec3],
-    screen: &'a mut [ScreenVertex],
-    varyings: &'a mut [Varyings],
-    /// Empty when shadows are off.
-    light: &'a mut [ScreenVertex],
-}
-
-impl VertexStage<'_> {
-    /// Transforms, lights and projects the run of vertices from global index `first` on,
-    /// instance by instance.
-    fn run(&self, first: usize, out: VertexOutputs) {
-        let mut span_index = self.spans.partition_point(|s| s.first_vertex <= first).saturating_sub(1);
-        let mut done = 0;
-        while done < out.world.len() {
-            let span = &self.spans[span_index];
-            let instance = &self.frame.instances[span_index];
-            let local = first + done - span.first_vertex;
-            let count = (instance.mesh.positions.len() - local).min(out.world.len() - done);
-            let outputs = VertexOutputs {
-                world: &mut out.world[done..done + count],
-                screen: &mut out.screen[done..done + count],
-                varyings: &mut out.varyings[done..done + count],
-                light: if out.light.is_empty() { &mut [] } else { &mut out.light[done..done + count] },
-            };
-            self.instance_run(span, instance, local, outputs);
-            done += count;
-            span_index += 1;
-        }
-    }
-
-    /// The vertices of one instance from its vertex `local` on, as many as `out` holds, four
-    /// at a time.
-    fn instance_run(&self, span: &Span, instance: &Instance, local: usize, out: VertexOutputs) {
-        let mesh = &instance.mesh;
-        let count = out.world.len();
-        let normal_matrix = Mat4::from_mat3(span.normal_matrix);
-        let (positions, normals) = (&mesh.positions[local..local + count], &mesh.normals[local..local + count]);
-        for group in (0..count).step_by(VERTEX_LANES) {
-            let lanes = group..(group + VERTEX_LANES).min(count);
-            let position = gather(&positions[lanes.clone()]);
-            let world = ClipLanes::transform(span.model, position);
-            // Projected from the world positions, exactly as clipping projects them again.
-            let world = [world.x, world.y, world.z];
-            let screen =
-                ScreenVertex::lanes(&ClipLanes::transform(self.view_projection, world), self.width, self.height);
-            let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
-            let diffuse = self.frame.light.diffuse_lanes(normal);
-            let light = self
-                .light
-                .map(|(light_clip, size)| ScreenVertex::lanes(&ClipLanes::transform(light_clip, world), size, size));
-            let (world, normal, diffuse) = (columns(world), columns(normal), diffuse.to_array());
-            for (k, i) in lanes.enumerate() {
-                out.world[i] = Vec3::from_array(world[k]);
-                out.screen[i] = screen[k];
-                let normal = Vec3::from_array(normal[k]);
-                out.varyings[i] = vertex_varyings(instance, local + i, normal, diffuse[k], &self.frame.light, self.lit);
-                if let Some(vertices) = &light {
-                    out.light[i] = vertices[k];
-                }
-            }
-        }
-    }
-}
-
-/// Vertices the vertex stage works on at once.
-const VERTEX_LANES: usize = 4;
-
-/// Up to [`VERTEX_LANES`] points as lanes of their coordinates; lanes past the points repeat
-/// the last one.
-#[inline(always)]
-fn gather(points: &[Vec3]) -> [Vec4; 3] {
-    let at = |k: usize| points[k.min(points.len() - 1)];
-    let [a, b, c, d] = [at(0), at(1), at(2), at(3)];
-    [Vec4::new(a.x, b.x, c.x, d.x), Vec4::new(a.y, b.y, c.y, d.y), Vec4::new(a.z, b.z, c.z, d.z)]
-}
-
-/// Lanes back to the [`VERTEX_LANES`] vectors they hold: entry `k` has lane `k` of each
-/// component.
-#[inline(always)]
-fn columns<const N: usize>(components: [Vec4; N]) -> [[f32; N]; VERTEX_LANES] {
-    let components = components.map(|c| c.to_array());
-    std::array::from_fn(|k| components.map(|c| c[k]))
-}
-
-/// Each lane's vector scaled to unit length, or zero where that is not possible.
-#[inline(always)]
-fn normalize_or_zero(v: ClipLanes) -> [Vec4; 3] {
-    let scale = Vec4::ONE / (v.x * v.x + v.y * v.y + v.z * v.z).sqrt();
-    let valid = scale.is_finite_mask() & scale.cmpgt(Vec4::ZERO);
-    [v.x, v.y, v.z].map(|c| Vec4::select(valid, c * scale, Vec4::ZERO))
-}
-
-/// The varyings of one vertex.
-///
-/// When `lit` the colour is lit as if the light reached the vertex (Gouraud: nothing is left
-/// to light per pixel but shadows).
-#[inline(always)]
-fn vertex_varyings(
-    instance: &Instance,
-    local: usize,
-    normal: Vec3,
-    diffuse: f32,
-    light: &Light,
-    lit: bool,
-) -> Varyings {
-    let material = &instance.material;
-    let mesh = &instance.mesh;
-    let mut color = material.color * mesh.colors.get(local).copied().unwrap_or(Vec3::ONE);
-    if lit {
-        color *= light.combine(diffuse, 1.0);
-    }
-    let uv = mesh.uvs.get(local).copied().unwrap_or(Vec2::ZERO) * material.uv_scale;
-    let mut varyings = [0.0; VARYINGS];
-    varyings[slot::COLOR..slot::COLOR + 3].copy_from_slice(&color.to_array());
-    varyings[slot::DIFFUSE] = diffuse;
-    varyings[slot::NORMAL..slot::NORMAL + 3].copy_from_slice(&normal.to_array());
-    varyings[slot::UV..slot::UV + 2].copy_from_slice(&uv.to_array());
-    varyings
-}
-
-/// The diffuse term of a triangle's geometric normal, for flat shading.
-pub(crate) fn flat_diffuse(corners: [Vec3; 3], light: &Light) -> f32 {
-    let [a, b, c] = corners;
-    light.diffuse_term((b - a).cross(c - a).normalize_or_zero())
-}
-
-/// World bounds of everything drawn, from each instance's transformed model bounds.
-fn scene_bounds(instances: &[Instance]) -> Option<(Vec3, Vec3)> {
-    instances
-        .iter()
-        .filter_map(|instance| {
-            let (min, max) = instance.mesh.bounds()?;
-            let centre = instance.model.transform_point3((min + max) * 0.5);
-            let half = (max - min) * 0.5;
-            let m = Mat3::from_mat4(instance.model);
-            // The transformed box's half extent along each world axis.
-            let extent = Vec3::new(m.row(0).abs().dot(half), m.row(1).abs().dot(half), m.row(2).abs().dot(half));
-            Some((centre - extent, centre + extent))
-        })
-        .reduce(|(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)))
-}
-
-/// The triangles of all `instances`, whose spans are `spans`.
-pub(crate) fn triangle_count(spans: &[Span], instances: &[Instance]) -> usize {
-    spans.last().zip(instances.last()).map_or(0, |(s, i)| s.first_triangle + i.mesh.triangle_count())
-}
-
-/// Splits `0..total` into at most `parts` contiguous, nearly equal runs.
-pub(crate) fn runs(total: usize, parts: usize) -> impl Iterator<Item = Range<usize>> {
-    let size = total.div_ceil(parts.max(1)).max(1);
-    (0..total).step_by(size).map(move |start| start..(start + size).min(total))
-}
-
-/// The instances the global triangles `range` belong to, each with the part of `range` among
-/// its triangles, in order.
-pub(crate) fn instance_runs<'a>(
-    spans: &'a [Span],
-    instances: &'a [Instance],
-    range: Range<usize>,
-) -> impl Iterator<Item = InstanceRun<'a>> {
-    let first = spans.partition_point(|s| s.first_triangle <= range.start).saturating_sub(1);
-    spans.iter().zip(instances).skip(first).map_while(move |(span, instance)| {
-        let start = range.start.max(span.first_triangle);
-        let end = range.end.min(span.first_triangle + instance.mesh.triangle_count());
-        (start < range.end).then(|| InstanceRun {
-            span,
-            instance,
-            triangles: start - span.first_triangle..end - span.first_triangle,
-        })
-    })
-}
-
-/// Some of the triangles of one instance.
-pub(crate) struct InstanceRun<'a> {
-    pub span: &'a Span,
-    pub instance: &'a Instance,
-    /// Which of its triangles.
-    pub triangles: Range<usize>,
-}
-
-/// Inclusive pixel bounds of a triangle, within its target.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct PixelBounds {
-    pub min_x: u32,
-    pub max_x: u32,
-    pub min_y: u32,
-    pub max_y: u32,
-}
-
-/// Twice the signed area of the triangle `a b p` in sub-pixel units squared; positive when `p`
-/// lies to the right of `a -> b` on a y-down screen.
-#[inline(always)]
-pub(crate) fn edge(a: (i64, i64), b: (i64, i64), p: (i64, i64)) -> i64 {
-    (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
-}
-
-/// The least and the greatest of three coordinates.
-#[inline(always)]
-pub(crate) fn range_of([a, b, c]: [i64; 3]) -> (i64, i64) {
-    (a.min(b).min(c), a.max(b).max(c))
-}
-
-/// The first and last of `size` pixel columns (or rows) whose centres lie between `least` and
-/// `greatest` (sub-pixel units); `None` when there is none.
-#[inline(always)]
-pub(crate) fn pixel_span((least, greatest): (i64, i64), size: u32) -> Option<(u32, u32)> {
-    // Pixel p is sampled at its centre, p + 1/2.
-    let half = SUBPIXEL_STEPS / 2;
-    let first = (least - half + SUBPIXEL_STEPS - 1).div_euclid(SUBPIXEL_STEPS).max(0);
-    let last = (greatest - half).div_euclid(SUBPIXEL_STEPS).min(i64::from(size) - 1);
-    (first <= last).then_some((first as u32, last as u32))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clip::outside;
+    use crate::{Camera, Instance, Light, Material, MeshData, RenderSettings};
     use std::f32::consts::FRAC_PI_2;
+    use std::sync::Arc;
 
     const SKY: [u8; 4] = [10, 20, 30, 255];
 
@@ -821,8 +420,8 @@ mod tests {
 
     #[test]
     fn one_sorting_pass_for_the_image_and_the_shadow_map_sorts_each_as_alone() {
+        use crate::benchmark_scene as standard;
         use crate::sort::Corners;
-        use crate::standard;
         let pool = TaskPool::new();
         let instances = [standard::instance()];
         let settings = RenderSettings { shadows: true, ..RenderSettings::default() };

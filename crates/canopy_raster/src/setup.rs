@@ -14,14 +14,11 @@
 //! plane of `1/w`. A triangle whose `w` varies too little for that to move any value beyond its
 //! tolerance (a sixteenth of what a pixel shows of it) is interpolated in screen space.
 
-use crate::pipeline::{MAX_TARGET_SIZE, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, edge, pixel_span, range_of};
+use crate::lanes::{LANE_OFFSETS, LANES, MASK_PIXELS};
+use crate::screen::{MAX_TARGET_SIZE, PixelBounds, SUBPIXEL_STEPS, ScreenVertex, edge, pixel_span, range_of};
 use crate::shade::{CompiledPass, Pass, VARYINGS, Varyings};
-use crate::tile::MASK_PIXELS;
 use bevy_math::Vec4;
 use std::ops::{Add, Mul, Sub};
-
-/// Values interpolated together, one per SIMD lane; also the pixels of a run.
-pub(crate) const LANES: usize = 4;
 
 /// Four-value packs of interpolated values: the [`Varyings`] four to a pack, then depth and
 /// `1/w` (sharing the last pack of varyings when it has room).
@@ -41,9 +38,6 @@ fn pack_of(varyings: &Varyings, pack: usize) -> Vec4 {
         None => Vec4::from_array(std::array::from_fn(|lane| varyings.get(first + lane).copied().unwrap_or(0.0))),
     }
 }
-
-/// Each lane's offset from a run's first pixel.
-pub(crate) const LANE_OFFSETS: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
 
 /// A target triangles are set up for.
 #[derive(Debug, Clone, Copy)]

@@ -6,12 +6,14 @@
 //! pixel loops are compiled for each combination.
 
 use crate::texture::{Sampler, Texture};
-use bevy_math::{Vec2, Vec3, Vec4};
+use bevy_math::{Vec2, Vec3};
 use std::sync::Arc;
-use wide::{f32x4, i32x4, u32x4};
 
-/// How light is computed across a triangle; the sources compare all three.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+/// How light is computed across a triangle; the sources compare all three. Scene files name
+/// the modes `flat`, `gouraud` and `phong`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+#[cfg_attr(feature = "reflect", derive(bevy_reflect::Reflect))]
 pub enum Shading {
     /// One intensity per triangle, from its geometric normal.
     Flat,
@@ -25,6 +27,21 @@ pub enum Shading {
 impl Shading {
     /// Every mode, in the order the sources present them.
     pub const ALL: [Shading; 3] = [Shading::Flat, Shading::Gouraud, Shading::Phong];
+
+    /// The mode's name in scene files and dumps.
+    pub fn key(self) -> &'static str {
+        match self {
+            Shading::Flat => "flat",
+            Shading::Gouraud => "gouraud",
+            Shading::Phong => "phong",
+        }
+    }
+
+    /// The mode after this one in [`Self::ALL`], the last followed by the first.
+    pub fn next(self) -> Self {
+        let index = Self::ALL.iter().position(|&mode| mode == self).unwrap_or(0);
+        Self::ALL[(index + 1) % Self::ALL.len()]
+    }
 }
 
 /// The surface an instance is drawn with.
@@ -150,49 +167,9 @@ macro_rules! with_compiled_pass {
 }
 pub(crate) use with_compiled_pass;
 
-/// The four lanes of a [`Vec4`] as a [`f32x4`], for the mask operations glam lacks.
-#[inline(always)]
-pub(crate) fn lanes_of(v: Vec4) -> f32x4 {
-    f32x4::new(v.to_array())
-}
-
-/// Each lane of `v` as a float.
-#[inline(always)]
-pub(crate) fn floats_of(v: i32x4) -> Vec4 {
-    Vec4::from_array(v.round_float().to_array())
-}
-
-/// What one step of an eight-bit channel is worth in `[0, 1]`.
-pub(crate) const BYTE_TO_UNIT: f32 = 1.0 / 255.0;
-
-/// The byte `shift` bits up in each of `words` (0 to 255), as floats: a channel of RGBA8 words.
-#[inline(always)]
-pub(crate) fn bytes_of(words: u32x4, shift: u32) -> Vec4 {
-    floats_of(bytemuck::cast((words >> shift) & u32x4::splat(0xff)))
-}
-
-/// The largest whole number not above each lane of `v`, for values well within `i32` (the
-/// baseline x86-64 target has no rounding instruction).
-#[inline(always)]
-pub(crate) fn floor_lanes(v: Vec4) -> i32x4 {
-    let v = lanes_of(v);
-    let truncated = v.fast_trunc_int();
-    // Truncation moves negative fractions up; the lanes it moved step back down (a true
-    // comparison is all ones, minus one as an integer).
-    let moved_up: i32x4 = bytemuck::cast(v.simd_lt(truncated.round_float()));
-    truncated + moved_up
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn lanes_floor_like_whole_numbers() {
-        let floor = |v: Vec4| floor_lanes(v).to_array();
-        assert_eq!(floor(Vec4::new(-1.5, -1.0, 0.25, 2.0)), [-2, -1, 0, 2]);
-        assert_eq!(floor(Vec4::new(-0.0, -0.75, 1e6 + 0.5, -1e6 - 0.5)), [0, -1, 1_000_000, -1_000_001]);
-    }
 
     #[test]
     fn passes_interpolate_only_what_they_use() {

@@ -10,8 +10,7 @@
 //! nearest surface is known.
 
 use crate::camera::{Camera, Light};
-use crate::depth::WINDOW;
-use crate::shade::{floats_of, lanes_of};
+use crate::lanes::{floats_of, lanes_of};
 use bevy_math::{DMat4, DVec4, Mat4, Vec3, Vec4};
 use wide::{f32x4, f32x8, i16x8, i32x4, i32x8};
 
@@ -53,6 +52,9 @@ pub struct ShadowMap {
 
 /// Border texels before each row and above the first row.
 const BORDER_BEFORE: usize = 1;
+
+/// Texels of a row one step of the depth pass covers.
+pub(crate) const WINDOW: usize = 8;
 
 /// Border texels after each row (and below the map): a filtered lookup reads up to two past
 /// the last texel, and the depth pass reads and writes back windows of [`WINDOW`] texels from

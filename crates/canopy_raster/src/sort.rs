@@ -9,7 +9,8 @@
 //! strip sets its triangles up right before drawing them, while they are in the core's cache.
 
 use crate::clip::outside;
-use crate::pipeline::{Instance, Span, View, instance_runs, pixel_span, range_of, runs, triangle_count};
+use crate::frame::{Instance, Span, View, instance_runs, runs, triangle_count};
+use crate::screen::{pixel_span, range_of};
 use bevy_tasks::TaskPool;
 use std::ops::Range;
 

@@ -4,7 +4,8 @@
 //! bottom-right; texel `(i, j)` covers `[i, i + 1] x [j, j + 1]` in texel units, so its centre is
 //! at `((i + 1/2) / width, (j + 1/2) / height)`.
 
-use crate::shade::{BYTE_TO_UNIT, bytes_of, floats_of, floor_lanes};
+use crate::lanes::{BYTE_TO_UNIT, bytes_of, floats_of, floor_lanes};
+
 use bevy_math::{Vec2, Vec3, Vec4};
 use wide::{i32x4, u32x4};
 

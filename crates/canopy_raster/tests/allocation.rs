@@ -2,7 +2,7 @@
 //! run its tasks is all there is, the same for a small and a large scene.
 
 use bevy_tasks::TaskPoolBuilder;
-use canopy_raster::standard::{self, CAMERAS};
+use canopy_raster::benchmark_scene::{self as standard, CAMERAS};
 use canopy_raster::{Framebuffer, Instance, RenderSettings, Renderer};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -7,7 +7,7 @@
 
 use bevy_math::{Mat4, Vec2, Vec3};
 use bevy_tasks::TaskPool;
-use canopy_raster::standard;
+use canopy_raster::benchmark_scene as standard;
 use canopy_raster::{
     Address, Camera, Filter, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
     Renderer, Sampler, Shading, Texture,

@@ -36,7 +36,7 @@ mod gl_peer;
 mod peer_scene;
 
 use bevy_tasks::{TaskPool, TaskPoolBuilder};
-use canopy_raster::standard::{self, CAMERAS, HEIGHT, WIDTH};
+use canopy_raster::benchmark_scene::{self as standard, CAMERAS, HEIGHT, WIDTH};
 use canopy_raster::{Framebuffer, RenderSettings, Renderer};
 use euc_peer::EucPeer;
 use gl_peer::GlPeer;

@@ -1,5 +1,7 @@
 //! Checked value types for scene files: each refuses what makes no sense where it is used and
-//! says what was expected, so that `serde_yaml` reports the error at the offending value.
+//! says what was expected, so that `serde_yaml` reports the error at the offending value. And
+//! the few conversions every domain shares: degrees wrapped into one turn, colours as the
+//! rasterizer takes them, the first free numbered file name.
 
 use bevy::color::Srgba;
 use bevy::math::Vec3;
@@ -52,7 +54,7 @@ macro_rules! checked_number {
                             Err(E::custom(format_args!(
                                 "expected {}, found {}",
                                 $expected,
-                                $crate::scene::values::shown($v)
+                                $crate::foundation::values::shown($v)
                             )))
                         }
                     }
@@ -119,11 +121,73 @@ checked_number!(
 );
 
 /// Whether `path` is relative and stays inside the folder it is relative to (no `..`, no root).
-pub fn inside_folder(path: &str) -> bool {
+fn inside_folder(path: &str) -> bool {
     !path.is_empty()
         && std::path::Path::new(path)
             .components()
             .all(|c| matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir))
+}
+
+/// What files a [`FolderFile`] may name: their extensions and how a message describes them.
+pub trait FileType: 'static {
+    /// The accepted extensions, lower case with the dot; a file's extension is compared
+    /// ignoring case, so `bark.PNG` is a `.png` file.
+    const EXTENSIONS: &'static [&'static str];
+    /// What a valid value is, for messages: "a .png or .bmp file in the scene's folder".
+    const EXPECTING: &'static str;
+    /// The files named in the "expected ..." of an error: "a .png or .bmp file".
+    const FILES: &'static str;
+}
+
+/// A file next to the scene: a relative path that stays inside the scene's folder (no `..`,
+/// no root) with one of `T`'s extensions.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FolderFile<T> {
+    /// The path as written, relative to the scene's folder.
+    pub path: String,
+    _type: std::marker::PhantomData<T>,
+}
+
+impl<T: FileType> FolderFile<T> {
+    /// A checked path, or what was expected.
+    pub fn new(path: &str) -> Result<Self, String> {
+        let lower = path.to_ascii_lowercase();
+        if inside_folder(path) && T::EXTENSIONS.iter().any(|extension| lower.ends_with(extension)) {
+            Ok(Self { path: path.to_string(), _type: std::marker::PhantomData })
+        } else {
+            Err(format!("expected {} inside the scene's folder (relative, without `..`), found \"{path}\"", T::FILES))
+        }
+    }
+}
+
+impl<T> serde::Serialize for FolderFile<T> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&self.path)
+    }
+}
+
+impl<'de, T: FileType> Deserialize<'de> for FolderFile<T> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        crate::foundation::yaml::deserialize_str_with(deserializer, T::EXPECTING, Self::new)
+    }
+}
+
+/// An angle in degrees brought into `[-180, 180)`.
+pub fn wrap_degrees(angle: f32) -> f32 {
+    (angle + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// The sRGB channels of `color`, each clamped to `[0, 1]`, as the rasterizer's material and
+/// vertex colours take them (it shades in these values as they are, without converting them
+/// to linear light).
+pub fn srgb_channels(color: Srgba) -> Vec3 {
+    Vec3::new(color.red, color.green, color.blue).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// The first of `candidate(1)`, `candidate(2)`, ... that names no existing file: numbered
+/// outputs never overwrite an earlier one.
+pub fn first_free_path(candidate: impl Fn(u32) -> std::path::PathBuf) -> std::path::PathBuf {
+    (1..).map(candidate).find(|path| !path.exists()).expect("an unbounded range always yields a free name")
 }
 
 checked_number!(
@@ -318,6 +382,33 @@ mod tests {
         assert_eq!(parse::<Color>("\"#ff0000\"").unwrap().0, Srgba::rgb(1.0, 0.0, 0.0));
         assert!(parse::<Color>("\"#ff00\"").unwrap_err().contains("six hex digits"));
         assert!(parse::<Color>("[1, 2, 0]").unwrap_err().contains("from 0 to 1"));
+    }
+
+    #[derive(Debug, Clone, PartialEq, Eq)]
+    struct Images;
+
+    impl FileType for Images {
+        const EXTENSIONS: &'static [&'static str] = &[".png", ".bmp"];
+        const EXPECTING: &'static str = "an image";
+        const FILES: &'static str = "a .png or .bmp file";
+    }
+
+    #[test]
+    fn folder_files_stay_inside_and_match_their_extension_in_any_case() {
+        assert_eq!(parse::<FolderFile<Images>>("textures/bark.PNG").unwrap().path, "textures/bark.PNG");
+        assert!(parse::<FolderFile<Images>>("./a.bmp").is_ok());
+        for bad in ["../up.png", "/abs.png", "image.jpg", "\"\""] {
+            let error = parse::<FolderFile<Images>>(bad).unwrap_err();
+            assert!(error.contains("expected a .png or .bmp file inside the scene's folder"), "{bad}: {error}");
+        }
+    }
+
+    #[test]
+    fn degrees_wrap_into_one_turn() {
+        assert_eq!(wrap_degrees(190.0), -170.0);
+        assert_eq!(wrap_degrees(-180.0), -180.0);
+        assert_eq!(wrap_degrees(180.0), -180.0);
+        assert_eq!(wrap_degrees(45.0), 45.0);
     }
 
     #[test]

@@ -9,23 +9,22 @@
 //! row of one.
 
 use crate::clip::outside;
+use crate::coverage::{RowMasks, Walk, covered, lane_multiples};
+use crate::frame::View;
 use crate::framebuffer::FAR_DEPTH;
-use crate::pipeline::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, View, edge};
-use crate::schedule::Schedule;
-use crate::setup::{Edges, LANE_OFFSETS, LANES, Plane, Viewport, Weights, greater, positive_order};
-use crate::shade::{VARYINGS, lanes_of};
-use crate::shadow::{CONSTANT_BIAS, QuadDepth, SLOPE_BIAS, ShadowMap, nearest_of_quads};
+use crate::lanes::{LANE_OFFSETS, LANES, lanes_of};
+use crate::screen::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, edge};
+use crate::setup::{Edges, Plane, Viewport, Weights, greater, positive_order};
+use crate::shade::VARYINGS;
+use crate::shadow::{CONSTANT_BIAS, QuadDepth, SLOPE_BIAS, ShadowMap, WINDOW, nearest_of_quads};
 use crate::sort::{Corners, Sorted};
-use crate::tile::{RowMasks, Walk, covered, lane_multiples};
+use crate::work_queue::Schedule;
 use bevy_math::{Vec3, Vec4};
 use bevy_tasks::TaskPool;
 use wide::{f32x4, f32x8, i32x8};
 
 /// Map rows one strip task draws.
 pub(crate) const STRIP_ROWS: u32 = 64;
-
-/// Texels of a row one step of the depth pass covers.
-pub(crate) const WINDOW: usize = 8;
 
 /// The depth pass's buffers, kept between frames so that a scene of steady size does not
 /// allocate.
@@ -304,7 +303,7 @@ fn fill_runs(walk: &Walk, rows: &mut RowMasks, bounds: PixelBounds, plane: &Plan
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::SUBPIXEL_STEPS;
+    use crate::screen::SUBPIXEL_STEPS;
     use proptest::prelude::*;
 
     /// The side of the test map, in texels.

@@ -115,6 +115,15 @@ where
     deserializer.deserialize_str(StrVisitor { expecting, parse })
 }
 
+/// An error at the `nth` (from 0) occurrence of mapping key `key` in `text`, read from
+/// `path`, or about the whole file when the key cannot be found.
+pub fn locate_key(path: &Path, text: &str, key: &str, nth: usize, message: String) -> FileError {
+    match find_nth_key(text, key, nth) {
+        Some((line, column)) => FileError::at(path, line, column, message),
+        None => FileError::whole_file(path, message),
+    }
+}
+
 /// The 1-based line and column of the `nth` (from 0) mapping key `key` in `text`.
 pub fn find_nth_key(text: &str, key: &str, nth: usize) -> Option<(usize, usize)> {
     key_offsets(text, key).nth(nth).map(|at| line_column(text.as_bytes(), at))

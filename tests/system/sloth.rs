@@ -2,8 +2,6 @@
 //! at every fixed step: planted feet on their support's surface, joints within limits, the body
 //! never inside a support, no NaN; and at the end: progress, speed, gait order.
 
-mod common;
-
 use bevy::math::{UVec2, Vec3};
 use canopy::controls::timeline::Timeline;
 use canopy::sloth::SlothBody;
@@ -70,7 +68,7 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
     std::fs::write(&scene, text).unwrap();
     let timeline_file = folder.path().join("timeline.yaml");
     std::fs::write(&timeline_file, timeline).unwrap();
-    let mut app = common::live_app(&scene, SIZE);
+    let mut app = super::common::live_app(&scene, SIZE);
     let timeline = Timeline::load(&timeline_file).unwrap();
     timeline.check(app.world_mut()).unwrap();
     app.insert_resource(timeline);

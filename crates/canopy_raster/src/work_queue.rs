@@ -7,6 +7,8 @@
 //! together. Handing out from a counter rather than spawning a task per part also keeps the
 //! executor from giving one thread a batch of parts while the other runs out of work.
 
+use crate::screen::{MAX_TARGET_SIZE, TILE_HEIGHT};
+
 use bevy_tasks::TaskPool;
 use std::cmp::Reverse;
 use std::sync::Mutex;
@@ -14,8 +16,8 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// The most parts a pass can have: an image of [`MAX_TARGET_SIZE`](crate::MAX_TARGET_SIZE) rows
-/// in bands of [`TILE_HEIGHT`](crate::pipeline::TILE_HEIGHT).
-pub(crate) const MAX_PARTS: usize = (crate::MAX_TARGET_SIZE / crate::pipeline::TILE_HEIGHT) as usize;
+/// in bands of [`TILE_HEIGHT`](crate::screen::TILE_HEIGHT).
+pub(crate) const MAX_PARTS: usize = (MAX_TARGET_SIZE / TILE_HEIGHT) as usize;
 
 /// The order a pass's parts are handed out in, and how long each took last time; kept between
 /// frames so that a frame of steady size does not allocate.

@@ -7,7 +7,7 @@
 //! `ball.position.y`. Numbers (`f32`, `f64`), booleans and choices (enums of unit variants,
 //! named in snake case, e.g. `render.shading: phong`) can be set.
 
-use crate::scene::SceneEntity;
+use crate::foundation::entity::SceneEntity;
 use bevy::ecs::reflect::ReflectComponent;
 use bevy::prelude::*;
 use bevy::reflect::enums::{DynamicEnum, DynamicVariant, VariantType};
@@ -211,25 +211,24 @@ pub fn check_param(world: &mut World, name: &str, value: ParamValue) -> Result<(
             known: params.iter().map(|p| p.path.as_str()).collect::<Vec<_>>().join(", "),
         });
     };
-    let (accepted, expected) = match (&entry.value, &value) {
-        (ParamValue::Number(_), ParamValue::Number(v)) => {
-            (v.is_finite() && v.abs() <= f32::MAX as f64, "a finite number")
-        }
-        (ParamValue::Number(_), _) => (false, "a number"),
-        (ParamValue::Bool(_), given) => (matches!(given, ParamValue::Bool(_)), "true or false"),
-        (ParamValue::Choice(_), given) => {
-            let accepted = matches!(given, ParamValue::Choice(choice) if entry.choices.contains(choice));
-            if !accepted {
-                let expected = format!("one of {}", entry.choices.join(", "));
-                return Err(ParamError::BadValue { name: name.to_string(), value, expected });
-            }
-            (true, "")
-        }
-    };
-    if accepted {
-        Ok(())
-    } else {
-        Err(ParamError::BadValue { name: name.to_string(), value, expected: expected.into() })
+    fits(&entry.value, &entry.choices, &value).map_err(|expected| ParamError::BadValue {
+        name: name.to_string(),
+        value,
+        expected,
+    })
+}
+
+/// Whether `value` can be given to a parameter holding `current` (whose names are `choices`
+/// when it is a choice); what the parameter takes when it cannot.
+fn fits(current: &ParamValue, choices: &[String], value: &ParamValue) -> Result<(), String> {
+    match (current, value) {
+        (ParamValue::Number(_), ParamValue::Number(v)) if v.is_finite() && v.abs() <= f32::MAX as f64 => Ok(()),
+        (ParamValue::Number(_), ParamValue::Number(_)) => Err("a finite number".into()),
+        (ParamValue::Number(_), _) => Err("a number".into()),
+        (ParamValue::Bool(_), ParamValue::Bool(_)) => Ok(()),
+        (ParamValue::Bool(_), _) => Err("true or false".into()),
+        (ParamValue::Choice(_), ParamValue::Choice(choice)) if choices.contains(choice) => Ok(()),
+        (ParamValue::Choice(_), _) => Err(format!("one of {}", choices.join(", "))),
     }
 }
 
@@ -270,43 +269,37 @@ fn set_on_entity(
     name: &str,
     value: &ParamValue,
 ) -> Result<bool, ParamError> {
-    let bad = |expected: &str| ParamError::BadValue {
-        name: name.to_string(),
-        value: value.clone(),
-        expected: expected.into(),
-    };
     for reflect in components.iter().filter_map(|id| registry.get_type_data::<ReflectComponent>(*id)) {
         let Ok(entity_mut) = world.get_entity_mut(entity) else { return Ok(false) };
         let Some(mut component) = reflect.reflect_mut(entity_mut) else { continue };
         let Ok(field) = component.bypass_change_detection().reflect_path_mut(path) else { continue };
-        if let Some(target) = field.try_downcast_mut::<f32>() {
-            let &ParamValue::Number(v) = value else { return Err(bad("a number")) };
-            if !v.is_finite() || v.abs() > f32::MAX as f64 {
-                return Err(bad("a finite number"));
+        let Some(current) = read_leaf(field) else { continue };
+        let names = choices(field).unwrap_or_default();
+        let bad = |expected: String| ParamError::BadValue { name: name.to_string(), value: value.clone(), expected };
+        fits(&current, &names, value).map_err(bad)?;
+        match value {
+            &ParamValue::Number(v) => {
+                if let Some(target) = field.try_downcast_mut::<f32>() {
+                    *target = v as f32;
+                } else if let Some(target) = field.try_downcast_mut::<f64>() {
+                    *target = v;
+                }
             }
-            *target = v as f32;
-        } else if let Some(target) = field.try_downcast_mut::<f64>() {
-            let &ParamValue::Number(v) = value else { return Err(bad("a number")) };
-            if !v.is_finite() {
-                return Err(bad("a finite number"));
+            &ParamValue::Bool(v) => {
+                if let Some(target) = field.try_downcast_mut::<bool>() {
+                    *target = v;
+                }
             }
-            *target = v;
-        } else if let Some(target) = field.try_downcast_mut::<bool>() {
-            let &ParamValue::Bool(v) = value else { return Err(bad("true or false")) };
-            *target = v;
-        } else if let Some(names) = choices(field) {
-            let expected = format!("one of {}", names.join(", "));
-            let ParamValue::Choice(choice) = value else { return Err(bad(&expected)) };
-            let Some(TypeInfo::Enum(info)) = field.get_represented_type_info() else { continue };
-            let Some(variant) = names.iter().position(|n| n == choice).and_then(|i| info.variant_at(i)) else {
-                return Err(bad(&expected));
-            };
-            debug_assert_eq!(variant.variant_type(), VariantType::Unit);
-            field
-                .try_apply(&DynamicEnum::new(variant.name(), DynamicVariant::Unit))
-                .map_err(|error| bad(&format!("{expected} ({error})")))?;
-        } else {
-            continue;
+            ParamValue::Choice(choice) => {
+                let Some(TypeInfo::Enum(info)) = field.get_represented_type_info() else { continue };
+                let Some(variant) = names.iter().position(|n| n == choice).and_then(|i| info.variant_at(i)) else {
+                    continue;
+                };
+                debug_assert_eq!(variant.variant_type(), VariantType::Unit);
+                field
+                    .try_apply(&DynamicEnum::new(variant.name(), DynamicVariant::Unit))
+                    .map_err(|error| bad(format!("one of {} ({error})", names.join(", "))))?;
+            }
         }
         component.set_changed();
         return Ok(true);

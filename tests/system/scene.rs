@@ -1,8 +1,28 @@
-//! Scene files: every shipped scene is valid, and every malformed file in `tests/malformed/`
-//! is refused with a message naming its line and field.
+//! Scene files: every shipped scene is valid, every malformed file in `tests/malformed/` is
+//! refused with a message naming its line and field, referenced files are read once, saved
+//! scenes read back the same, and a broken reload keeps the last good scene.
 
+use super::common::*;
+use canopy::foundation::dump::dump_state;
+use canopy::foundation::messages::ReloadScene;
+use canopy::foundation::yaml::FileError;
+use canopy::muscle::MuscleDef;
+use canopy::raster::texture::TextureDef;
 use canopy::scene::schema::SceneDef;
+use canopy::scene::{ActiveScene, SceneStatus};
+use canopy::shape::ShapeDef;
+use canopy::tree::TreeDef;
 use std::path::{Path, PathBuf};
+
+/// Reads and checks a scene file with every kind of the app.
+fn load(path: &Path) -> Result<SceneDef, FileError> {
+    canopy::app::entity_kinds().load(path).map(|scene| scene.def)
+}
+
+/// Parses and checks scene text read from `path` with every kind of the app.
+fn parse(path: &Path, bytes: &[u8]) -> Result<SceneDef, FileError> {
+    canopy::app::entity_kinds().parse(path, bytes).map(|scene| scene.def)
+}
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -15,7 +35,7 @@ fn shipped_scenes_are_valid() {
         for entry in std::fs::read_dir(root().join(folder)).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "yaml") {
-                SceneDef::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                load(&path).unwrap_or_else(|e| panic!("{e}"));
                 count += 1;
             }
         }
@@ -83,7 +103,7 @@ fn malformed_scenes_name_their_line_and_field() {
     assert_eq!(files, MALFORMED.len(), "every malformed file has an expectation");
     for &(file, line, words) in MALFORMED {
         let path = folder.join(file);
-        let error = SceneDef::load(&path).expect_err(file);
+        let error = load(&path).expect_err(file);
         assert_eq!(error.path, path, "{file}");
         assert_eq!(error.location.map(|(l, _)| l), line, "{file}: {error}");
         let shown = error.to_string();
@@ -96,7 +116,7 @@ fn malformed_scenes_name_their_line_and_field() {
 
 #[test]
 fn a_missing_file_is_an_error_not_a_panic() {
-    let error = SceneDef::load(Path::new("no/such/scene.yaml")).unwrap_err();
+    let error = load(Path::new("no/such/scene.yaml")).unwrap_err();
     assert!(error.to_string().starts_with("no/such/scene.yaml: cannot read the file"), "{error}");
 }
 
@@ -110,7 +130,7 @@ mod never_panics {
         /// Arbitrary bytes are refused or accepted, never a panic.
         #[test]
         fn on_arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
-            let _ = SceneDef::parse(Path::new("fuzz.yaml"), &bytes);
+            let _ = parse(Path::new("fuzz.yaml"), &bytes);
         }
 
         /// The demo scene with one span of characters replaced by random text: every error
@@ -122,7 +142,7 @@ mod never_panics {
             let end = (start + len).min(text.len());
             if text.is_char_boundary(start) && text.is_char_boundary(end) {
                 let mutated = format!("{}{}{}", &text[..start], junk, &text[end..]);
-                if let Err(error) = SceneDef::parse(Path::new("m.yaml"), mutated.as_bytes())
+                if let Err(error) = parse(Path::new("m.yaml"), mutated.as_bytes())
                     && let Some((line, _)) = error.location
                 {
                     prop_assert!(line >= 1 && line <= mutated.lines().count() + 1, "{error}");
@@ -134,18 +154,18 @@ mod never_panics {
 
 #[test]
 fn referenced_configurations_are_read_and_their_errors_located() {
-    let from_file = SceneDef::load(&root().join("scenes/biceps_from_file.yaml")).unwrap();
-    let inline = SceneDef::load(&root().join("scenes/biceps.yaml")).unwrap();
-    let muscle = |scene: &SceneDef| match &scene.entities[0].kind {
-        canopy::scene::schema::EntityKind::Muscle(muscle) => muscle.build().unwrap(),
-        other => panic!("not a muscle: {other:?}"),
+    let from_file = load(&root().join("scenes/biceps_from_file.yaml")).unwrap();
+    let inline = load(&root().join("scenes/biceps.yaml")).unwrap();
+    let muscle = |scene: &SceneDef| match scene.entities[0].def::<MuscleDef>() {
+        Some(muscle) => muscle.build().unwrap(),
+        None => panic!("not a muscle: {:?}", scene.entities[0]),
     };
     assert_eq!(muscle(&from_file), muscle(&inline));
 
     let folder = tempfile::tempdir().unwrap();
     let scene = folder.path().join("scene.yaml");
     std::fs::write(&scene, "entities:\n  - muscle: { file: arm.yaml }\n").unwrap();
-    let error = SceneDef::load(&scene).unwrap_err();
+    let error = load(&scene).unwrap_err();
     assert_eq!(error.path, folder.path().join("arm.yaml"));
     assert!(error.message.contains("cannot read the file"), "{error}");
     // Errors inside the referenced file name that file and their line there.
@@ -159,7 +179,7 @@ fn referenced_configurations_are_read_and_their_errors_located() {
     ];
     for (contents, line, words) in broken {
         std::fs::write(folder.path().join("arm.yaml"), contents).unwrap();
-        let error = SceneDef::load(&scene).unwrap_err();
+        let error = load(&scene).unwrap_err();
         assert_eq!(
             (error.path.clone(), error.location.map(|l| l.0)),
             (folder.path().join("arm.yaml"), Some(line)),
@@ -171,31 +191,31 @@ fn referenced_configurations_are_read_and_their_errors_located() {
 
 #[test]
 fn textures_are_decoded_with_the_scene_and_bad_ones_name_their_file() {
-    let demo = SceneDef::load(&root().join("scenes/demo.yaml")).unwrap();
+    let demo = load(&root().join("scenes/demo.yaml")).unwrap();
     let textures: Vec<(u32, u32)> = demo
         .entities
         .iter()
-        .filter_map(|entity| match &entity.kind {
-            canopy::scene::schema::EntityKind::Shape(shape) => shape.texture.as_ref(),
-            _ => None,
-        })
+        .filter_map(|entity| entity.def::<ShapeDef>().and_then(|shape| shape.texture.as_ref()))
         .map(|texture| texture.image.as_ref().map(|i| (i.width(), i.height())).expect("decoded"))
         .collect();
     // The checker board is a PNG, the bricks a BMP.
     assert_eq!(textures, [(64, 64), (64, 64)]);
     // Trees take textures too.
-    let tree = SceneDef::load(&root().join("scenes/tree.yaml")).unwrap();
-    let bark = tree.entities.iter().find_map(|e| e.kind.texture()).and_then(|t| t.image.as_ref()).expect("decoded");
+    let tree = load(&root().join("scenes/tree.yaml")).unwrap();
+    fn texture(e: &canopy::scene::schema::EntityDef) -> Option<&TextureDef> {
+        e.def::<TreeDef>().and_then(|t| t.texture.as_ref()).or_else(|| e.def::<ShapeDef>()?.texture.as_ref())
+    }
+    let bark = tree.entities.iter().find_map(texture).and_then(|t| t.image.as_ref()).expect("decoded");
     assert_eq!((bark.width(), bark.height()), (64, 64));
 
     let folder = tempfile::tempdir().unwrap();
     let scene = folder.path().join("scene.yaml");
     std::fs::write(&scene, "entities:\n  - shape: { primitive: box, texture: { file: wood.png } }\n").unwrap();
-    let error = SceneDef::load(&scene).unwrap_err();
+    let error = load(&scene).unwrap_err();
     assert_eq!(error.path, folder.path().join("wood.png"));
     assert!(error.message.contains("cannot read the file"), "{error}");
     std::fs::write(folder.path().join("wood.png"), "not an image").unwrap();
-    let error = SceneDef::load(&scene).unwrap_err();
+    let error = load(&scene).unwrap_err();
     assert_eq!(error.path, folder.path().join("wood.png"));
     assert!(error.message.contains("entities[0].shape.texture.file: not a readable PNG or BMP image"), "{error}");
 }
@@ -209,12 +229,43 @@ fn every_shipped_scene_survives_being_written_and_read_back() {
         if path.extension().is_none_or(|e| e != "yaml") {
             continue;
         }
-        let scene = SceneDef::load(&path).unwrap();
-        let text = scene.to_yaml().unwrap();
+        let scene = load(&path).unwrap();
+        let text = canopy::app::entity_kinds().to_yaml(&scene).unwrap();
         // Read back from the same folder, so that referenced files resolve alike.
-        let again = SceneDef::parse(&path, text.as_bytes()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let again = parse(&path, text.as_bytes()).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_eq!(again, scene, "{}", path.display());
         checked += 1;
     }
     assert!(checked >= 12, "{checked} scenes");
+}
+
+#[test]
+fn a_broken_reload_keeps_the_last_good_scene_and_a_fixed_one_replaces_it() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("live.yaml");
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n").unwrap();
+    let mut app = canopy::app::headless_app(&scene, SMALL, false).unwrap();
+    update_until(&mut app, |s| s.status == SceneStatus::Live);
+    let names = |app: &mut bevy::app::App| -> Vec<String> {
+        let dump = dump_state(app.world_mut());
+        dump["entities"].as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap().to_string()).collect()
+    };
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first"]);
+
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: bx }\n").unwrap();
+    app.world_mut().write_message(ReloadScene);
+    update_until(&mut app, |s| s.error.is_some());
+    let scene_state = app.world().resource::<ActiveScene>();
+    assert_eq!(scene_state.status, SceneStatus::Live);
+    let error = scene_state.error.clone().unwrap();
+    assert!(error.contains("live.yaml:3:") && error.contains("unknown variant `bx`"), "{error}");
+    app.update();
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first"]);
+
+    std::fs::write(&scene, "entities:\n  - name: first\n    shape: { primitive: box }\n  - name: second\n    shape: { primitive: sphere }\n").unwrap();
+    app.world_mut().write_message(ReloadScene);
+    update_until(&mut app, |s| s.generation == 2);
+    app.update();
+    assert_eq!(app.world().resource::<ActiveScene>().error, None);
+    assert_eq!(names(&mut app), ["camera", "light", "render", "first", "second"]);
 }

@@ -5,8 +5,8 @@
 //! registering them with [`RegisterDump::register_dump`]. Entities appear in scene order and
 //! object keys are sorted, so a dump is byte-for-byte reproducible.
 
-use crate::scene::SceneEntity;
-use crate::schedule::SimClock;
+use crate::foundation::entity::SceneEntity;
+use crate::foundation::schedule::SimClock;
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 

@@ -1,0 +1,360 @@
+//! The registry of entity kinds, through which a scene is read, checked, spawned and saved
+//! without naming any kind.
+//!
+//! Kinds are listed once, with [`Kinds::with`], in the order their keys appear in messages
+//! and in which they are built: a kind's checks see what the kinds before it built (the sloth
+//! comes after the trees it hangs from).
+
+use super::schema::{EntityDef, SceneDef, SceneFile, WriteScene};
+use crate::foundation::kind::{
+    BuildContext, Built, EntityContext, EntityKind, EntityRecord, KindDef, ReferencedFile, Standalone,
+};
+use crate::foundation::yaml::{FileError, parse_yaml};
+use bevy::app::PluginGroupBuilder;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
+use serde::de::MapAccess;
+use serde::ser::SerializeMap;
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A list of kinds known by type, so that serde can read and write each kind's definition
+/// with the deserializer at hand (and its errors keep their place in the file).
+pub trait KindList: Send + Sync + 'static {
+    /// Every key, in registration order.
+    fn keys() -> Vec<&'static str>;
+
+    /// Reads the value of an entity's `key` as that kind's definition; `None` if no kind has
+    /// the key.
+    fn next_value<'de, A: MapAccess<'de>>(
+        key: &str,
+        map: &mut A,
+    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>>;
+
+    /// Writes `def` as the value of `key`; `None` if no kind has the key.
+    fn serialize_entry<M: SerializeMap>(key: &str, def: &dyn KindDef, map: &mut M) -> Option<Result<(), M::Error>>;
+}
+
+impl KindList for () {
+    fn keys() -> Vec<&'static str> {
+        Vec::new()
+    }
+
+    fn next_value<'de, A: MapAccess<'de>>(
+        _key: &str,
+        _map: &mut A,
+    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>> {
+        None
+    }
+
+    fn serialize_entry<M: SerializeMap>(_key: &str, _def: &dyn KindDef, _map: &mut M) -> Option<Result<(), M::Error>> {
+        None
+    }
+}
+
+impl<L: KindList, K: EntityKind> KindList for (L, PhantomData<fn() -> K>) {
+    fn keys() -> Vec<&'static str> {
+        let mut keys = L::keys();
+        keys.push(K::KEY);
+        keys
+    }
+
+    fn next_value<'de, A: MapAccess<'de>>(
+        key: &str,
+        map: &mut A,
+    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>> {
+        if key != K::KEY {
+            return L::next_value(key, map);
+        }
+        Some(map.next_value::<K::Def>().map(|def| (K::KEY, Box::new(def) as Box<dyn KindDef>)))
+    }
+
+    fn serialize_entry<M: SerializeMap>(key: &str, def: &dyn KindDef, map: &mut M) -> Option<Result<(), M::Error>> {
+        if key != K::KEY {
+            return L::serialize_entry(key, def, map);
+        }
+        let def = def.as_any().downcast_ref::<K::Def>()?;
+        Some(map.serialize_entry(key, def))
+    }
+}
+
+/// A kind's hooks behind one object-safe face.
+trait ErasedKind: Send + Sync {
+    fn key(&self) -> &'static str;
+    fn add_plugin(&self, group: PluginGroupBuilder) -> PluginGroupBuilder;
+    fn standalone(&self, path: &Path, bytes: &[u8]) -> Option<Result<Standalone<Box<dyn KindDef>>, FileError>>;
+    fn validate(&self, def: &dyn KindDef, cx: &EntityContext) -> Result<(), FileError>;
+    fn references(&self, def: &dyn KindDef) -> Vec<String>;
+    fn resolve(&self, def: &mut dyn KindDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError>;
+    fn build(&self, def: &dyn KindDef, cx: &BuildContext) -> Result<Built, FileError>;
+    fn spawn(&self, def: &dyn KindDef, built: &Built, entity: &mut EntityWorldMut);
+    fn saved(&self, def: &dyn KindDef) -> Box<dyn KindDef>;
+    fn save_live(&self, def: &mut dyn KindDef, entity: EntityRef);
+}
+
+struct Erased<K>(PhantomData<fn() -> K>);
+
+impl<K: EntityKind> Erased<K> {
+    fn def(def: &dyn KindDef) -> &K::Def {
+        def.as_any().downcast_ref().expect("the registry holds each definition with its own kind")
+    }
+}
+
+impl<K: EntityKind> ErasedKind for Erased<K> {
+    fn key(&self) -> &'static str {
+        K::KEY
+    }
+
+    fn add_plugin(&self, group: PluginGroupBuilder) -> PluginGroupBuilder {
+        group.add(K::Plugin::default())
+    }
+
+    fn standalone(&self, path: &Path, bytes: &[u8]) -> Option<Result<Standalone<Box<dyn KindDef>>, FileError>> {
+        let read = K::standalone(path, bytes)?;
+        Some(read.map(|Standalone { def, view }| Standalone { def: Box::new(def) as Box<dyn KindDef>, view }))
+    }
+
+    fn validate(&self, def: &dyn KindDef, cx: &EntityContext) -> Result<(), FileError> {
+        K::validate(Self::def(def), cx)
+    }
+
+    fn references(&self, def: &dyn KindDef) -> Vec<String> {
+        K::references(Self::def(def))
+    }
+
+    fn resolve(&self, def: &mut dyn KindDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        let def = def.as_any_mut().downcast_mut().expect("the registry holds each definition with its own kind");
+        K::resolve(def, file, cx)
+    }
+
+    fn build(&self, def: &dyn KindDef, cx: &BuildContext) -> Result<Built, FileError> {
+        K::build(Self::def(def), cx).map(|built| Arc::new(built) as Built)
+    }
+
+    fn spawn(&self, def: &dyn KindDef, built: &Built, entity: &mut EntityWorldMut) {
+        let built = built.downcast_ref().expect("a kind's build is spawned by the same kind");
+        K::spawn(Self::def(def), built, entity);
+    }
+
+    fn saved(&self, def: &dyn KindDef) -> Box<dyn KindDef> {
+        Box::new(K::saved(Self::def(def)))
+    }
+
+    fn save_live(&self, def: &mut dyn KindDef, entity: EntityRef) {
+        let def = def.as_any_mut().downcast_mut().expect("the registry holds each definition with its own kind");
+        K::save_live(def, entity);
+    }
+}
+
+/// The kinds being listed, before [`Kinds::build`] makes them a [`KindRegistry`].
+pub struct Kinds<L> {
+    kinds: Vec<Box<dyn ErasedKind>>,
+    list: PhantomData<L>,
+}
+
+impl Kinds<()> {
+    /// No kinds yet.
+    pub fn new() -> Self {
+        Self { kinds: Vec::new(), list: PhantomData }
+    }
+}
+
+impl Default for Kinds<()> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<L: KindList> Kinds<L> {
+    /// Adds kind `K` after the kinds listed so far.
+    pub fn with<K: EntityKind>(mut self) -> Kinds<(L, PhantomData<fn() -> K>)> {
+        assert!(self.kinds.iter().all(|kind| kind.key() != K::KEY), "two entity kinds have the key `{}`", K::KEY);
+        self.kinds.push(Box::new(Erased::<K>(PhantomData)));
+        Kinds { kinds: self.kinds, list: PhantomData }
+    }
+
+    /// The registry of the kinds listed.
+    pub fn build(self) -> KindRegistry {
+        KindRegistry {
+            kinds: self.kinds,
+            keys: L::keys(),
+            read: |path, bytes| parse_yaml::<SceneFile<L>>(path, bytes, "a scene").map(SceneDef::from),
+            write: |scene| serde_yaml::to_string(&WriteScene::<L>(scene, PhantomData)),
+        }
+    }
+}
+
+/// A file a scene refers to, as read from disk or through the asset server.
+#[derive(Debug, Clone)]
+pub struct ReadFile {
+    /// The file as the scene names it, relative to its folder.
+    pub file: String,
+    /// Its path as messages show it.
+    pub path: PathBuf,
+    /// Its bytes.
+    pub contents: Vec<u8>,
+}
+
+/// A checked scene: its definition, and what each entity's kind built from it.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    /// The scene as the file describes it, referenced files filled in.
+    pub def: SceneDef,
+    /// What each entity's kind built, in entity order.
+    pub built: Vec<Built>,
+}
+
+/// Every entity kind the app knows; reading, checking, spawning and saving scenes go through
+/// it.
+pub struct KindRegistry {
+    kinds: Vec<Box<dyn ErasedKind>>,
+    keys: Vec<&'static str>,
+    read: fn(&Path, &[u8]) -> Result<SceneDef, FileError>,
+    write: fn(&SceneDef) -> Result<String, serde_yaml::Error>,
+}
+
+impl std::fmt::Debug for KindRegistry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("KindRegistry").field("keys", &self.keys).finish()
+    }
+}
+
+impl KindRegistry {
+    /// Every kind's key, in registration order.
+    pub fn keys(&self) -> &[&'static str] {
+        &self.keys
+    }
+
+    /// `group` with every kind's plugin added, in registration order.
+    pub fn add_plugins(&self, group: PluginGroupBuilder) -> PluginGroupBuilder {
+        self.kinds.iter().fold(group, |group, kind| kind.add_plugin(group))
+    }
+
+    fn kind(&self, key: &str) -> &dyn ErasedKind {
+        self.kinds.iter().find(|kind| kind.key() == key).map(Box::as_ref).expect("every entity's key is a kind's")
+    }
+
+    /// Reads and checks a scene file, and the files it refers to.
+    pub fn load(&self, path: &Path) -> Result<LoadedScene, FileError> {
+        let bytes = std::fs::read(path).map_err(|error| FileError::unreadable(path, error))?;
+        self.parse(path, &bytes)
+    }
+
+    /// Parses and checks scene text read from `path`, reading referenced files next to it.
+    pub fn parse(&self, path: &Path, bytes: &[u8]) -> Result<LoadedScene, FileError> {
+        let scene = self.parse_unresolved(path, bytes)?;
+        let folder = path.parent().unwrap_or(Path::new(""));
+        let files = self
+            .references(&scene)
+            .into_iter()
+            .map(|file| {
+                let path = folder.join(&file);
+                let contents = std::fs::read(&path).map_err(|error| FileError::unreadable(&path, error))?;
+                Ok(ReadFile { file, path, contents })
+            })
+            .collect::<Result<Vec<_>, FileError>>()?;
+        self.finish(scene, path, bytes, &files)
+    }
+
+    /// Parses scene text read from `path`, leaving references to other files unread; the
+    /// result still needs [`Self::finish`] with the files of [`Self::references`].
+    ///
+    /// A file a kind claims as its own configuration (see
+    /// [`EntityKind::standalone`]) is a scene holding that one entity.
+    pub fn parse_unresolved(&self, path: &Path, bytes: &[u8]) -> Result<SceneDef, FileError> {
+        for kind in &self.kinds {
+            if let Some(standalone) = kind.standalone(path, bytes) {
+                return Ok(SceneDef::of_standalone(kind.key(), standalone?));
+            }
+        }
+        let scene = (self.read)(path, bytes)?;
+        let text = String::from_utf8_lossy(bytes);
+        for (index, entity) in scene.entities.iter().enumerate() {
+            let cx = EntityContext { path, text: &text, index, key: entity.key };
+            self.kind(entity.key).validate(&*entity.def, &cx)?;
+        }
+        Ok(scene)
+    }
+
+    /// The files `scene` refers to, relative to its folder, each once, sorted.
+    pub fn references(&self, scene: &SceneDef) -> Vec<String> {
+        let mut files: Vec<String> =
+            scene.entities.iter().flat_map(|entity| self.kind(entity.key).references(&*entity.def)).collect();
+        files.sort();
+        files.dedup();
+        files
+    }
+
+    /// Fills `scene` from the referenced `files` (each shared by every entity naming it),
+    /// then checks and builds every entity, kind by kind in registration order.
+    pub fn finish(
+        &self,
+        mut scene: SceneDef,
+        path: &Path,
+        bytes: &[u8],
+        files: &[ReadFile],
+    ) -> Result<LoadedScene, FileError> {
+        let text = String::from_utf8_lossy(bytes);
+        for file in files {
+            let mut decoded: HashMap<TypeId, Arc<dyn Any + Send + Sync>> = HashMap::new();
+            for (index, entity) in scene.entities.iter_mut().enumerate() {
+                let kind = self.kind(entity.key);
+                if !kind.references(&*entity.def).contains(&file.file) {
+                    continue;
+                }
+                let cx = EntityContext { path, text: &text, index, key: entity.key };
+                let mut referenced = ReferencedFile::new(&file.file, &file.path, &file.contents, &mut decoded);
+                kind.resolve(&mut *entity.def, &mut referenced, &cx)?;
+            }
+        }
+        scene.check_view(path, &text)?;
+        let mut built: Vec<Option<Built>> = vec![None; scene.entities.len()];
+        for kind in &self.kinds {
+            for (index, entity) in scene.entities.iter().enumerate().filter(|(_, e)| e.key == kind.key()) {
+                let records: Vec<EntityRecord> = scene
+                    .entities
+                    .iter()
+                    .zip(&built)
+                    .map(|(entity, built)| EntityRecord {
+                        name: entity.name.as_deref(),
+                        key: entity.key,
+                        def: &*entity.def,
+                        built: built.as_deref(),
+                    })
+                    .collect();
+                let cx = BuildContext {
+                    entity: EntityContext { path, text: &text, index, key: entity.key },
+                    entities: &records,
+                };
+                let made = kind.build(&*entity.def, &cx)?;
+                built[index] = Some(made);
+            }
+        }
+        scene.check_names(path, &text)?;
+        let built = built.into_iter().map(|b| b.expect("every entity's kind is registered")).collect();
+        Ok(LoadedScene { def: scene, built })
+    }
+
+    /// The scene as YAML text, as a file holds it: what came from referenced files stays a
+    /// reference.
+    pub fn to_yaml(&self, scene: &SceneDef) -> Result<String, serde_yaml::Error> {
+        let mut scene = scene.clone();
+        for entity in &mut scene.entities {
+            entity.def = self.kind(entity.key).saved(&*entity.def);
+        }
+        let text = (self.write)(&scene)?;
+        Ok(format!("# Saved by Canopy; the scene format is described in docs/scenes.md.\n{text}"))
+    }
+
+    /// Inserts the components of `entity`, a scene entity of `def`'s kind.
+    pub fn spawn(&self, def: &EntityDef, built: &Built, entity: &mut EntityWorldMut) {
+        self.kind(def.key).spawn(&*def.def, built, entity);
+    }
+
+    /// Brings `def` up to date with the live `entity` it was spawned as.
+    pub fn save_live(&self, def: &mut EntityDef, entity: EntityRef) {
+        self.kind(def.key).save_live(&mut *def.def, entity);
+    }
+}

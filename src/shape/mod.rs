@@ -1,0 +1,20 @@
+//! The `shape` entity kind: primitive solids (box, sphere, cylinder, plane) that give scenes
+//! real 3D content, optionally spinning at a constant rate.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`def`] | the `shape:` entry of a scene file and [`ShapeKind`] |
+//! | [`plugin`] | [`ShapePlugin`]: parameters, dump, spinning, writing the transform and colour |
+//!
+//! Parameters (`<name>.<parameter>`, all from [`ShapeParams`]): `position.{x,y,z}` (metres),
+//! `rotation_deg.{x,y,z}`, `size.{x,y,z}` (metres, > 0), `color.{red,green,blue}` (0 to 1),
+//! `spin_deg_per_s.{x,y,z}`.
+//!
+//! A shape may carry a texture: a PNG or BMP file in the scene's folder, modulated by its
+//! colour, read with nearest or bilinear filtering, repeated or clamped at its edges.
+
+pub mod def;
+pub mod plugin;
+
+pub use def::{ShapeDef, ShapeKind};
+pub use plugin::{Shape, ShapeParams, ShapePlugin};

@@ -1,0 +1,130 @@
+//! The shape kind's plugin: its parameters and dump, spinning in the fixed step, and the
+//! write-back of its transform and colour.
+
+use super::def::ShapeDef;
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::params::RegisterParams;
+use crate::foundation::schedule::{SimSystems, WriteBackSystems};
+use crate::foundation::values::{srgb_channels, wrap_degrees};
+use crate::raster::RasterMesh;
+use crate::raster::primitives::Primitive;
+use bevy::math::{EulerRot, Quat};
+use bevy::prelude::*;
+use serde_json::{Map, Value, json};
+
+/// Which primitive a shape entity draws.
+#[derive(Component, Debug, Clone, Copy)]
+pub struct Shape(pub Primitive);
+
+/// The live, editable state of a shape; the single source of its transform and colour.
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct ShapeParams {
+    /// Centre in metres.
+    pub position: Vec3,
+    /// Rotation in degrees about x, then y, then z, each kept in `[-180, 180)`.
+    pub rotation_deg: Vec3,
+    /// Extent in metres along each axis.
+    pub size: Vec3,
+    /// Surface colour (sRGB).
+    pub color: Srgba,
+    /// Rates of change of `rotation_deg`, degrees per second.
+    pub spin_deg_per_s: Vec3,
+}
+
+impl From<&ShapeDef> for ShapeParams {
+    fn from(def: &ShapeDef) -> Self {
+        Self {
+            position: def.position.0,
+            rotation_deg: def.rotation_deg.0,
+            size: def.size.0,
+            color: def.color.0,
+            spin_deg_per_s: def.spin_deg_per_s.0,
+        }
+    }
+}
+
+/// The smallest size a shape may be edited down to, in metres.
+const MIN_SIZE: f32 = 1e-3;
+
+impl ShapeParams {
+    /// The transform these parameters describe.
+    pub fn transform(&self) -> Transform {
+        let r = self.rotation_deg.map(f32::to_radians);
+        Transform {
+            translation: self.position,
+            rotation: Quat::from_euler(EulerRot::XYZ, r.x, r.y, r.z),
+            scale: self.size.max(Vec3::splat(MIN_SIZE)),
+        }
+    }
+
+    /// The colour as the rasterizer takes it.
+    pub fn color_channels(&self) -> Vec3 {
+        srgb_channels(self.color)
+    }
+}
+
+impl DumpState for ShapeParams {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("position".into(), json!(self.position.to_array()));
+        out.insert("rotation_deg".into(), json!(self.rotation_deg.to_array()));
+        out.insert("size".into(), json!(self.size.to_array()));
+        out.insert("color".into(), json!([self.color.red, self.color.green, self.color.blue]));
+        out.insert("spin_deg_per_s".into(), json!(self.spin_deg_per_s.to_array()));
+    }
+}
+
+impl DumpState for Shape {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("primitive".into(), json!(self.0.key()));
+    }
+}
+
+/// Runs shapes: their parameters and dump fields, spinning, and their write-back.
+#[derive(Default)]
+pub struct ShapePlugin;
+
+impl Plugin for ShapePlugin {
+    fn build(&self, app: &mut App) {
+        app.register_params::<ShapeParams>()
+            .register_dump::<Shape>()
+            .register_dump::<ShapeParams>()
+            .add_systems(FixedUpdate, spin_shapes.in_set(SimSystems::Deform))
+            .add_systems(PostUpdate, write_back_shapes.in_set(WriteBackSystems));
+    }
+}
+
+/// Advances the rotation of spinning shapes by one fixed step.
+fn spin_shapes(time: Res<Time>, mut shapes: Query<&mut ShapeParams>) {
+    let dt = time.delta_secs();
+    for mut params in &mut shapes {
+        if params.spin_deg_per_s != Vec3::ZERO {
+            let spin = params.spin_deg_per_s;
+            params.rotation_deg = (params.rotation_deg + spin * dt).map(wrap_degrees);
+        }
+    }
+}
+
+/// Writes edited or spun shape parameters into the transform and the mesh colour.
+fn write_back_shapes(mut shapes: Query<(&ShapeParams, &mut Transform, &mut RasterMesh), Changed<ShapeParams>>) {
+    for (params, mut transform, mut mesh) in &mut shapes {
+        *transform = params.transform();
+        mesh.material.color = params.color_channels();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transform_scales_by_size_and_rotates_in_degrees() {
+        let def: ShapeDef =
+            serde_yaml::from_str("{primitive: box, size: [2, 3, 4], rotation_deg: [0, 90, 0], position: [1, 0, 0]}")
+                .unwrap();
+        let transform = ShapeParams::from(&def).transform();
+        assert_eq!(transform.scale, Vec3::new(2.0, 3.0, 4.0));
+        assert!((transform.rotation * Vec3::X - Vec3::NEG_Z).length() < 1e-6);
+        assert_eq!(transform.translation, Vec3::X);
+    }
+}

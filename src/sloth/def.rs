@@ -1,0 +1,198 @@
+//! The `sloth:` entry of a scene file, and the kind that places it on the scene's trees
+//! (once, while checking) and spawns it.
+
+use super::gait;
+use super::locomotion::{Placement, Sloth};
+use super::plugin::{self, SlothPlugin};
+use super::rig::Proportions;
+use super::supports::Supports;
+use crate::foundation::kind::{BuildContext, EntityKind};
+use crate::foundation::values::{Color, Degrees, UnitInterval, checked_number};
+use crate::foundation::yaml::FileError;
+use crate::tree::TreeKind;
+use bevy::color::Srgba;
+use bevy::ecs::world::EntityWorldMut;
+use bevy::prelude::Reflect;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+checked_number!(
+    /// A walking speed in metres per second, within the gait's range.
+    Speed(f32),
+    "a speed in metres per second from 0.05 to 0.35",
+    |v| (gait::SPEED_RANGE.0 as f64..=gait::SPEED_RANGE.1 as f64).contains(&v)
+);
+
+checked_number!(
+    /// A size relative to the default 0.8 m animal.
+    Scale(f32),
+    "a scale from 0.5 to 2",
+    |v| (0.5..=2.0).contains(&v)
+);
+
+checked_number!(
+    /// How far below its grips a body hangs, metres.
+    Hang(f32),
+    "a distance in metres from 0.1 to 0.6",
+    |v| (0.1..=0.6).contains(&v)
+);
+
+/// Which way along its support a sloth faces when placed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Facing {
+    /// Towards the support's end (its last point, or its tip for a fork).
+    #[default]
+    Forward,
+    /// Towards the support's start.
+    Backward,
+}
+
+/// Which way autorun walks.
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WalkDirection {
+    /// Head first (up, on a trunk).
+    #[default]
+    Forward,
+    /// Tail first (down, on a trunk).
+    Back,
+}
+
+impl WalkDirection {
+    /// +1 forward, -1 back.
+    pub fn sign(self) -> f32 {
+        match self {
+            WalkDirection::Forward => 1.0,
+            WalkDirection::Back => -1.0,
+        }
+    }
+}
+
+/// A `sloth` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlothDef {
+    /// The support it hangs from: `tree/support`, or just the support's name when only one
+    /// tree has a support of that name.
+    pub support: String,
+    /// Where along the support, 0 to 1 of its length; 0.5 by default.
+    #[serde(default = "middle")]
+    pub at: UnitInterval,
+    /// On a branch, which way it faces: `forward` (towards the support's end, the default) or
+    /// `backward`. On a trunk it always faces up.
+    #[serde(default)]
+    pub facing: Facing,
+    /// On a trunk, where around it the body hangs: degrees about +y from +z (0, the default,
+    /// puts the sloth on the trunk's +z side).
+    #[serde(default = "no_turn")]
+    pub around_deg: Degrees,
+    /// Mean walking speed, metres per second; 0.11 by default.
+    #[serde(default = "free_speed")]
+    pub speed: Speed,
+    /// Whether it walks by itself from the start (it stops where it finds no foothold).
+    #[serde(default)]
+    pub autorun: bool,
+    /// Which way autorun walks: `forward` (the default) or `back`.
+    #[serde(default)]
+    pub direction: WalkDirection,
+    /// Size relative to the default animal of 0.8 m; 1 by default.
+    #[serde(default = "unit_scale")]
+    pub scale: Scale,
+    /// How far the body hangs below its grips, metres; 0.28 times `scale` by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hang: Option<Hang>,
+    /// Fur colour; a greyish brown by default.
+    #[serde(default = "fur")]
+    pub color: Color,
+}
+
+fn middle() -> UnitInterval {
+    UnitInterval(0.5)
+}
+
+fn no_turn() -> Degrees {
+    Degrees(0.0)
+}
+
+fn free_speed() -> Speed {
+    Speed(0.11)
+}
+
+fn unit_scale() -> Scale {
+    Scale(1.0)
+}
+
+fn fur() -> Color {
+    Color(Srgba::rgb(0.7, 0.63, 0.52))
+}
+
+impl SlothDef {
+    /// The body proportions this definition asks for.
+    pub fn proportions(&self) -> Proportions {
+        let mut proportions = Proportions::default().scaled(self.scale.0);
+        if let Some(hang) = self.hang {
+            proportions.hang = hang.0;
+        }
+        proportions
+    }
+
+    /// The index of the support it names among `supports`, or why there is none.
+    pub fn resolve(&self, supports: &Supports) -> Result<usize, String> {
+        if let Some(index) = supports.find(&self.support) {
+            return Ok(index);
+        }
+        let suffix = format!("/{}", self.support);
+        let matching: Vec<usize> =
+            (0..supports.paths.len()).filter(|&i| supports.paths[i].label.ends_with(&suffix)).collect();
+        match matching.as_slice() {
+            [index] => Ok(*index),
+            [] => {
+                let known: Vec<&str> = supports.paths.iter().map(|p| p.label.as_str()).take(12).collect();
+                Err(format!("no support named `{}`; the scene has: {}", self.support, known.join(", ")))
+            }
+            several => Err(format!(
+                "`{}` names a support in {} trees; write it as `tree/support`",
+                self.support,
+                several.len()
+            )),
+        }
+    }
+
+    /// Places the sloth among `supports`.
+    pub fn place(&self, supports: &Supports, speed: f32) -> Result<Sloth, String> {
+        let placement = Placement {
+            support: self.resolve(supports)?,
+            fraction: self.at.0,
+            facing: if self.facing == Facing::Forward { 1.0 } else { -1.0 },
+            around: self.around_deg.0.to_radians(),
+        };
+        Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())
+    }
+}
+
+/// The `sloth` kind, built after the trees it hangs from.
+pub struct SlothKind;
+
+impl EntityKind for SlothKind {
+    const KEY: &'static str = "sloth";
+    type Def = SlothDef;
+    type Built = (Sloth, Arc<Supports>);
+    type Plugin = SlothPlugin;
+
+    /// Places the sloth on the scene's trees (built by the tree kind before); an error is
+    /// located at the sloth's `support` key.
+    fn build(def: &SlothDef, cx: &BuildContext) -> Result<(Sloth, Arc<Supports>), FileError> {
+        let supports = Arc::new(Supports::new(cx.built::<TreeKind>()));
+        let entity = &cx.entity;
+        let nth = cx.earlier::<SlothKind>().count();
+        let sloth = def
+            .place(&supports, def.speed.0)
+            .map_err(|error| entity.locate("support", nth, format!("{}: {error}", entity.field("support"))))?;
+        Ok((sloth, supports))
+    }
+
+    fn spawn(def: &SlothDef, (sloth, supports): &(Sloth, Arc<Supports>), entity: &mut EntityWorldMut) {
+        plugin::spawn_sloth(entity, def, sloth.clone(), supports.clone());
+    }
+}

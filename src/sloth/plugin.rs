@@ -1,0 +1,236 @@
+//! The sloth kind's plugin: its parameters and keys, the walk in the fixed step, the
+//! write-back of its mesh, and its dump.
+
+use super::def::{SlothDef, WalkDirection};
+use super::locomotion::{Drive, Sloth};
+use super::mesh;
+use super::rig::{JOINTS, Limb};
+use super::supports::Supports;
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::entity::SceneEntity;
+use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
+use crate::foundation::params::RegisterParams;
+use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
+use crate::foundation::values::srgb_channels;
+use crate::raster::{Material, RasterMesh};
+use crate::tree::TreeBody;
+use bevy::ecs::world::EntityWorldMut;
+use bevy::prelude::*;
+use serde_json::{Map, Value, json};
+use std::sync::Arc;
+
+/// A sloth's parameters: `<name>.speed` (m/s), `<name>.autorun`, `<name>.direction`.
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Component)]
+pub struct SlothParams {
+    /// Mean walking speed, metres per second (clamped to 0.05-0.35).
+    pub speed: f32,
+    /// Walk without a key held, until no foothold is found.
+    pub autorun: bool,
+    /// Which way autorun walks.
+    pub direction: WalkDirection,
+}
+
+/// What the keys ask of a sloth until the next fixed step.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct SlothInput {
+    /// +1 while forward is held, -1 while back is held.
+    pub hold: f32,
+    /// A change of branch asked for: +1 right, -1 left.
+    pub change: Option<f32>,
+    /// +1 while right is held, -1 while left is held (side steps round a trunk).
+    pub around: f32,
+}
+
+/// The scene's description of a sloth.
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct SlothSource(pub SlothDef);
+
+/// A placed sloth and the supports it moves on.
+#[derive(Component, Debug, Clone)]
+pub struct SlothBody {
+    /// Its locomotion state.
+    pub sloth: Sloth,
+    /// The scene's supports when it was placed.
+    pub supports: Arc<Supports>,
+}
+
+/// Spawns a sloth entity of `def`, placed as `sloth` among `supports`.
+pub(super) fn spawn_sloth(entity: &mut EntityWorldMut, def: &SlothDef, sloth: Sloth, supports: Arc<Supports>) {
+    entity.insert((
+        Transform::IDENTITY,
+        RasterMesh { mesh: Arc::default(), material: Material::colored(Vec3::ONE) },
+        SlothSource(def.clone()),
+        SlothParams { speed: def.speed.0, autorun: def.autorun, direction: def.direction },
+        SlothInput::default(),
+        SlothBody { sloth, supports },
+    ));
+}
+
+/// Keys of the sloth kind, held or pressed.
+const FORWARD_KEY: KeyCode = KeyCode::KeyW;
+const BACK_KEY: KeyCode = KeyCode::KeyS;
+const AUTORUN_KEY: KeyCode = KeyCode::KeyR;
+const LEFT_KEY: KeyCode = KeyCode::KeyA;
+const RIGHT_KEY: KeyCode = KeyCode::KeyD;
+
+/// Runs sloths: parameters, keys, placement after tree edits, locomotion, mesh and dump.
+#[derive(Default)]
+pub struct SlothPlugin;
+
+impl Plugin for SlothPlugin {
+    fn build(&self, app: &mut App) {
+        let scope = KeyScope::Kind("sloth");
+        app.register_params::<SlothParams>()
+            .register_dump::<SlothBody>()
+            .register_keys(&[
+                KeyHelp { key: FORWARD_KEY, action: "walk forward, or climb up a trunk (hold)", scope },
+                KeyHelp { key: BACK_KEY, action: "walk back, or climb down a trunk (hold)", scope },
+                KeyHelp { key: AUTORUN_KEY, action: "autorun on or off (stops where no foothold is found)", scope },
+                KeyHelp {
+                    key: LEFT_KEY,
+                    action: "change to the branch on the left; on a trunk, hold to step round it",
+                    scope,
+                },
+                KeyHelp {
+                    key: RIGHT_KEY,
+                    action: "change to the branch on the right; on a trunk, hold to step round it",
+                    scope,
+                },
+            ])
+            .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input))
+            .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply))
+            .add_systems(FixedUpdate, walk_sloths.in_set(SimSystems::Locomotion))
+            .add_systems(PostUpdate, write_back_sloths.in_set(WriteBackSystems));
+    }
+}
+
+fn sloth_keys(keys: Res<ButtonInput<KeyCode>>, mut sloths: Query<(&mut SlothInput, &mut SlothParams)>) {
+    let hold = f32::from(keys.pressed(FORWARD_KEY)) - f32::from(keys.pressed(BACK_KEY));
+    let around = f32::from(keys.pressed(RIGHT_KEY)) - f32::from(keys.pressed(LEFT_KEY));
+    let change = if keys.just_pressed(LEFT_KEY) {
+        Some(-1.0)
+    } else if keys.just_pressed(RIGHT_KEY) {
+        Some(1.0)
+    } else {
+        None
+    };
+    for (mut input, mut params) in &mut sloths {
+        input.hold = hold;
+        input.around = around;
+        if change.is_some() {
+            input.change = change;
+        }
+        if keys.just_pressed(AUTORUN_KEY) {
+            params.autorun = !params.autorun;
+        }
+    }
+}
+
+/// Places every sloth again when a tree was edited (sloths are placed when they are spawned),
+/// and any sloth an earlier placement left without a body.
+fn place_sloths(
+    mut commands: Commands,
+    trees: Query<(&SceneEntity, Ref<TreeBody>)>,
+    sloths: Query<(Entity, &SceneEntity, &SlothSource, &SlothParams, Has<SlothBody>)>,
+) {
+    let rebuild = trees.iter().any(|(_, body)| body.is_changed() && !body.is_added());
+    if !rebuild && sloths.iter().all(|(.., placed)| placed) {
+        return;
+    }
+    let mut named: Vec<(&SceneEntity, Ref<TreeBody>)> = trees.iter().collect();
+    named.sort_by_key(|(entity, _)| entity.index);
+    let supports = Arc::new(Supports::new(named.iter().map(|(entity, body)| (entity.name.as_str(), &body.tree))));
+    for (entity, scene_entity, source, params, placed) in &sloths {
+        if placed && !rebuild {
+            continue;
+        }
+        match source.0.place(&supports, params.speed) {
+            Ok(sloth) => {
+                commands.entity(entity).insert(SlothBody { sloth, supports: supports.clone() });
+            }
+            Err(error) => {
+                error!("sloth `{}` not placed: {error}", scene_entity.name);
+                commands.entity(entity).remove::<SlothBody>();
+            }
+        }
+    }
+}
+
+fn walk_sloths(time: Res<Time>, mut sloths: Query<(&mut SlothBody, &mut SlothParams, &mut SlothInput)>) {
+    let dt = time.delta_secs();
+    for (mut body, mut params, mut input) in &mut sloths {
+        let direction = if input.hold != 0.0 {
+            input.hold
+        } else if params.autorun {
+            params.direction.sign()
+        } else {
+            0.0
+        };
+        let drive = Drive { direction, change: input.change.take(), around: input.around };
+        let SlothBody { sloth, supports } = &mut *body;
+        sloth.speed = params.speed;
+        sloth.step(dt, drive, supports);
+        if params.autorun && input.hold == 0.0 && sloth.blocked.is_some() {
+            params.autorun = false;
+        }
+    }
+}
+
+/// Meshes sloths whose pose changed.
+fn write_back_sloths(mut sloths: Query<(&SlothBody, &SlothSource, &mut RasterMesh), Changed<SlothBody>>) {
+    for (body, source, mut raster) in &mut sloths {
+        raster.mesh = Arc::new(mesh::sloth_mesh(&body.sloth, srgb_channels(source.0.color.0)));
+    }
+}
+
+fn vec3(v: Vec3) -> Value {
+    json!([v.x, v.y, v.z])
+}
+
+impl DumpState for SlothBody {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let sloth = &self.sloth;
+        let label = |index: usize| self.supports.paths[index].label.clone();
+        let mut feet = Map::new();
+        let mut joints = Map::new();
+        for limb in Limb::ALL {
+            let foot = &sloth.feet[limb.index()];
+            let rig = &sloth.rigs[limb.index()];
+            feet.insert(
+                limb.key().into(),
+                json!({
+                    "position": vec3(foot.position),
+                    "planted": foot.planted(),
+                    "support": label(foot.support),
+                    "surface_distance": self.supports.paths[foot.support].distance(foot.position),
+                }),
+            );
+            let limb_joints: Map<String, Value> = (0..JOINTS)
+                .map(|j| {
+                    let joint = json!({
+                        "angle_deg": foot.angles[j].to_degrees(),
+                        "min_deg": rig.min[j].to_degrees(),
+                        "max_deg": rig.max[j].to_degrees(),
+                    });
+                    (limb.joint_names()[j].to_string(), joint)
+                })
+                .collect();
+            joints.insert(limb.key().into(), Value::Object(limb_joints));
+        }
+        let footfalls: Vec<Value> =
+            sloth.footfalls.iter().map(|f| json!({ "limb": f.limb.key(), "time": f.time })).collect();
+        out.insert("body_position".into(), vec3(sloth.frame.centre));
+        out.insert("heading".into(), vec3(sloth.frame.forward));
+        out.insert("support".into(), json!(label(sloth.support())));
+        out.insert("changing_to".into(), json!(sloth.change_to.map(label)));
+        out.insert("blocked".into(), json!(sloth.blocked.is_some()));
+        out.insert("feet".into(), Value::Object(feet));
+        out.insert("joints".into(), Value::Object(joints));
+        out.insert("footfalls".into(), json!(footfalls));
+        out.insert("distance_travelled".into(), json!(sloth.distance));
+        out.insert("mean_speed".into(), json!(sloth.mean_speed()));
+        out.insert("body_clearance".into(), json!(sloth.clearance));
+        out.insert("min_body_clearance".into(), json!(sloth.min_clearance));
+    }
+}

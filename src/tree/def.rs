@@ -1,0 +1,281 @@
+//! The `tree:` entry of a scene file (supports written out, or generator settings), its
+//! checks, and the kind that reads, builds, spawns and saves it.
+
+use super::generate::{self, GeneratorSettings};
+use super::model::{Shape, SupportKind, SupportSpec, Tree, TreeError};
+use super::plugin::{self, TreePlugin, TreeSource};
+use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use crate::foundation::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
+use crate::foundation::yaml::FileError;
+use crate::raster::texture::TextureDef;
+use bevy::color::Srgba;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
+use serde::{Deserialize, Serialize};
+
+/// A `tree` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TreeDef {
+    /// Bark colour; brown by default.
+    #[serde(default = "bark")]
+    pub color: Color,
+    /// Bark image (PNG or BMP in the scene's folder), wrapped once around each support (u) and
+    /// repeating every metre along it (v), times `repeat`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<TextureDef>,
+    /// Vertices around each ring of the tubes (3 to 64; 12 by default).
+    #[serde(deserialize_with = "sides")]
+    #[serde(default = "default_sides")]
+    pub sides: usize,
+    /// The trunks and branches, written out.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub supports: Vec<SupportDef>,
+    /// Or: generated from these settings (see `canopy tree generate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generate: Option<GeneratorSettings>,
+}
+
+fn bark() -> Color {
+    Color(Srgba::rgb(0.42, 0.3, 0.2))
+}
+
+fn default_sides() -> usize {
+    12
+}
+
+/// Reads `sides`: a whole number from 3 to 64.
+fn sides<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
+    let sides = u64::deserialize(deserializer)?;
+    if (3..=64).contains(&sides) {
+        Ok(sides as usize)
+    } else {
+        Err(serde::de::Error::custom(format_args!("expected 3 to 64 sides, found {sides}")))
+    }
+}
+
+/// One support in a scene file: a polyline (`points`, `radii`) or a fork from a parent
+/// (`parent`, `at`, `yaw_deg`, `pitch_deg`, `length`, `radius`, optionally `bend_deg` and
+/// `sections`).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportDef {
+    /// Unique within the tree.
+    pub name: String,
+    /// `trunk` or `branch`; by default a support tilted more than 70 degrees from horizontal is
+    /// a trunk.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<SupportKind>,
+    /// Axis points in metres (a polyline).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<Point>>,
+    /// A radius in metres at each point (a polyline).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radii: Option<Vec<Radius>>,
+    /// The support this one forks from (a fork).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<String>,
+    /// Where along the parent it starts, 0 to 1 of its length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<UnitInterval>,
+    /// Initial heading about +y, degrees (0 towards +z, 90 towards +x); 0 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub yaw_deg: Option<Degrees>,
+    /// Initial angle above the horizontal, degrees; 0 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pitch_deg: Option<Degrees>,
+    /// Length in metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<Length>,
+    /// Radius at the start and at the tip, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<[Radius; 2]>,
+    /// Total change of heading and pitch along the branch, degrees; none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bend_deg: Option<[Degrees; 2]>,
+    /// Straight sections of a fork (1 to 64; 4 by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sections: Option<u32>,
+}
+
+/// Fields only forks take.
+const FORK_FIELDS: [&str; 8] = ["parent", "at", "yaw_deg", "pitch_deg", "length", "radius", "bend_deg", "sections"];
+
+impl SupportDef {
+    /// The support's description, or the field at fault and why.
+    fn spec(&self) -> Result<SupportSpec, (&'static str, String)> {
+        let polyline = self.points.is_some() || self.radii.is_some();
+        let fork = self.parent.is_some();
+        let shape = match (polyline, fork) {
+            (true, true) => {
+                return Err((
+                    "parent",
+                    "a support is either a polyline (points, radii) or a fork (parent, ...), not both".into(),
+                ));
+            }
+            (false, false) => {
+                return Err((
+                    "name",
+                    format!("support \"{}\" needs points and radii, or a parent to fork from", self.name),
+                ));
+            }
+            (true, false) => {
+                if let Some(field) = self.fork_field() {
+                    return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
+                }
+                let points = self.points.as_ref().ok_or(("radii", "a polyline needs points too".to_string()))?;
+                let radii = self.radii.as_ref().ok_or(("points", "a polyline needs radii too".to_string()))?;
+                Shape::Polyline {
+                    points: points.iter().map(|p| p.0).collect(),
+                    radii: radii.iter().map(|r| r.0).collect(),
+                }
+            }
+            (false, true) => {
+                let missing = |field: &'static str| ("parent", format!("a fork needs `{field}`"));
+                let sections = self.sections.unwrap_or(4);
+                if !(1..=64).contains(&sections) {
+                    return Err(("sections", format!("expected 1 to 64 sections, found {sections}")));
+                }
+                Shape::Fork {
+                    parent: self.parent.clone().unwrap_or_default(),
+                    at: self.at.ok_or_else(|| missing("at"))?.0,
+                    yaw_deg: self.yaw_deg.map_or(0.0, |d| d.0),
+                    pitch_deg: self.pitch_deg.map_or(0.0, |d| d.0),
+                    length: self.length.ok_or_else(|| missing("length"))?.0,
+                    radius: self.radius.ok_or_else(|| missing("radius"))?.map(|r| r.0),
+                    bend_deg: self.bend_deg.map_or([0.0; 2], |b| b.map(|d| d.0)),
+                    sections,
+                }
+            }
+        };
+        Ok(SupportSpec { name: self.name.clone(), shape, kind: self.kind })
+    }
+
+    /// Every optional field and whether it is given, in file-format order.
+    fn given(&self) -> [(&'static str, bool); 11] {
+        [
+            ("kind", self.kind.is_some()),
+            ("points", self.points.is_some()),
+            ("radii", self.radii.is_some()),
+            ("parent", self.parent.is_some()),
+            ("at", self.at.is_some()),
+            ("yaw_deg", self.yaw_deg.is_some()),
+            ("pitch_deg", self.pitch_deg.is_some()),
+            ("length", self.length.is_some()),
+            ("radius", self.radius.is_some()),
+            ("bend_deg", self.bend_deg.is_some()),
+            ("sections", self.sections.is_some()),
+        ]
+    }
+
+    /// The first fork-only field given, if any.
+    fn fork_field(&self) -> Option<&'static str> {
+        self.given().into_iter().find_map(|(field, given)| (given && FORK_FIELDS.contains(&field)).then_some(field))
+    }
+
+    /// Whether this support's mapping holds `field`, for locating errors in the file.
+    pub fn has_field(&self, field: &str) -> bool {
+        field == "name" || self.given().into_iter().any(|(name, given)| given && name == field)
+    }
+}
+
+impl TreeDef {
+    /// The tree this definition describes, or the support and field at fault and why.
+    pub fn build(&self) -> Result<Tree, TreeError> {
+        let tree_error = |field, message: String| TreeError { support: None, field, message };
+        match (&self.generate, self.supports.is_empty()) {
+            (Some(_), false) => Err(tree_error("generate", "give either supports or generate, not both".into())),
+            (None, true) => Err(tree_error("supports", "a tree needs supports, or generate settings".into())),
+            (Some(settings), true) => {
+                settings.check().map_err(|message| tree_error("generate", message))?;
+                Tree::build(
+                    &generate::generate(settings).into_iter().enumerate().flat_map(prefixed).collect::<Vec<_>>(),
+                )
+            }
+            (None, false) => {
+                let specs = self
+                    .supports
+                    .iter()
+                    .enumerate()
+                    .map(|(support, def)| {
+                        def.spec().map_err(|(field, message)| TreeError { support: Some(support), field, message })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Tree::build(&specs)
+            }
+        }
+    }
+}
+
+/// The supports of generated tree `index`, renamed `t<index + 1>-<name>` so that the supports of
+/// all the trees generated into one entity have distinct names.
+fn prefixed((index, supports): (usize, Vec<SupportSpec>)) -> Vec<SupportSpec> {
+    let rename = |name: &str| format!("t{}-{name}", index + 1);
+    supports
+        .into_iter()
+        .map(|mut spec| {
+            spec.name = rename(&spec.name);
+            if let Shape::Fork { parent, .. } = &mut spec.shape {
+                *parent = rename(parent);
+            }
+            spec
+        })
+        .collect()
+}
+
+/// The `tree` kind.
+pub struct TreeKind;
+
+impl EntityKind for TreeKind {
+    const KEY: &'static str = "tree";
+    type Def = TreeDef;
+    type Built = Tree;
+    type Plugin = TreePlugin;
+
+    fn references(def: &TreeDef) -> Vec<String> {
+        TextureDef::reference(def.texture.as_ref())
+    }
+
+    fn resolve(def: &mut TreeDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx))
+    }
+
+    /// Builds the tree; an error is located at its support's field, the nth occurrence of that
+    /// key among the supports of the file's trees, or at the tree's `generate` or `tree` key.
+    fn build(def: &TreeDef, cx: &BuildContext) -> Result<Tree, FileError> {
+        let error = match def.build() {
+            Ok(tree) => return Ok(tree),
+            Err(error) => error,
+        };
+        let entity = &cx.entity;
+        let message = format!("entities[{}].tree.{error}", entity.index);
+        let earlier: Vec<&TreeDef> = cx.earlier::<TreeKind>().collect();
+        let Some(support) = error.support else {
+            // About the tree as a whole: at its `generate` key, or else its `tree` key.
+            return Err(match error.field {
+                "generate" => {
+                    let nth = earlier.iter().filter(|tree| tree.generate.is_some()).count();
+                    entity.locate("generate", nth, message)
+                }
+                _ => entity.locate("tree", earlier.len(), message),
+            });
+        };
+        // Supports of earlier trees, and earlier supports of this one, holding the key.
+        let before = earlier.iter().flat_map(|tree| &tree.supports).chain(&def.supports[..support]);
+        let mut nth = before.filter(|s| s.has_field(error.field)).count();
+        if error.field == "name" {
+            // Entity names come before their kinds' supports in the file.
+            nth += cx.names_through();
+        }
+        Err(entity.locate(error.field, nth, message))
+    }
+
+    fn spawn(def: &TreeDef, tree: &Tree, entity: &mut EntityWorldMut) {
+        plugin::spawn_tree(entity, def, tree.clone());
+    }
+
+    fn save_live(def: &mut TreeDef, entity: EntityRef) {
+        if let Some(source) = entity.get::<TreeSource>() {
+            *def = source.def.clone();
+        }
+    }
+}

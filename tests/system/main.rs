@@ -1,0 +1,12 @@
+//! System tests: the real plugins, headless, on scenes from disk, checked through the state
+//! dump and the framebuffer; one module per domain, in one binary so that they build once and
+//! run in parallel.
+
+mod common;
+mod controls;
+mod muscle;
+mod scene;
+mod shape;
+mod sloth;
+mod tree;
+mod view;

@@ -1,0 +1,71 @@
+//! The muscle: flexion by parameter and key at constant volume, its configuration files.
+
+use super::common::*;
+use canopy::run::RunOutput;
+
+#[test]
+fn setting_the_flexion_thickens_the_belly_at_constant_volume() {
+    let timeline = "- { at: 0.0, set: { biceps.flexion_deg: 30 } }\n- { at: 0.5, set: { biceps.flexion_deg: 60 } }\n- { at: 1.0, set: { biceps.flexion_deg: 90 } }\n";
+    let mut belly = Vec::new();
+    for (frames, flexion) in [(10, 30.0), (40, 60.0), (70, 90.0)] {
+        let output = run("scenes/biceps_real.yaml", frames, Some(timeline), SMALL);
+        let muscle = entity(&output.dump, "biceps");
+        assert_eq!(muscle["kind"], "muscle");
+        assert!((muscle["flexion_deg"].as_f64().unwrap() - flexion).abs() < 1e-9, "{muscle}");
+        // The length follows from the carcass (b1 = 220, a2 = 30) by the law of cosines.
+        let expected_length =
+            (220.0f64.powi(2) + 30.0f64.powi(2) + 2.0 * 220.0 * 30.0 * flexion.to_radians().cos()).sqrt();
+        let length = muscle["length"].as_f64().unwrap();
+        assert!((length - expected_length).abs() < 1e-9, "{length} vs {expected_length}");
+        assert!((muscle["node_spacing"].as_f64().unwrap() - length / 10.0).abs() < 1e-12);
+        // The radii follow from the model and keep the rest volume.
+        let radii: Vec<f64> = muscle["radii"].as_array().unwrap().iter().map(|r| r.as_f64().unwrap()).collect();
+        let spacing = length / 10.0;
+        let volume: f64 = radii.windows(2).map(|w| (w[0] * w[0] + w[0] * w[1] + w[1] * w[1]) / 3.0).sum::<f64>()
+            * std::f64::consts::PI
+            * spacing;
+        let rest = muscle["rest_volume"].as_f64().unwrap();
+        assert!(((volume - rest) / rest).abs() < 1e-12, "volume {volume} vs rest {rest}");
+        assert_eq!(radii[0], 5.0);
+        belly.push(radii[7]);
+    }
+    assert!(belly[0] < belly[1] && belly[1] < belly[2], "the belly thickens with flexion: {belly:?}");
+}
+
+#[test]
+fn holding_w_flexes_the_elbow_at_its_documented_rate() {
+    let output = run("scenes/biceps.yaml", 30, Some("- { at: 0, press: [KeyW] }"), SMALL);
+    let start = run("scenes/biceps.yaml", 1, None, SMALL);
+    let flexion = |o: &RunOutput| entity(&o.dump, "biceps")["flexion_deg"].as_f64().unwrap();
+    // 30 degrees per second for 30 frames at 60 Hz.
+    assert!((flexion(&output) - flexion(&start) - 15.0).abs() < 1e-3, "{} -> {}", flexion(&start), flexion(&output));
+}
+
+#[test]
+fn the_source_config_file_alone_is_a_playable_scene() {
+    let output = run("scenes/biceps_config.yaml", 2, Some("- { at: 0, set: { muscle.flexion_deg: 60 } }"), SMALL);
+    let muscle = entity(&output.dump, "muscle");
+    assert_eq!(muscle["kind"], "muscle");
+    assert!((muscle["flexion_deg"].as_f64().unwrap() - 60.0).abs() < 1e-9);
+    // The default camera frames the arm: the muscle's red is on screen, around the middle.
+    let width = output.framebuffer.width() as usize;
+    let columns: Vec<usize> = output
+        .framebuffer
+        .color()
+        .chunks_exact(4)
+        .enumerate()
+        .filter(|(_, p)| p[0] as u32 > 2 * p[1] as u32 && p[0] > 60)
+        .map(|(i, _)| i % width)
+        .collect();
+    assert!(columns.len() > 100, "{} muscle pixels", columns.len());
+    let centre = columns.iter().sum::<usize>() as f64 / columns.len() as f64;
+    assert!((width as f64 * 0.2..width as f64 * 0.8).contains(&centre), "muscle centred at column {centre}");
+}
+
+#[test]
+fn a_muscle_configured_from_another_file_plays_like_the_inline_one() {
+    let timeline = Some("- { at: 0, set: { biceps.flexion_deg: 80 } }");
+    let from_file = run("scenes/biceps_from_file.yaml", 3, timeline, SMALL);
+    let inline = run("scenes/biceps.yaml", 3, timeline, SMALL);
+    assert_eq!(entity(&from_file.dump, "biceps")["radii"], entity(&inline.dump, "biceps")["radii"]);
+}
