@@ -9,3 +9,12 @@ for name in "${scenes[@]}"; do
     cargo run --quiet -- run "scenes/$name.yaml" --frames 60 --size 640x360 --screenshot "docs/images/$name.png"
     echo "docs/images/$name.png"
 done
+
+# The window with its panel, where a display server can be started (Xvfb, and a Vulkan driver
+# such as Mesa's lavapipe).
+if command -v xvfb-run >/dev/null; then
+    xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 20
+    echo "docs/images/window.png"
+else
+    echo "xvfb-run not found: docs/images/window.png left as it is" >&2
+fi

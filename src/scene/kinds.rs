@@ -20,6 +20,12 @@ use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// A kind's key and its definition, as an entity's mapping holds them.
+pub type KindValue = (&'static str, Box<dyn KindDef>);
+
+/// The kinds of `L`, then kind `K`: a node of a [`KindList`].
+pub struct Then<L, K>(PhantomData<fn() -> (L, K)>);
+
 /// A list of kinds known by type, so that serde can read and write each kind's definition
 /// with the deserializer at hand (and its errors keep their place in the file).
 pub trait KindList: Send + Sync + 'static {
@@ -28,10 +34,7 @@ pub trait KindList: Send + Sync + 'static {
 
     /// Reads the value of an entity's `key` as that kind's definition; `None` if no kind has
     /// the key.
-    fn next_value<'de, A: MapAccess<'de>>(
-        key: &str,
-        map: &mut A,
-    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>>;
+    fn next_value<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<KindValue, A::Error>>;
 
     /// Writes `def` as the value of `key`; `None` if no kind has the key.
     fn serialize_entry<M: SerializeMap>(key: &str, def: &dyn KindDef, map: &mut M) -> Option<Result<(), M::Error>>;
@@ -42,10 +45,7 @@ impl KindList for () {
         Vec::new()
     }
 
-    fn next_value<'de, A: MapAccess<'de>>(
-        _key: &str,
-        _map: &mut A,
-    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>> {
+    fn next_value<'de, A: MapAccess<'de>>(_key: &str, _map: &mut A) -> Option<Result<KindValue, A::Error>> {
         None
     }
 
@@ -54,17 +54,14 @@ impl KindList for () {
     }
 }
 
-impl<L: KindList, K: EntityKind> KindList for (L, PhantomData<fn() -> K>) {
+impl<L: KindList, K: EntityKind> KindList for Then<L, K> {
     fn keys() -> Vec<&'static str> {
         let mut keys = L::keys();
         keys.push(K::KEY);
         keys
     }
 
-    fn next_value<'de, A: MapAccess<'de>>(
-        key: &str,
-        map: &mut A,
-    ) -> Option<Result<(&'static str, Box<dyn KindDef>), A::Error>> {
+    fn next_value<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<KindValue, A::Error>> {
         if key != K::KEY {
             return L::next_value(key, map);
         }
@@ -169,7 +166,7 @@ impl Default for Kinds<()> {
 
 impl<L: KindList> Kinds<L> {
     /// Adds kind `K` after the kinds listed so far.
-    pub fn with<K: EntityKind>(mut self) -> Kinds<(L, PhantomData<fn() -> K>)> {
+    pub fn with<K: EntityKind>(mut self) -> Kinds<Then<L, K>> {
         assert!(self.kinds.iter().all(|kind| kind.key() != K::KEY), "two entity kinds have the key `{}`", K::KEY);
         self.kinds.push(Box::new(Erased::<K>(PhantomData)));
         Kinds { kinds: self.kinds, list: PhantomData }
@@ -312,24 +309,28 @@ impl KindRegistry {
         scene.check_view(path, &text)?;
         let mut built: Vec<Option<Built>> = vec![None; scene.entities.len()];
         for kind in &self.kinds {
+            // What the kinds before this one built, as every entity of this kind sees it.
+            let records: Vec<EntityRecord> = scene
+                .entities
+                .iter()
+                .zip(&built)
+                .map(|(entity, built)| EntityRecord {
+                    name: entity.name.as_deref(),
+                    key: entity.key,
+                    def: &*entity.def,
+                    built: built.as_deref(),
+                })
+                .collect();
+            let mut made = Vec::new();
             for (index, entity) in scene.entities.iter().enumerate().filter(|(_, e)| e.key == kind.key()) {
-                let records: Vec<EntityRecord> = scene
-                    .entities
-                    .iter()
-                    .zip(&built)
-                    .map(|(entity, built)| EntityRecord {
-                        name: entity.name.as_deref(),
-                        key: entity.key,
-                        def: &*entity.def,
-                        built: built.as_deref(),
-                    })
-                    .collect();
                 let cx = BuildContext {
                     entity: EntityContext { path, text: &text, index, key: entity.key },
                     entities: &records,
                 };
-                let made = kind.build(&*entity.def, &cx)?;
-                built[index] = Some(made);
+                made.push((index, kind.build(&*entity.def, &cx)?));
+            }
+            for (index, result) in made {
+                built[index] = Some(result);
             }
         }
         scene.check_names(path, &text)?;

@@ -5,7 +5,7 @@
 //! Every entity is a mapping with an optional `name` and exactly one kind key; the kind's
 //! value is that kind's definition (see [`super::kinds`]).
 
-use super::kinds::KindList;
+use super::kinds::{KindList, KindValue};
 use crate::foundation::kind::{KindDef, Standalone};
 use crate::foundation::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::foundation::yaml::{FileError, deserialize_str_with, locate_key as locate};
@@ -286,7 +286,7 @@ impl<'de, L: KindList> Deserialize<'de> for ReadEntity<L> {
 
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<ReadEntity<L>, A::Error> {
                 let mut name: Option<String> = None;
-                let mut kind: Option<(&'static str, Box<dyn KindDef>)> = None;
+                let mut kind: Option<KindValue> = None;
                 while let Some(key) = map.next_key::<String>()? {
                     if key == "name" {
                         if name.is_some() {
