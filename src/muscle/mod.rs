@@ -4,7 +4,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`def`] | the `muscle:` entry of a scene file, the source's two configurations, [`MuscleKind`] |
-//! | [`plugin`] | [`MusclePlugin`]: parameters, keys, the model in the fixed step, write-back, dump |
+//! | [`plugin`] | [`MusclePlugin`] and its set [`MuscleSystems`]: parameters, keys, the model in the fixed step, write-back, dump |
 //! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
 //! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
 //! | [`surface`] | the revolved surface with smooth profile normals |
@@ -26,4 +26,4 @@ pub mod plugin;
 pub mod surface;
 
 pub use def::{CarcassConfig, ConfigFile, MuscleConfig, MuscleDef, MuscleKind};
-pub use plugin::{MuscleBody, MuscleParams, MusclePlugin, Placement};
+pub use plugin::{MuscleBody, MuscleParams, MusclePlugin, MuscleSystems, Placement};

@@ -100,6 +100,11 @@ pub(super) fn spawn_muscle(entity: &mut EntityWorldMut, def: &MuscleDef, (model,
         });
 }
 
+/// Every system of the muscle kind, in whichever phase it runs: a handle for ordering other
+/// plugins' systems before or after the muscles'.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MuscleSystems;
+
 /// Runs muscles: parameters, keys, the model in the fixed step, write-back, dump and panel.
 #[derive(Default)]
 pub struct MusclePlugin;
@@ -142,10 +147,13 @@ impl Plugin for MusclePlugin {
             .register_keys(&MUSCLE_KEYS.map(|(key, action, ..)| help(key, action)))
             .register_keys(&PLACEMENT_KEYS.map(|(key, action, ..)| help(key, action)))
             .register_panel_section("muscle", panel::muscle_section)
-            .add_systems(RunFixedMainLoop, (flex_with_keys, place_with_keys).in_set(ControlSystems::Input))
-            .add_systems(RunFixedMainLoop, apply_placement.in_set(ControlSystems::Apply))
-            .add_systems(FixedUpdate, follow_flexion.in_set(SimSystems::Deform))
-            .add_systems(PostUpdate, write_back_muscles.in_set(WriteBackSystems));
+            .add_systems(
+                RunFixedMainLoop,
+                (flex_with_keys, place_with_keys).in_set(ControlSystems::Input).in_set(MuscleSystems),
+            )
+            .add_systems(RunFixedMainLoop, apply_placement.in_set(ControlSystems::Apply).in_set(MuscleSystems))
+            .add_systems(FixedUpdate, follow_flexion.in_set(SimSystems::Deform).in_set(MuscleSystems))
+            .add_systems(PostUpdate, write_back_muscles.in_set(WriteBackSystems).in_set(MuscleSystems));
     }
 }
 

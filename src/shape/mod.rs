@@ -4,7 +4,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`def`] | the `shape:` entry of a scene file and [`ShapeKind`] |
-//! | [`plugin`] | [`ShapePlugin`]: parameters, dump, spinning, writing the transform and colour |
+//! | [`plugin`] | [`ShapePlugin`] and its set [`ShapeSystems`]: parameters, dump, spinning, writing the transform and colour |
 //!
 //! Parameters (`<name>.<parameter>`, all from [`ShapeParams`]): `position.{x,y,z}` (metres),
 //! `rotation_deg.{x,y,z}`, `size.{x,y,z}` (metres, > 0), `color.{red,green,blue}` (0 to 1),
@@ -17,4 +17,4 @@ pub mod def;
 pub mod plugin;
 
 pub use def::{ShapeDef, ShapeKind};
-pub use plugin::{Shape, ShapeParams, ShapePlugin};
+pub use plugin::{Shape, ShapeParams, ShapePlugin, ShapeSystems};

@@ -80,6 +80,11 @@ impl DumpState for Shape {
     }
 }
 
+/// Every system of the shape kind, in whichever phase it runs: a handle for ordering other
+/// plugins' systems before or after the shapes'.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ShapeSystems;
+
 /// Runs shapes: their parameters and dump fields, spinning, and their write-back.
 #[derive(Default)]
 pub struct ShapePlugin;
@@ -89,8 +94,8 @@ impl Plugin for ShapePlugin {
         app.register_params::<ShapeParams>()
             .register_dump::<Shape>()
             .register_dump::<ShapeParams>()
-            .add_systems(FixedUpdate, spin_shapes.in_set(SimSystems::Deform))
-            .add_systems(PostUpdate, write_back_shapes.in_set(WriteBackSystems));
+            .add_systems(FixedUpdate, spin_shapes.in_set(SimSystems::Deform).in_set(ShapeSystems))
+            .add_systems(PostUpdate, write_back_shapes.in_set(WriteBackSystems).in_set(ShapeSystems));
     }
 }
 

@@ -6,7 +6,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`def`] | the `sloth:` entry of a scene file and [`SlothKind`], which places it once while checking |
-//! | [`plugin`] | [`SlothPlugin`]: parameters `<name>.speed`, `.autorun`, `.direction`, keys, the walk, mesh write-back, dump |
+//! | [`plugin`] | [`SlothPlugin`] and its set [`SlothSystems`]: parameters `<name>.speed`, `.autorun`, `.direction`, keys, the walk, mesh write-back, dump |
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
 //! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
@@ -38,5 +38,5 @@ pub mod transfer;
 
 pub use def::{Facing, SlothDef, SlothKind, WalkDirection};
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
-pub use plugin::{SlothBody, SlothInput, SlothParams, SlothPlugin, SlothSource};
+pub use plugin::{SlothBody, SlothInput, SlothParams, SlothPlugin, SlothSource, SlothSystems};
 pub use supports::Supports;

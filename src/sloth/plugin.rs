@@ -74,6 +74,11 @@ const AUTORUN_KEY: KeyCode = KeyCode::KeyR;
 const LEFT_KEY: KeyCode = KeyCode::KeyA;
 const RIGHT_KEY: KeyCode = KeyCode::KeyD;
 
+/// Every system of the sloth kind, in whichever phase it runs: a handle for ordering other
+/// plugins' systems before or after the sloths'.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SlothSystems;
+
 /// Runs sloths: parameters, keys, placement after tree edits, locomotion, mesh and dump.
 #[derive(Default)]
 pub struct SlothPlugin;
@@ -98,10 +103,10 @@ impl Plugin for SlothPlugin {
                     scope,
                 },
             ])
-            .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input))
-            .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply))
-            .add_systems(FixedUpdate, walk_sloths.in_set(SimSystems::Locomotion))
-            .add_systems(PostUpdate, write_back_sloths.in_set(WriteBackSystems));
+            .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input).in_set(SlothSystems))
+            .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply).in_set(SlothSystems))
+            .add_systems(FixedUpdate, walk_sloths.in_set(SimSystems::Locomotion).in_set(SlothSystems))
+            .add_systems(PostUpdate, write_back_sloths.in_set(WriteBackSystems).in_set(SlothSystems));
     }
 }
 

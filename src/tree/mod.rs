@@ -4,7 +4,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`def`] | the `tree:` entry of a scene file and [`TreeKind`] |
-//! | [`plugin`] | [`TreePlugin`]: the live tree, picking, edits with undo, mesh write-back, dump |
+//! | [`plugin`] | [`TreePlugin`] and its set [`TreeSystems`]: the live tree, picking, edits with undo, mesh write-back, dump |
 //! | [`panel`] | the window's tree section: counts, the picked support and its editor |
 //! | [`model`] | supports from their descriptions (polylines or forks), trunk or branch |
 //! | [`geometry`] | one tapered segment: signed distance, closest surface point, ray hit |
@@ -32,4 +32,6 @@ pub use def::{SupportDef, TreeDef, TreeKind};
 pub use generate::GeneratorSettings;
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
-pub use plugin::{Pick, SelectedSupport, TreeBody, TreePlugin, TreeSource, edit_tree, pick, undo_tree_edit};
+pub use plugin::{
+    Pick, SelectedSupport, TreeBody, TreePlugin, TreeSource, TreeSystems, edit_tree, pick, undo_tree_edit,
+};

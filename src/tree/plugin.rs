@@ -174,6 +174,11 @@ fn replace_tree(world: &mut World, entity: Entity, def: TreeDef, remember: bool)
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SelectedSupport(pub usize);
 
+/// Every system of the tree kind, in whichever phase it runs: a handle for ordering other
+/// plugins' systems before or after the trees'.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TreeSystems;
+
 /// Runs trees: their dump fields, picking supports in the view, the panel section, and the
 /// write-back of their meshes.
 #[derive(Default)]
@@ -183,8 +188,8 @@ impl Plugin for TreePlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<TreeBody>()
             .register_panel_section("tree", panel::tree_section)
-            .add_systems(RunFixedMainLoop, select_clicked_support.in_set(ControlSystems::Input))
-            .add_systems(PostUpdate, write_back_trees.in_set(WriteBackSystems));
+            .add_systems(RunFixedMainLoop, select_clicked_support.in_set(ControlSystems::Input).in_set(TreeSystems))
+            .add_systems(PostUpdate, write_back_trees.in_set(WriteBackSystems).in_set(TreeSystems));
     }
 }
 
