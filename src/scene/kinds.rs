@@ -229,8 +229,18 @@ impl KindRegistry {
         self.kinds.iter().fold(group, |group, kind| kind.add_plugin(group))
     }
 
-    fn kind(&self, key: &str) -> &dyn ErasedKind {
-        self.kinds.iter().find(|kind| kind.key() == key).map(Box::as_ref).expect("every entity's key is a kind's")
+    /// The kind with `key`; `None` for a definition made in code with a key no kind has.
+    fn kind(&self, key: &str) -> Option<&dyn ErasedKind> {
+        self.kinds.iter().find(|kind| kind.key() == key).map(Box::as_ref)
+    }
+
+    /// The kind of the file's entity `index`, or an error naming it.
+    fn kind_of(&self, entity: &EntityDef, index: usize, path: &Path) -> Result<&dyn ErasedKind, FileError> {
+        self.kind(entity.key).ok_or_else(|| {
+            let message =
+                format!("entities[{index}]: no entity kind `{}` (kinds: {})", entity.key, self.keys.join(", "));
+            FileError::whole_file(path, message)
+        })
     }
 
     /// Reads and checks a scene file, and the files it refers to.
@@ -270,15 +280,19 @@ impl KindRegistry {
         let text = String::from_utf8_lossy(bytes);
         for (index, entity) in scene.entities.iter().enumerate() {
             let cx = EntityContext { path, text: &text, index, key: entity.key };
-            self.kind(entity.key).validate(&*entity.def, &cx)?;
+            self.kind_of(entity, index, path)?.validate(&*entity.def, &cx)?;
         }
         Ok(scene)
     }
 
     /// The files `scene` refers to, relative to its folder, each once, sorted.
     pub fn references(&self, scene: &SceneDef) -> Vec<String> {
-        let mut files: Vec<String> =
-            scene.entities.iter().flat_map(|entity| self.kind(entity.key).references(&*entity.def)).collect();
+        let mut files: Vec<String> = scene
+            .entities
+            .iter()
+            .flat_map(|entity| self.kind(entity.key).map(|kind| kind.references(&*entity.def)))
+            .flatten()
+            .collect();
         files.sort();
         files.dedup();
         files
@@ -294,10 +308,13 @@ impl KindRegistry {
         files: &[ReadFile],
     ) -> Result<LoadedScene, FileError> {
         let text = String::from_utf8_lossy(bytes);
+        for (index, entity) in scene.entities.iter().enumerate() {
+            self.kind_of(entity, index, path)?;
+        }
         for file in files {
             let mut decoded: HashMap<TypeId, Arc<dyn Any + Send + Sync>> = HashMap::new();
             for (index, entity) in scene.entities.iter_mut().enumerate() {
-                let kind = self.kind(entity.key);
+                let kind = self.kind_of(entity, index, path)?;
                 if !kind.references(&*entity.def).contains(&file.file) {
                     continue;
                 }
@@ -343,7 +360,9 @@ impl KindRegistry {
     pub fn to_yaml(&self, scene: &SceneDef) -> Result<String, serde_yaml::Error> {
         let mut scene = scene.clone();
         for entity in &mut scene.entities {
-            entity.def = self.kind(entity.key).saved(&*entity.def);
+            if let Some(kind) = self.kind(entity.key) {
+                entity.def = kind.saved(&*entity.def);
+            }
         }
         let text = (self.write)(&scene)?;
         Ok(format!("# Saved by Canopy; the scene format is described in docs/scenes.md.\n{text}"))
@@ -351,11 +370,41 @@ impl KindRegistry {
 
     /// Inserts the components of `entity`, a scene entity of `def`'s kind.
     pub fn spawn(&self, def: &EntityDef, built: &Built, entity: &mut EntityWorldMut) {
-        self.kind(def.key).spawn(&*def.def, built, entity);
+        match self.kind(def.key) {
+            Some(kind) => kind.spawn(&*def.def, built, entity),
+            None => bevy::log::error!("entity `{}` not spawned: no entity kind `{}`", def.display_name(), def.key),
+        }
     }
 
     /// Brings `def` up to date with the live `entity` it was spawned as.
     pub fn save_live(&self, def: &mut EntityDef, entity: EntityRef) {
-        self.kind(def.key).save_live(&mut *def.def, entity);
+        if let Some(kind) = self.kind(def.key) {
+            kind.save_live(&mut *def.def, entity);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_definition_of_no_registered_kind_is_an_error_not_a_panic() {
+        let kinds = Kinds::new().build();
+        let path = Path::new("code.yaml");
+        let mut scene = kinds.parse_unresolved(path, b"entities: []\n").unwrap();
+        scene.entities.push(EntityDef { name: None, key: "comet", def: Box::new(String::from("tail")) });
+        let error = kinds.finish(scene.clone(), path, b"", &[]).unwrap_err();
+        assert!(error.message.contains("entities[0]: no entity kind `comet`"), "{error}");
+        assert!(kinds.to_yaml(&scene).is_err());
+        assert!(kinds.references(&scene).is_empty());
+    }
+
+    #[test]
+    fn an_empty_registry_reads_a_scene_without_entities_and_refuses_any_kind() {
+        let kinds = Kinds::new().build();
+        assert!(kinds.keys().is_empty());
+        let error = kinds.parse(Path::new("s.yaml"), b"entities:\n  - shape: { primitive: box }\n").unwrap_err();
+        assert!(error.message.contains("unknown field `shape`, expected `name`"), "{error}");
     }
 }

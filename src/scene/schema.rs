@@ -296,10 +296,14 @@ impl<'de, L: KindList> Deserialize<'de> for ReadEntity<L> {
                         continue;
                     }
                     let Some(value) = L::next_value(&key, &mut map) else {
-                        return Err(de::Error::custom(format_args!(
-                            "unknown field `{key}`, expected one of `name`, `{}`",
-                            L::keys().join("`, `")
-                        )));
+                        // As serde words it for a struct's fields, which yaml.rs locates.
+                        let kinds = L::keys();
+                        let expected = if kinds.is_empty() {
+                            "`name`".to_string()
+                        } else {
+                            format!("one of `name`, `{}`", kinds.join("`, `"))
+                        };
+                        return Err(de::Error::custom(format_args!("unknown field `{key}`, expected {expected}")));
                     };
                     let value = value?;
                     if let Some((first, _)) = &kind {
