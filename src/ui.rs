@@ -175,6 +175,7 @@ struct PanelActions {
     step: bool,
     reload: bool,
     save: bool,
+    toggle_help: bool,
     view_size: egui::Vec2,
 }
 
@@ -274,6 +275,7 @@ fn draw_ui(world: &mut World) {
     if actions.reload {
         world.write_message(ReloadScene);
     }
+    world.resource_mut::<HelpVisible>().0 ^= actions.toggle_help;
     if actions.save {
         state.saved = Some(match save_live_scene(world) {
             Ok((path, Some(backup))) => format!("saved {}; the previous file is {}", path.display(), backup.display()),
@@ -334,6 +336,8 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
         actions.step = ui.add_enabled(data.control.paused, egui::Button::new("Step")).clicked();
         actions.reload = ui.button("Reload").clicked();
         actions.save = ui.button("Save").on_hover_text(SAVE_HINT).clicked();
+        let keys = egui::Button::new("Keys").selected(data.help);
+        actions.toggle_help = ui.add(keys).on_hover_text("Show or hide the keys of this scene (F1)").clicked();
     });
     if let Some(saved) = &state.saved {
         ui.small(saved);
@@ -384,6 +388,4 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
             }
         });
     }
-    ui.separator();
-    ui.small("F1: keys");
 }

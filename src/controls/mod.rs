@@ -29,15 +29,10 @@ pub const RELOAD: KeyCode = KeyCode::F5;
 /// The key that saves a screenshot.
 pub const SCREENSHOT: KeyCode = KeyCode::F12;
 
-/// Whether the key help is shown; it is at start, until F1 hides it.
-#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+/// Whether the key help is shown over the 3D view; hidden at start (it would cover a third of
+/// the view), shown by F1 or the panel's Keys button.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct HelpVisible(pub bool);
-
-impl Default for HelpVisible {
-    fn default() -> Self {
-        Self(true)
-    }
-}
 
 /// The global keys and scripted input.
 pub struct ControlsPlugin;

@@ -59,3 +59,28 @@ fn the_readme_key_table_lists_every_registered_key() {
         assert!(listed, "the README's key table does not list {name} ({})", help.action);
     }
 }
+
+#[test]
+fn the_key_help_starts_hidden_and_f1_shows_and_hides_it() {
+    use bevy::input::ButtonState;
+    use bevy::input::keyboard::{Key, KeyboardInput, NativeKey};
+    use bevy::prelude::{Entity, KeyCode};
+    use canopy::controls::HelpVisible;
+    let mut app = small_app(&path("scenes/demo.yaml"));
+    let key = |app: &mut bevy::app::App, state| {
+        app.world_mut().write_message(KeyboardInput {
+            key_code: KeyCode::F1,
+            logical_key: Key::Unidentified(NativeKey::Unidentified),
+            state,
+            text: None,
+            repeat: false,
+            window: Entity::PLACEHOLDER,
+        });
+        app.update();
+        app.world().resource::<HelpVisible>().0
+    };
+    assert!(!app.world().resource::<HelpVisible>().0, "the key help covers the view at start");
+    assert!(key(&mut app, ButtonState::Pressed));
+    assert!(key(&mut app, ButtonState::Released), "releasing F1 keeps the help shown");
+    assert!(!key(&mut app, ButtonState::Pressed));
+}
