@@ -9,7 +9,7 @@ use crate::foundation::keys::KeyMap;
 use crate::foundation::messages::{ReloadScene, SelectEntity, ViewClicked};
 use crate::foundation::panel::{PanelSection, PanelSections};
 use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};
-use crate::foundation::schedule::{RenderSystems, SimClock, SimControl};
+use crate::foundation::schedule::{FixedStepTime, RenderSystems, SimClock, SimControl};
 use crate::raster::plugin::RasterTarget;
 use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneStatus, save_live_scene};
 use crate::view::CameraParams;
@@ -22,6 +22,7 @@ use bevy_egui::{
     EguiContext, EguiGlobalSettings, EguiPrimaryContextPass, EguiTextureHandle, EguiUserTextures, PrimaryEguiContext,
 };
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 /// What the Save button does, shown when hovering it.
 const SAVE_HINT: &str = "Write the scene, with its trees as edited, to its file. The file is first copied to \
@@ -80,11 +81,45 @@ struct FramebufferImage(Handle<Image>);
 struct UiState {
     /// Name of the entity whose parameters are shown.
     selected: Option<String>,
-    /// Smoothed wall-clock frame time, milliseconds.
-    frame_ms: f32,
+    /// Where the frame's time went, smoothed.
+    times: PhaseTimes,
+    /// Wall-clock time building the panel took last frame.
+    panel: Duration,
     /// What the last save did.
     saved: Option<String>,
 }
+
+/// Wall-clock milliseconds of a frame and of its phases, each smoothed over about ten frames.
+#[derive(Debug, Clone, Copy, Default)]
+struct PhaseTimes {
+    frame: f32,
+    simulation: f32,
+    raster: f32,
+    panel: f32,
+    present: f32,
+}
+
+impl PhaseTimes {
+    /// Takes in the latest frame's times.
+    fn update(&mut self, frame: Duration, simulation: Duration, raster: Duration, panel: Duration, present: Duration) {
+        let smooth = |average: &mut f32, time: Duration| *average += (time.as_secs_f32() * 1000.0 - *average) * 0.1;
+        smooth(&mut self.frame, frame);
+        smooth(&mut self.simulation, simulation);
+        smooth(&mut self.raster, raster);
+        smooth(&mut self.panel, panel);
+        smooth(&mut self.present, present);
+    }
+
+    /// What the phases do not account for: Bevy's renderer showing the image and the panel,
+    /// and waiting for the display.
+    fn rest(&self) -> f32 {
+        (self.frame - self.simulation - self.raster - self.panel - self.present).max(0.0)
+    }
+}
+
+/// Wall-clock time the last copy of the framebuffer into the displayed image took.
+#[derive(Resource, Debug, Default)]
+struct PresentTime(Duration);
 
 fn image_of(size: UVec2, data: Vec<u8>) -> Image {
     Image::new(
@@ -97,13 +132,20 @@ fn image_of(size: UVec2, data: Vec<u8>) -> Image {
 }
 
 fn setup_view(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
+    commands.init_resource::<PresentTime>();
     commands.spawn(Camera2d);
     let image = images.add(image_of(UVec2::ONE, vec![0, 0, 0, 255]));
     commands.insert_resource(FramebufferImage(image));
 }
 
 /// Copies the last frame into the displayed image, replacing the image when the size changed.
-fn present_framebuffer(target: Res<RasterTarget>, image: Res<FramebufferImage>, mut images: ResMut<Assets<Image>>) {
+fn present_framebuffer(
+    target: Res<RasterTarget>,
+    image: Res<FramebufferImage>,
+    mut images: ResMut<Assets<Image>>,
+    mut time: ResMut<PresentTime>,
+) {
+    let started = Instant::now();
     let framebuffer = &target.framebuffer;
     let size = UVec2::new(framebuffer.width(), framebuffer.height());
     if size.min_element() == 0 {
@@ -115,6 +157,7 @@ fn present_framebuffer(target: Res<RasterTarget>, image: Res<FramebufferImage>, 
         Some(data) if same_size => data.copy_from_slice(framebuffer.color()),
         _ => *shown = image_of(size, framebuffer.color().to_vec()),
     }
+    time.0 = started.elapsed();
 }
 
 /// Everything the panel shows, read from the world before drawing.
@@ -126,7 +169,6 @@ struct PanelData {
     control: SimControl,
     target_size: UVec2,
     stats: crate::raster::RenderStats,
-    raster_ms: f32,
     entities: Vec<(String, &'static str)>,
     /// The selected entity and its kind.
     selected: Option<(Entity, &'static str)>,
@@ -157,7 +199,6 @@ impl PanelData {
             control: *world.resource::<SimControl>(),
             target_size: target.size,
             stats: target.stats,
-            raster_ms: target.raster_time.as_secs_f32() * 1000.0,
             entities: entities.into_iter().map(|(_, _, name, kind)| (name, kind)).collect(),
             selected,
             params,
@@ -186,9 +227,14 @@ fn draw_ui(world: &mut World) {
     let ctx = context.get_mut().clone();
     let image = world.resource::<FramebufferImage>().0.id();
     let texture = world.resource_mut::<EguiUserTextures>().add_image(EguiTextureHandle::Weak(image));
-    let frame_seconds = world.resource::<Time<Real>>().delta_secs();
+    let started = Instant::now();
+    let frame = world.resource::<Time<Real>>().delta();
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
-    state.frame_ms += (frame_seconds * 1000.0 - state.frame_ms) * 0.1;
+    let simulation = world.resource::<FixedStepTime>().last;
+    let raster = world.resource::<RasterTarget>().raster_time;
+    let present = world.get_resource::<PresentTime>().map_or(Duration::ZERO, |p| p.0);
+    let panel_time = state.panel;
+    state.times.update(frame, simulation, raster, panel_time, present);
     if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {
         state.selected = Some(name);
     }
@@ -286,6 +332,7 @@ fn draw_ui(world: &mut World) {
     if let Some(click) = click {
         world.write_message(click);
     }
+    state.panel = started.elapsed();
     world.insert_resource(state);
 }
 
@@ -344,12 +391,22 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
     }
     ui.separator();
     egui::Grid::new("figures").show(ui, |ui| {
+        let times = &state.times;
         ui.label("frame time");
-        ui.label(format!("{:.1} ms", state.frame_ms));
+        ui.label(format!("{:.1} ms", times.frame));
         ui.end_row();
-        ui.label("raster time");
-        ui.label(format!("{:.2} ms", data.raster_ms));
-        ui.end_row();
+        let phases = [
+            ("simulation", times.simulation),
+            ("raster", times.raster),
+            ("panel", times.panel),
+            ("present", times.present),
+            ("renderer, waiting", times.rest()),
+        ];
+        for (phase, ms) in phases {
+            ui.label(format!("    {phase}"));
+            ui.label(format!("{ms:.2} ms"));
+            ui.end_row();
+        }
         ui.label("triangles");
         ui.label(format!("{} ({} drawn)", data.stats.triangles_submitted, data.stats.triangles_rasterized));
         ui.end_row();

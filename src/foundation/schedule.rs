@@ -17,7 +17,7 @@ use bevy::input::InputSystems;
 use bevy::prelude::*;
 use bevy::transform::TransformSystems;
 use bevy_egui::EguiPostUpdateSet;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Sets that turn input into parameter changes, and the scene's (re)spawning.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -88,6 +88,15 @@ impl SimControl {
     }
 }
 
+/// Wall-clock time the last frame's fixed steps took, input excluded: for display only (the
+/// panel's split of the frame time); nothing in the simulation reads it.
+#[derive(Resource, Debug, Clone, Copy, Default)]
+pub struct FixedStepTime {
+    /// The fixed steps of the last frame, together.
+    pub last: Duration,
+    started: Option<Instant>,
+}
+
 /// Configures every phase and the simulation clock.
 pub struct SchedulePlugin;
 
@@ -119,7 +128,27 @@ impl Plugin for SchedulePlugin {
                     .after(TransformSystems::Propagate)
                     .after(EguiPostUpdateSet::EndPass),
             )
+            .init_resource::<FixedStepTime>()
+            .add_systems(
+                RunFixedMainLoop,
+                (
+                    start_fixed_step_timer
+                        .in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop)
+                        .after(ControlSystems::Apply),
+                    stop_fixed_step_timer.in_set(RunFixedMainLoopSystems::AfterFixedMainLoop),
+                ),
+            )
             .add_systems(FixedUpdate, advance_clock.in_set(SimSystems::Clock));
+    }
+}
+
+fn start_fixed_step_timer(mut timer: ResMut<FixedStepTime>) {
+    timer.started = Some(Instant::now());
+}
+
+fn stop_fixed_step_timer(mut timer: ResMut<FixedStepTime>) {
+    if let Some(started) = timer.started.take() {
+        timer.last = started.elapsed();
     }
 }
 

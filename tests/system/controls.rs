@@ -84,3 +84,11 @@ fn the_key_help_starts_hidden_and_f1_shows_and_hides_it() {
     assert!(key(&mut app, ButtonState::Released), "releasing F1 keeps the help shown");
     assert!(!key(&mut app, ButtonState::Pressed));
 }
+
+#[test]
+fn the_fixed_steps_of_a_frame_are_timed_for_the_panel() {
+    use canopy::foundation::schedule::FixedStepTime;
+    let mut app = small_app(&path("scenes/sloth.yaml"));
+    app.update();
+    assert!(app.world().resource::<FixedStepTime>().last > std::time::Duration::ZERO);
+}
