@@ -41,6 +41,7 @@ impl Plugin for UiPlugin {
         // While an egui field has the keyboard (typing a value), the scene's keys stay quiet.
         app.world_mut().get_resource_or_init::<EguiGlobalSettings>().enable_absorb_bevy_input_system = true;
         app.init_resource::<UiState>()
+            .init_resource::<PresentTime>()
             .add_systems(Startup, setup_view)
             .add_systems(Update, capture_window.run_if(resource_exists::<WindowCapture>))
             .add_systems(EguiPrimaryContextPass, draw_ui)
@@ -132,7 +133,6 @@ fn image_of(size: UVec2, data: Vec<u8>) -> Image {
 }
 
 fn setup_view(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
-    commands.init_resource::<PresentTime>();
     commands.spawn(Camera2d);
     let image = images.add(image_of(UVec2::ONE, vec![0, 0, 0, 255]));
     commands.insert_resource(FramebufferImage(image));
@@ -232,7 +232,7 @@ fn draw_ui(world: &mut World) {
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
     let simulation = world.resource::<FixedStepTime>().last;
     let raster = world.resource::<RasterTarget>().raster_time;
-    let present = world.get_resource::<PresentTime>().map_or(Duration::ZERO, |p| p.0);
+    let present = world.resource::<PresentTime>().0;
     let panel_time = state.panel;
     state.times.update(frame, simulation, raster, panel_time, present);
     if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {

@@ -25,6 +25,7 @@ use bevy::math::Vec3;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::any::{Any, TypeId};
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::fmt::Debug;
 use std::path::Path;
@@ -197,6 +198,11 @@ impl EntityRecord<'_> {
     }
 }
 
+/// What the entities of one kind derive alike while they are built (the sloths' view of all
+/// the trees, say), made for the first that asks and shared by the others of that load.
+#[derive(Debug, Default)]
+pub struct SharedBuilds(RefCell<HashMap<(&'static str, TypeId), Built>>);
+
 /// What [`EntityKind::build`] may see: the entity's place in the file, and every entity of
 /// the scene with what the kinds registered before this one built.
 #[derive(Debug, Clone, Copy)]
@@ -205,6 +211,8 @@ pub struct BuildContext<'a> {
     pub entity: EntityContext<'a>,
     /// Every entity of the scene, in file order.
     pub entities: &'a [EntityRecord<'a>],
+    /// What this load's entities of the kind share.
+    pub shared: &'a SharedBuilds,
 }
 
 impl<'a> BuildContext<'a> {
@@ -216,6 +224,18 @@ impl<'a> BuildContext<'a> {
     /// How many entities up to and including this one have a name in the file.
     pub fn names_through(&self) -> usize {
         self.entities[..=self.entity.index].iter().filter(|record| record.name.is_some()).count()
+    }
+
+    /// The value of type `T` that this kind's entities share in this load: made by `make`
+    /// for the first entity that asks, the same for every later one.
+    pub fn shared<T: Send + Sync + 'static>(&self, make: impl FnOnce() -> T) -> Arc<T> {
+        let key = (self.entity.key, TypeId::of::<T>());
+        if let Some(done) = self.shared.0.borrow().get(&key).and_then(|d| d.clone().downcast::<T>().ok()) {
+            return done;
+        }
+        let value = Arc::new(make());
+        self.shared.0.borrow_mut().insert(key, value.clone());
+        value
     }
 
     /// The entities of kind `K` already built, with their display names, in file order.
@@ -262,5 +282,26 @@ impl<'a> ReferencedFile<'a> {
         let value = Arc::new(decode(self.path, self.contents)?);
         self.decoded.insert(TypeId::of::<T>(), value.clone());
         Ok(value)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shared_value_is_made_once_per_kind_and_type() {
+        let shared = SharedBuilds::default();
+        let entity = |key| EntityContext { path: Path::new("s.yaml"), text: "", index: 0, key };
+        let cx = |key| BuildContext { entity: entity(key), entities: &[], shared: &shared };
+        let mut made = 0;
+        let first = cx("sloth").shared(|| {
+            made += 1;
+            7u32
+        });
+        let again = cx("sloth").shared(|| 8u32);
+        assert!(Arc::ptr_eq(&first, &again));
+        assert_eq!((*again, made), (7, 1));
+        assert_eq!(*cx("tree").shared(|| 9u32), 9, "another kind has values of its own");
     }
 }

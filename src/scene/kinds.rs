@@ -7,7 +7,7 @@
 
 use super::schema::{EntityDef, SceneDef, SceneFile, WriteScene};
 use crate::foundation::kind::{
-    BuildContext, Built, EntityContext, EntityKind, EntityRecord, KindDef, ReferencedFile, Standalone,
+    BuildContext, Built, EntityContext, EntityKind, EntityRecord, KindDef, ReferencedFile, SharedBuilds, Standalone,
 };
 use crate::foundation::yaml::{FileError, parse_yaml};
 use bevy::app::PluginGroupBuilder;
@@ -308,13 +308,16 @@ impl KindRegistry {
         files: &[ReadFile],
     ) -> Result<LoadedScene, FileError> {
         let text = String::from_utf8_lossy(bytes);
-        for (index, entity) in scene.entities.iter().enumerate() {
-            self.kind_of(entity, index, path)?;
-        }
+        let kinds = scene
+            .entities
+            .iter()
+            .enumerate()
+            .map(|(index, entity)| self.kind_of(entity, index, path))
+            .collect::<Result<Vec<_>, _>>()?;
         for file in files {
             let mut decoded: HashMap<TypeId, Arc<dyn Any + Send + Sync>> = HashMap::new();
             for (index, entity) in scene.entities.iter_mut().enumerate() {
-                let kind = self.kind_of(entity, index, path)?;
+                let kind = kinds[index];
                 if !kind.references(&*entity.def).contains(&file.file) {
                     continue;
                 }
@@ -338,11 +341,13 @@ impl KindRegistry {
                     built: built.as_deref(),
                 })
                 .collect();
+            let shared = SharedBuilds::default();
             let mut made = Vec::new();
             for (index, entity) in scene.entities.iter().enumerate().filter(|(_, e)| e.key == kind.key()) {
                 let cx = BuildContext {
                     entity: EntityContext { path, text: &text, index, key: entity.key },
                     entities: &records,
+                    shared: &shared,
                 };
                 made.push((index, kind.build(&*entity.def, &cx)?));
             }

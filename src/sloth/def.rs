@@ -180,10 +180,10 @@ impl EntityKind for SlothKind {
     type Built = (Sloth, Arc<Supports>);
     type Plugin = SlothPlugin;
 
-    /// Places the sloth on the scene's trees (built by the tree kind before); an error is
-    /// located at the sloth's `support` key.
+    /// Places the sloth on the scene's trees (built by the tree kind before, gathered once for
+    /// all the sloths); an error is located at the sloth's `support` key.
     fn build(def: &SlothDef, cx: &BuildContext) -> Result<(Sloth, Arc<Supports>), FileError> {
-        let supports = Arc::new(Supports::new(cx.built::<TreeKind>()));
+        let supports = cx.shared(|| Supports::new(cx.built::<TreeKind>()));
         let entity = &cx.entity;
         let nth = cx.earlier::<SlothKind>().count();
         let sloth = def
