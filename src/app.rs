@@ -10,6 +10,7 @@ use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
 use crate::tree::TreeKind;
+use crate::ui::pacing::FramePacing;
 use crate::ui::{UiPlugin, WindowCapture};
 use crate::view::ViewPlugin;
 use bevy::app::PluginGroupBuilder;
@@ -102,9 +103,9 @@ pub fn headless_app(scene: &Path, size: UVec2, log: bool) -> std::io::Result<App
     Ok(app)
 }
 
-/// A windowed app playing `scene`, hot-reloading it on change; with `capture`, it saves a
-/// screenshot of the window and exits.
-pub fn window_app(scene: &Path, capture: Option<WindowCapture>) -> std::io::Result<App> {
+/// A windowed app playing `scene`, hot-reloading it on change, at most as fast as `pacing`
+/// lets it; with `capture`, it saves a picture of the window and exits.
+pub fn window_app(scene: &Path, capture: Option<WindowCapture>, pacing: FramePacing) -> std::io::Result<App> {
     let mut app = App::new();
     register_scene_source(&mut app, scene)?;
     let title = format!("Canopy: {}", scene.display());
@@ -114,10 +115,16 @@ pub fn window_app(scene: &Path, capture: Option<WindowCapture>) -> std::io::Resu
                 primary_window: Some(Window { title, resolution: (1280, 720).into(), ..default() }),
                 ..default()
             })
-            .set(asset_plugin(true)),
+            .set(asset_plugin(true))
+            // The camera only carries egui's context: nothing is culled or projected for it.
+            .disable::<bevy::camera::CameraPlugin>(),
     )
     .add_plugins(bevy_egui::EguiPlugin::default())
     .insert_resource(Time::<Fixed>::from_hz(FIXED_HZ))
+    // Bevy's default slows an unfocused window down to 60 updates a second of its own; frames
+    // are paced by `FramePacing` alone, so a scene keeps its rate behind other windows too.
+    .insert_resource(bevy::winit::WinitSettings::continuous())
+    .insert_resource(pacing)
     .add_plugins(CanopyPlugins { scene: scene.to_path_buf(), display: Display::Window });
     if let Some(capture) = capture {
         app.insert_resource(capture);

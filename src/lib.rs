@@ -31,7 +31,7 @@
 //! | [`TreePlugin`](tree::TreePlugin) | [`tree`] | the `tree` entity kind: supports, queries, editing |
 //! | [`SlothPlugin`](sloth::SlothPlugin) | [`sloth`] | the `sloth` entity kind: rig, IK, gait, footholds |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
-//! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: framebuffer, egui panel, key help |
+//! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: the frame and the egui panel composed on the CPU, key help |
 //!
 //! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps.
 //!
@@ -50,7 +50,8 @@
 //! | the shadow map fitted to the light's view, its biases and filtering | [`raster::shadow`] |
 //! | errors at file, line, column and field | [`foundation::yaml`] |
 //! | the phases of a frame | [`foundation::schedule`] |
-#![forbid(unsafe_code)]
+// One `unsafe` call, to hand the window handles to `softbuffer` (`ui::surface`).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod app;

@@ -8,6 +8,7 @@ use canopy::run::{RunOptions, run_headless};
 use canopy::tree::GeneratorSettings;
 use canopy::tree::generate::{generate, scene_text};
 use canopy::ui::WindowCapture;
+use canopy::ui::pacing::FramePacing;
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -37,6 +38,9 @@ enum Command {
         /// Frames to show before the `--screenshot`.
         #[arg(long, default_value_t = 30, requires = "screenshot")]
         frames: u32,
+        /// Frames a second at most; 0 draws frames back to back (for measuring).
+        #[arg(long, default_value_t = 60, value_name = "FPS")]
+        max_fps: u32,
     },
     /// Run a scene headless at a fixed 60 Hz step and write its state and last frame.
     Run(RunArgs),
@@ -129,10 +133,10 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command.unwrap_or(Command::Play { scene: None, screenshot: None, frames: 0 }) {
-        Command::Play { scene, screenshot, frames } => {
-            let capture = screenshot.map(|path| WindowCapture { path, after_frames: frames });
-            play(scene.unwrap_or_else(default_scene), capture)
+    match cli.command.unwrap_or(Command::Play { scene: None, screenshot: None, frames: 0, max_fps: 60 }) {
+        Command::Play { scene, screenshot, frames, max_fps } => {
+            let capture = screenshot.map(|path| WindowCapture::new(path, frames));
+            play(scene.unwrap_or_else(default_scene), capture, FramePacing::max_fps(max_fps))
         }
         Command::Run(args) => run(args),
         Command::Check { scenes } => check(&scenes),
@@ -146,7 +150,7 @@ fn default_scene() -> PathBuf {
     if local.exists() { local } else { Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE) }
 }
 
-fn play(scene: PathBuf, capture: Option<WindowCapture>) -> ExitCode {
+fn play(scene: PathBuf, capture: Option<WindowCapture>, pacing: FramePacing) -> ExitCode {
     if !scene.is_file() {
         eprintln!("{}: no such scene file", scene.display());
         return ExitCode::from(1);
@@ -175,7 +179,7 @@ fn play(scene: PathBuf, capture: Option<WindowCapture>) -> ExitCode {
         // The window opens anyway and shows the error until the file is fixed.
         eprintln!("{error}");
     }
-    match window_app(&scene, capture) {
+    match window_app(&scene, capture, pacing) {
         Ok(mut app) => match app.run() {
             bevy::app::AppExit::Success => ExitCode::SUCCESS,
             bevy::app::AppExit::Error(code) => ExitCode::from(code.get()),

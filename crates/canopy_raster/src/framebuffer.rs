@@ -10,8 +10,8 @@ pub const FAR_DEPTH: f32 = 1.0;
 /// An RGBA8 colour buffer and an `f32` depth buffer of the same size, stored row by row from the
 /// top-left pixel.
 ///
-/// Colours are stored as sRGB-encoded bytes: the window shows them with an `Rgba8UnormSrgb`
-/// texture and PNG files hold them unchanged, so both show the same pixels.
+/// Colours are stored as sRGB-encoded bytes: the window shows them unchanged
+/// ([`write_window`](Self::write_window)) and so do PNG files, so both show the same pixels.
 #[derive(Debug, Clone, Default)]
 pub struct Framebuffer {
     width: u32,
@@ -100,10 +100,47 @@ impl Framebuffer {
             })
     }
 
+    /// Writes this frame into a window buffer and fills the rest of the window with
+    /// `background` (RGB): the base layer a window's panel is then painted over.
+    ///
+    /// `window` holds `width` pixels a row in the `0RGB` layout display servers take (one `u32`
+    /// per pixel, red in bits 16-23, green in 8-15, blue in 0-7, the top byte zero); the frame's
+    /// top-left pixel goes to window pixel `at` = (column, row), and the frame is clipped to the
+    /// window. A frame drawn at a size the window just left shows in part, never out of place.
+    pub fn write_window(&self, window: &mut [u32], width: u32, at: [u32; 2], background: [u8; 3]) {
+        let fill = xrgb(background);
+        let width = width as usize;
+        if width == 0 {
+            return;
+        }
+        let [left, top] = at.map(|v| v as usize);
+        let frame_width = self.width as usize;
+        let shown = frame_width.min(width.saturating_sub(left));
+        for (y, row) in window.chunks_exact_mut(width).enumerate() {
+            let Some(source) = y.checked_sub(top).filter(|&fy| fy < self.height as usize) else {
+                row.fill(fill);
+                continue;
+            };
+            let source = &self.color.as_chunks::<4>().0[source * frame_width..][..shown];
+            let (before, rest) = row.split_at_mut(left.min(width));
+            let (view, after) = rest.split_at_mut(shown);
+            before.fill(fill);
+            for (pixel, &[r, g, b, _]) in view.iter_mut().zip(source) {
+                *pixel = xrgb([r, g, b]);
+            }
+            after.fill(fill);
+        }
+    }
+
     /// Writes the colour buffer to a PNG file.
     pub fn save_png(&self, path: &Path) -> image::ImageResult<()> {
         image::save_buffer(path, &self.color, self.width, self.height, image::ExtendedColorType::Rgba8)
     }
+}
+
+/// One pixel in the `0RGB` layout of [`Framebuffer::write_window`].
+fn xrgb([r, g, b]: [u8; 3]) -> u32 {
+    u32::from(r) << 16 | u32::from(g) << 8 | u32::from(b)
 }
 
 /// A horizontal band of a [`Framebuffer`]: rows `y0..y0 + rows` of both targets.
@@ -133,6 +170,28 @@ mod tests {
         assert_eq!(fb.pixel(2, 1), [1, 2, 3, 4]);
         assert!(fb.depth().iter().all(|&d| d == FAR_DEPTH));
         assert_eq!(fb.color().len(), 3 * 2 * 4);
+    }
+
+    #[test]
+    fn window_gets_the_frame_at_its_place_and_the_background_around_it() {
+        let mut fb = Framebuffer::new(2, 2);
+        fb.clear([0x10, 0x20, 0x30, 255]);
+        let mut window = vec![7; 4 * 3];
+        fb.write_window(&mut window, 4, [1, 1], [1, 2, 3]);
+        let (f, b) = (0x10_2030, 0x01_0203);
+        assert_eq!(window, [b, b, b, b, b, f, f, b, b, f, f, b]);
+    }
+
+    #[test]
+    fn window_clips_a_frame_larger_than_its_room() {
+        let mut fb = Framebuffer::new(3, 3);
+        fb.clear([0xff, 0, 0, 255]);
+        let mut window = vec![7; 2 * 2];
+        fb.write_window(&mut window, 2, [1, 0], [0, 0, 0]);
+        assert_eq!(window, [0, 0xff_0000, 0, 0xff_0000]);
+        // Placed entirely outside, the frame leaves only the background.
+        fb.write_window(&mut window, 2, [5, 5], [0, 0, 9]);
+        assert_eq!(window, [9; 4]);
     }
 
     #[test]

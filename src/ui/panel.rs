@@ -1,27 +1,22 @@
-//! The window: the framebuffer shown in the space left of the egui side panel (and sized to
-//! it), the panel with scene information, timings and the selected entity's parameters, the
-//! key help and load errors. Dragging on the view orbits the camera, the wheel zooms; both
-//! go through the camera's parameters like every other edit.
+//! The panel: scene information, the frame's timings and the selected entity's parameters in
+//! a side panel, the key help and load errors over the view. The 3D view fills the room the
+//! panel leaves (the framebuffer is sized to it); dragging on it orbits the camera, the wheel
+//! zooms, a click selects; all go through the camera's parameters like every other edit.
 
+use super::{ViewArea, WindowTimes};
 use crate::controls::HelpVisible;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::keys::KeyMap;
 use crate::foundation::messages::{ReloadScene, SelectEntity, ViewClicked};
 use crate::foundation::panel::{PanelSection, PanelSections};
 use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};
-use crate::foundation::schedule::{FixedStepTime, RenderSystems, SimClock, SimControl};
+use crate::foundation::schedule::{FixedStepTime, SimClock, SimControl};
 use crate::raster::plugin::RasterTarget;
 use crate::scene::{ActiveScene, FIRST_FILE_ENTITY, SceneStatus, save_live_scene};
 use crate::view::CameraParams;
-use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
-use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
-use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy_egui::egui;
-use bevy_egui::{
-    EguiContext, EguiGlobalSettings, EguiPrimaryContextPass, EguiTextureHandle, EguiUserTextures, PrimaryEguiContext,
-};
-use std::path::PathBuf;
+use bevy_egui::{EguiContext, PrimaryEguiContext};
 use std::time::{Duration, Instant};
 
 /// What the Save button does, shown when hovering it.
@@ -33,53 +28,9 @@ const DRAG_DEG_PER_POINT: f32 = 0.3;
 /// Factor the camera distance changes by per point of wheel scroll.
 const WHEEL_ZOOM_PER_POINT: f32 = 0.998;
 
-/// The window's view and panel.
-pub struct UiPlugin;
-
-impl Plugin for UiPlugin {
-    fn build(&self, app: &mut App) {
-        // While an egui field has the keyboard (typing a value), the scene's keys stay quiet.
-        app.world_mut().get_resource_or_init::<EguiGlobalSettings>().enable_absorb_bevy_input_system = true;
-        app.init_resource::<UiState>()
-            .init_resource::<PresentTime>()
-            .add_systems(Startup, setup_view)
-            .add_systems(Update, capture_window.run_if(resource_exists::<WindowCapture>))
-            .add_systems(EguiPrimaryContextPass, draw_ui)
-            .add_systems(PostUpdate, present_framebuffer.in_set(RenderSystems::Present));
-    }
-}
-
-/// Asks for a screenshot of the whole window (view and panel) once the scene has been shown
-/// for some frames, after which the app exits: for smoke tests and documentation.
-#[derive(Resource, Debug, Clone)]
-pub struct WindowCapture {
-    /// The PNG file to write.
-    pub path: PathBuf,
-    /// Frames to show after the scene has loaded (or failed to) before the capture.
-    pub after_frames: u32,
-}
-
-fn capture_window(mut commands: Commands, capture: Res<WindowCapture>, scene: Res<ActiveScene>, mut shown: Local<u32>) {
-    if scene.status == SceneStatus::Loading {
-        return;
-    }
-    *shown += 1;
-    if *shown == capture.after_frames.max(1) {
-        commands.spawn(Screenshot::primary_window()).observe(save_to_disk(capture.path.clone())).observe(
-            |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
-                exit.write(AppExit::Success);
-            },
-        );
-    }
-}
-
-/// The image the framebuffer is copied into for display.
-#[derive(Resource)]
-struct FramebufferImage(Handle<Image>);
-
 /// What the panel remembers between frames.
 #[derive(Resource, Default)]
-struct UiState {
+pub(super) struct UiState {
     /// Name of the entity whose parameters are shown.
     selected: Option<String>,
     /// Where the frame's time went, smoothed.
@@ -94,70 +45,27 @@ struct UiState {
 #[derive(Debug, Clone, Copy, Default)]
 struct PhaseTimes {
     frame: f32,
-    simulation: f32,
-    raster: f32,
-    panel: f32,
-    present: f32,
+    /// In the order the panel lists them: simulation, raster, panel, paint, present, wait.
+    phases: [f32; 6],
 }
+
+/// The names of [`PhaseTimes::phases`].
+const PHASES: [&str; 6] = ["simulation", "raster", "panel", "panel paint", "present", "frame cap wait"];
 
 impl PhaseTimes {
     /// Takes in the latest frame's times.
-    fn update(&mut self, frame: Duration, simulation: Duration, raster: Duration, panel: Duration, present: Duration) {
+    fn update(&mut self, frame: Duration, phases: [Duration; 6]) {
         let smooth = |average: &mut f32, time: Duration| *average += (time.as_secs_f32() * 1000.0 - *average) * 0.1;
         smooth(&mut self.frame, frame);
-        smooth(&mut self.simulation, simulation);
-        smooth(&mut self.raster, raster);
-        smooth(&mut self.panel, panel);
-        smooth(&mut self.present, present);
+        for (average, time) in self.phases.iter_mut().zip(phases) {
+            smooth(average, time);
+        }
     }
 
-    /// What the phases do not account for: Bevy's renderer showing the image and the panel,
-    /// and waiting for the display.
+    /// What the phases do not account for: input, scene loading, Bevy's own systems.
     fn rest(&self) -> f32 {
-        (self.frame - self.simulation - self.raster - self.panel - self.present).max(0.0)
+        (self.frame - self.phases.iter().sum::<f32>()).max(0.0)
     }
-}
-
-/// Wall-clock time the last copy of the framebuffer into the displayed image took.
-#[derive(Resource, Debug, Default)]
-struct PresentTime(Duration);
-
-fn image_of(size: UVec2, data: Vec<u8>) -> Image {
-    Image::new(
-        Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
-        TextureDimension::D2,
-        data,
-        TextureFormat::Rgba8UnormSrgb,
-        RenderAssetUsages::MAIN_WORLD | RenderAssetUsages::RENDER_WORLD,
-    )
-}
-
-fn setup_view(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
-    commands.spawn(Camera2d);
-    let image = images.add(image_of(UVec2::ONE, vec![0, 0, 0, 255]));
-    commands.insert_resource(FramebufferImage(image));
-}
-
-/// Copies the last frame into the displayed image, replacing the image when the size changed.
-fn present_framebuffer(
-    target: Res<RasterTarget>,
-    image: Res<FramebufferImage>,
-    mut images: ResMut<Assets<Image>>,
-    mut time: ResMut<PresentTime>,
-) {
-    let started = Instant::now();
-    let framebuffer = &target.framebuffer;
-    let size = UVec2::new(framebuffer.width(), framebuffer.height());
-    if size.min_element() == 0 {
-        return;
-    }
-    let Some(mut shown) = images.get_mut(&image.0) else { return };
-    let same_size = shown.size() == size;
-    match shown.data.as_mut() {
-        Some(data) if same_size => data.copy_from_slice(framebuffer.color()),
-        _ => *shown = image_of(size, framebuffer.color().to_vec()),
-    }
-    time.0 = started.elapsed();
 }
 
 /// Everything the panel shows, read from the world before drawing.
@@ -217,24 +125,25 @@ struct PanelActions {
     reload: bool,
     save: bool,
     toggle_help: bool,
+    /// The top-left corner of the room left for the 3D view, in points.
+    view_min: egui::Pos2,
+    /// The size of that room, in points.
     view_size: egui::Vec2,
 }
 
-fn draw_ui(world: &mut World) {
+pub(super) fn draw_ui(world: &mut World) {
     let Ok(mut context) = world.query_filtered::<&mut EguiContext, With<PrimaryEguiContext>>().single_mut(world) else {
         return;
     };
     let ctx = context.get_mut().clone();
-    let image = world.resource::<FramebufferImage>().0.id();
-    let texture = world.resource_mut::<EguiUserTextures>().add_image(EguiTextureHandle::Weak(image));
     let started = Instant::now();
     let frame = world.resource::<Time<Real>>().delta();
     let mut state = world.remove_resource::<UiState>().unwrap_or_default();
     let simulation = world.resource::<FixedStepTime>().last;
     let raster = world.resource::<RasterTarget>().raster_time;
-    let present = world.resource::<PresentTime>().0;
+    let window = *world.resource::<WindowTimes>();
     let panel_time = state.panel;
-    state.times.update(frame, simulation, raster, panel_time, present);
+    state.times.update(frame, [simulation, raster, panel_time, window.paint, window.present, window.wait]);
     if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {
         state.selected = Some(name);
     }
@@ -272,13 +181,10 @@ fn draw_ui(world: &mut World) {
     });
     let view = egui::CentralPanel::no_frame()
         .show_inside(&mut root, |ui| {
-            let size = ui.available_size();
-            actions.view_size = size;
-            let picture =
-                egui::Image::new(egui::load::SizedTexture::new(texture, size)).sense(egui::Sense::click_and_drag());
-            let response = ui.add(picture);
+            // The frame is copied in here when the window is composed; egui only takes the input.
+            let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
+            (actions.view_min, actions.view_size) = (rect.min, rect.size());
             let scroll = if response.hovered() { ui.input(|input| input.smooth_scroll_delta.y) } else { 0.0 };
-            let rect = response.rect;
             let click = response.clicked().then(|| response.interact_pointer_pos()).flatten().map(|pos| {
                 let at = (pos - rect.min) / rect.size();
                 ViewClicked { ndc: Vec2::new(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0), aspect: rect.aspect_ratio() }
@@ -307,7 +213,10 @@ fn draw_ui(world: &mut World) {
         });
     }
 
-    let pixels = (actions.view_size * ctx.pixels_per_point()).round();
+    let pixels_per_point = ctx.pixels_per_point();
+    let [x, y] = (actions.view_min.to_vec2() * pixels_per_point).round().max(egui::Vec2::ZERO).into();
+    world.resource_mut::<ViewArea>().origin = UVec2::new(x as u32, y as u32);
+    let pixels = (actions.view_size * pixels_per_point).round();
     world.resource_mut::<RasterTarget>().size = UVec2::new(pixels.x.max(1.0) as u32, pixels.y.max(1.0) as u32);
     orbit_with_mouse(world, view, &mut actions.edits);
     for (name, value) in actions.edits {
@@ -395,13 +304,7 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
         ui.label("frame time");
         ui.label(format!("{:.1} ms", times.frame));
         ui.end_row();
-        let phases = [
-            ("simulation", times.simulation),
-            ("raster", times.raster),
-            ("panel", times.panel),
-            ("present", times.present),
-            ("renderer, waiting", times.rest()),
-        ];
+        let phases = PHASES.into_iter().zip(times.phases).chain([("other", times.rest())]);
         for (phase, ms) in phases {
             ui.label(format!("    {phase}"));
             ui.label(format!("{ms:.2} ms"));
