@@ -3,6 +3,7 @@
 
 use bevy::math::UVec2;
 use canopy::app::{FIXED_HZ, entity_kinds, window_app};
+use canopy::foundation::dump::write_dump;
 use canopy::raster::MAX_TARGET_SIZE;
 use canopy::run::{RunOptions, run_headless};
 use canopy::tree::GeneratorSettings;
@@ -38,6 +39,9 @@ enum Command {
         /// Frames to show before the `--screenshot`.
         #[arg(long, default_value_t = 30, requires = "screenshot")]
         frames: u32,
+        /// Also write the state as JSON to this file with the `--screenshot`.
+        #[arg(long, value_name = "STATE.json", requires = "screenshot")]
+        dump: Option<PathBuf>,
         /// Frames a second at most; 0 draws frames back to back (for measuring).
         #[arg(long, default_value_t = 60, value_name = "FPS")]
         max_fps: u32,
@@ -133,9 +137,9 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command.unwrap_or(Command::Play { scene: None, screenshot: None, frames: 0, max_fps: 60 }) {
-        Command::Play { scene, screenshot, frames, max_fps } => {
-            let capture = screenshot.map(|path| WindowCapture::new(path, frames));
+    match cli.command.unwrap_or(Command::Play { scene: None, screenshot: None, frames: 0, dump: None, max_fps: 60 }) {
+        Command::Play { scene, screenshot, frames, dump, max_fps } => {
+            let capture = screenshot.map(|path| WindowCapture::new(path, frames, dump));
             play(scene.unwrap_or_else(default_scene), capture, FramePacing::max_fps(max_fps))
         }
         Command::Run(args) => run(args),
@@ -157,14 +161,15 @@ fn play(scene: PathBuf, capture: Option<WindowCapture>, pacing: FramePacing) -> 
     }
     if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
         let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let dump = capture.as_ref().and_then(|c| c.dump.clone());
         let out = capture.map_or_else(|| std::env::temp_dir().join(format!("canopy-{stem}.png")), |c| c.path);
         eprintln!("no display available (DISPLAY is not set): rendering {} headless instead", scene.display());
         let options =
             RunOptions { scene, frames: FIXED_HZ as u64, timeline: None, size: UVec2::new(1280, 720), log: true };
-        return match run_headless(&options)
-            .map_err(|e| e.to_string())
-            .and_then(|output| output.framebuffer.save_png(&out).map_err(|e| format!("{}: {e}", out.display())))
-        {
+        return match run_headless(&options).map_err(|e| e.to_string()).and_then(|output| {
+            output.framebuffer.save_png(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+            dump.map_or(Ok(()), |path| write_dump(&path, &output.dump).map_err(|e| format!("{}: {e}", path.display())))
+        }) {
             Ok(()) => {
                 println!("{}", out.display());
                 ExitCode::SUCCESS
@@ -205,12 +210,11 @@ fn run(args: RunArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    if let Some(path) = &args.dump {
-        let text = serde_json::to_string_pretty(&output.dump).expect("a JSON value always serializes") + "\n";
-        if let Err(error) = std::fs::write(path, text) {
-            eprintln!("{}: cannot write the dump: {error}", path.display());
-            return ExitCode::from(1);
-        }
+    if let Some(path) = &args.dump
+        && let Err(error) = write_dump(path, &output.dump)
+    {
+        eprintln!("{}: cannot write the dump: {error}", path.display());
+        return ExitCode::from(1);
     }
     if let Some(path) = &args.screenshot
         && let Err(error) = output.framebuffer.save_png(path)

@@ -40,6 +40,12 @@ impl RegisterDump for App {
     }
 }
 
+/// Writes a dump to a JSON file, pretty-printed, with a final newline.
+pub fn write_dump(path: &std::path::Path, dump: &Value) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(dump).expect("a JSON value always serializes");
+    std::fs::write(path, text + "\n")
+}
+
 /// The dump of the whole scene as it is now.
 pub fn dump_state(world: &mut World) -> Value {
     let mut entities: Vec<(Entity, SceneEntity)> =

@@ -14,6 +14,7 @@
 //! | `PreUpdate`, before egui's contexts | `size_egui_camera` | the window's size and scale factor become egui's screen |
 //! | `EguiPrimaryContextPass` | `draw_ui` | builds the panel; places the 3D view |
 //! | `PostUpdate`, [`RenderSystems::Present`] after egui's output | `present_window` | composes the window, saves a capture, presents |
+//! | `PostUpdate`, after it | `dump_at_capture` | the state dump a capture asks for |
 //! | `Last` | `pace_frames` | waits out the rest of the frame interval |
 
 pub mod compose;
@@ -21,6 +22,7 @@ pub mod pacing;
 pub mod panel;
 pub mod surface;
 
+use crate::foundation::dump::{dump_state, write_dump};
 use crate::foundation::schedule::RenderSystems;
 use crate::raster::plugin::{RasterTarget, RenderView};
 use crate::scene::{ActiveScene, SceneStatus};
@@ -58,6 +60,12 @@ impl Plugin for UiPlugin {
                 PostUpdate,
                 present_window.in_set(RenderSystems::Present).after(EguiPostUpdateSet::ProcessOutput),
             )
+            .add_systems(
+                PostUpdate,
+                dump_at_capture
+                    .after(RenderSystems::Present)
+                    .run_if(|capture: Option<Res<WindowCapture>>| capture.is_some_and(|capture| capture.due())),
+            )
             .add_systems(Last, pace_frames);
     }
 }
@@ -70,14 +78,18 @@ pub struct WindowCapture {
     pub path: PathBuf,
     /// Frames to show after the scene has loaded (or failed to) before the capture.
     pub after_frames: u32,
+    /// A JSON file for the state dump at the time of the capture (see
+    /// [`dump`](crate::foundation::dump)): what the window's input did, for tests.
+    pub dump: Option<PathBuf>,
     /// Frames shown so far.
     shown: u32,
 }
 
 impl WindowCapture {
-    /// A capture into `path` after `after_frames` frames of the loaded scene.
-    pub fn new(path: PathBuf, after_frames: u32) -> Self {
-        Self { path, after_frames, shown: 0 }
+    /// A capture into `path` after `after_frames` frames of the loaded scene, with a state
+    /// dump into `dump` if given.
+    pub fn new(path: PathBuf, after_frames: u32, dump: Option<PathBuf>) -> Self {
+        Self { path, after_frames, dump, shown: 0 }
     }
 
     fn due(&self) -> bool {
@@ -88,6 +100,16 @@ impl WindowCapture {
 fn count_capture_frames(mut capture: ResMut<WindowCapture>, scene: Res<ActiveScene>) {
     if scene.status != SceneStatus::Loading {
         capture.shown += 1;
+    }
+}
+
+/// Writes the state dump of a capture that asks for one.
+fn dump_at_capture(world: &mut World) {
+    let Some(path) = world.resource::<WindowCapture>().dump.clone() else { return };
+    let dump = dump_state(world);
+    if let Err(error) = write_dump(&path, &dump) {
+        error!("could not write the state dump to {}: {error}", path.display());
+        world.write_message(AppExit::error());
     }
 }
 

@@ -1,0 +1,184 @@
+//! The real window, driven as a user would: keys, clicks on the panel and in the view, and a
+//! drag to orbit, sent with `xdotool` to the app under a virtual X server. Checks the state the
+//! app dumps and the window it saves when done.
+//!
+//! Needs `Xvfb` and `xdotool`, so it is ignored by `cargo test`; `.ci/run` runs it with
+//! `cargo test --test window -- --ignored`.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::thread::sleep;
+use std::time::{Duration, Instant};
+
+/// Frames the app shows before it saves the window and exits: room for every action below.
+const FRAMES: u32 = 900;
+
+/// The scene played: a tree, whose supports are picked by clicking them in the view.
+const SCENE: &str = "scenes/tree.yaml";
+
+/// Where things are in the 1280 x 720 window of [`SCENE`]: the panel is on the right, the view
+/// on the left.
+mod at {
+    /// The panel's Pause button.
+    pub const PAUSE: (u32, u32) = (1008, 71);
+    /// The panel's Keys button.
+    pub const KEYS: (u32, u32) = (1196, 71);
+    /// The tree's trunk in the view.
+    pub const TRUNK: (u32, u32) = (490, 350);
+    /// The tree's row in the panel's entity list, and the ground's above it (selected at
+    /// start).
+    pub const TREE_ROW: (u32, u32) = (995, 422);
+    pub const GROUND_ROW: (u32, u32) = (995, 401);
+    /// Inside the key help window, which opens at the view's top-left corner.
+    pub const HELP: (u32, u32) = (30, 30);
+    /// Empty ground in the view, where a drag starts.
+    pub const DRAG_FROM: (u32, u32) = (250, 620);
+}
+
+/// A virtual X server on a free display, stopped when dropped.
+struct Xvfb {
+    server: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Self {
+        let mut server = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb is installed");
+        let mut line = String::new();
+        BufReader::new(server.stdout.take().expect("piped")).read_line(&mut line).expect("Xvfb prints its display");
+        Self { server, display: format!(":{}", line.trim()) }
+    }
+
+    /// Runs `xdotool` with `args` on this display and returns what it printed.
+    fn xdotool(&self, args: &[&str]) -> String {
+        let output = Command::new("xdotool").args(args).env("DISPLAY", &self.display).output().expect("xdotool runs");
+        assert!(output.status.success(), "xdotool {args:?}: {}", String::from_utf8_lossy(&output.stderr));
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
+fn click(x: &Xvfb, window: &str, (px, py): (u32, u32)) {
+    x.xdotool(&["mousemove", "--window", window, &px.to_string(), &py.to_string()]);
+    sleep(Duration::from_millis(150));
+    x.xdotool(&["click", "1"]);
+    sleep(Duration::from_millis(300));
+}
+
+fn press(x: &Xvfb, key: &str) {
+    x.xdotool(&["keydown", key]);
+    sleep(Duration::from_millis(120));
+    x.xdotool(&["keyup", key]);
+    sleep(Duration::from_millis(300));
+}
+
+fn pixel(image: &image::RgbImage, (x, y): (u32, u32)) -> [u8; 3] {
+    image.get_pixel(x, y).0
+}
+
+#[test]
+#[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
+fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
+    let (shot, dump) = (dir.path().join("window.png"), dir.path().join("state.json"));
+    // The state before any input, from a headless run.
+    let initial = dir.path().join("initial.json");
+    let mut run = Command::new(env!("CARGO_BIN_EXE_canopy"));
+    run.arg("run").arg(&scene).args(["--frames", "1", "--dump"]).arg(&initial);
+    assert!(run.status().unwrap().success());
+    let x = Xvfb::start();
+    let mut app = Command::new(env!("CARGO_BIN_EXE_canopy"))
+        .arg("play")
+        .arg(&scene)
+        .arg("--screenshot")
+        .arg(&shot)
+        .args(["--frames", &FRAMES.to_string(), "--dump"])
+        .arg(&dump)
+        .current_dir(dir.path())
+        .env("DISPLAY", &x.display)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let window = x.xdotool(&["search", "--sync", "--name", "^Canopy"]).lines().next().unwrap().to_string();
+    x.xdotool(&["windowfocus", "--sync", &window]);
+    // Let the scene load and a few frames pass.
+    sleep(Duration::from_secs(2));
+
+    press(&x, "v"); // shading: gouraud -> phong
+    press(&x, "h"); // shadows off
+    press(&x, "F12"); // a picture of the 3D view
+    click(&x, &window, at::TRUNK);
+    // Drag on the view to orbit the camera.
+    let (fx, fy) = at::DRAG_FROM;
+    x.xdotool(&["mousemove", "--window", &window, &fx.to_string(), &fy.to_string()]);
+    x.xdotool(&["mousedown", "1"]);
+    for step in 1..=10 {
+        sleep(Duration::from_millis(40));
+        x.xdotool(&["mousemove", "--window", &window, &(fx + step * 12).to_string(), &fy.to_string()]);
+    }
+    x.xdotool(&["mouseup", "1"]);
+    sleep(Duration::from_millis(300));
+    click(&x, &window, at::KEYS);
+    click(&x, &window, at::PAUSE);
+    let acted = started.elapsed();
+
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let status = loop {
+        if let Some(status) = app.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "the app did not exit after its capture");
+        sleep(Duration::from_millis(100));
+    };
+    assert!(status.success(), "the app failed: {status}");
+
+    let read =
+        |path: &Path| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap() };
+    let (state, initial) = (read(&dump), read(&initial));
+    let entity = |state: &serde_json::Value, name: &str| {
+        state["entities"].as_array().unwrap().iter().find(|e| e["name"] == name).unwrap().clone()
+    };
+    let render = entity(&initial, "render");
+    assert_eq!((&render["shading"], &render["shadows"]), (&"gouraud".into(), &true.into()));
+    let render = entity(&state, "render");
+    assert_eq!(render["shading"], "phong", "the V key cycles the shading");
+    assert_eq!(render["shadows"], false, "the H key switches shadows off");
+    let position = |state: &serde_json::Value| -> Vec<f64> {
+        serde_json::from_value(entity(state, "camera")["position"].clone()).unwrap()
+    };
+    let (from, to) = (position(&initial), position(&state));
+    let moved: f64 = from.iter().zip(&to).map(|(a, b)| (a - b).abs()).sum();
+    assert!(moved > 0.5, "dragging on the view orbits the camera: from {from:?} to {to:?}");
+    let frame = state["frame"].as_u64().unwrap();
+    assert!(frame < u64::from(FRAMES) * 3 / 4, "the Pause button stops the clock: {frame} steps in {FRAMES} frames");
+
+    let window = image::open(&shot).unwrap().to_rgb8();
+    assert_eq!(window.dimensions(), (1280, 720));
+    let [r, g, b] = pixel(&window, at::TREE_ROW);
+    assert!(b > 100 && r < 60 && g > 60, "clicking the trunk selects the tree's row in the panel: {:?}", [r, g, b]);
+    assert_ne!(pixel(&window, at::GROUND_ROW), [r, g, b], "only the tree's row is selected");
+    let help = pixel(&window, at::HELP);
+    assert!(help.iter().all(|&c| c < 80), "the Keys button opens the key help over the view: {help:?}");
+
+    let pictures: Vec<_> =
+        std::fs::read_dir(dir.path().join("screenshots")).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(pictures.len(), 1, "F12 saves one picture: {pictures:?}");
+    let view = image::open(&pictures[0]).unwrap();
+    assert_eq!((view.width(), view.height()), (980, 720), "F12 saves the 3D view alone");
+    assert!(acted < Duration::from_secs(12), "the actions took {acted:?}: the capture may have come first");
+}
