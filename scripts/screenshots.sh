@@ -10,8 +10,7 @@ for name in "${scenes[@]}"; do
     echo "docs/images/$name.png"
 done
 
-# The window with its panel, where a display server can be started (Xvfb, and a Vulkan driver
-# such as Mesa's lavapipe).
+# The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then
     xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 20
     echo "docs/images/window.png"

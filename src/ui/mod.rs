@@ -23,7 +23,7 @@ pub mod panel;
 pub mod surface;
 
 use crate::foundation::dump::{dump_state, write_dump};
-use crate::foundation::schedule::RenderSystems;
+use crate::foundation::schedule::{FixedStepTime, RenderSystems};
 use crate::raster::plugin::{RasterTarget, RenderView};
 use crate::scene::{ActiveScene, SceneStatus};
 use bevy::camera::{Camera, RenderTargetInfo};
@@ -83,24 +83,47 @@ pub struct WindowCapture {
     pub dump: Option<PathBuf>,
     /// Frames shown so far.
     shown: u32,
+    /// Wall-clock time of the frames shown, together: whole frames, their fixed steps, their
+    /// rasters. Reported with the capture, for measurements.
+    spent: [Duration; 3],
 }
 
 impl WindowCapture {
     /// A capture into `path` after `after_frames` frames of the loaded scene, with a state
     /// dump into `dump` if given.
     pub fn new(path: PathBuf, after_frames: u32, dump: Option<PathBuf>) -> Self {
-        Self { path, after_frames, dump, shown: 0 }
+        Self { path, after_frames, dump, shown: 0, spent: [Duration::ZERO; 3] }
     }
 
     fn due(&self) -> bool {
         self.shown == self.after_frames.max(1)
     }
+
+    /// The mean milliseconds of a frame, its fixed steps and its raster, over the frames shown
+    /// after the first (which loaded the scene).
+    fn means(&self) -> [f64; 3] {
+        self.spent.map(|time| time.as_secs_f64() * 1000.0 / f64::from(self.shown.saturating_sub(1).max(1)))
+    }
 }
 
-fn count_capture_frames(mut capture: ResMut<WindowCapture>, scene: Res<ActiveScene>) {
-    if scene.status != SceneStatus::Loading {
-        capture.shown += 1;
+fn count_capture_frames(
+    mut capture: ResMut<WindowCapture>,
+    scene: Res<ActiveScene>,
+    time: Res<Time<Real>>,
+    steps: Res<FixedStepTime>,
+    target: Res<RasterTarget>,
+) {
+    if scene.status == SceneStatus::Loading {
+        return;
     }
+    // Each frame's time is known one frame later: the first counted frame is the loading one.
+    if capture.shown > 0 {
+        let [frame, simulation, raster] = &mut capture.spent;
+        *frame += time.delta();
+        *simulation += steps.last;
+        *raster += target.raster_time;
+    }
+    capture.shown += 1;
 }
 
 /// Writes the state dump of a capture that asks for one.
@@ -188,7 +211,13 @@ fn present_window(
     if let Some(capture) = capture.filter(|capture| capture.due()) {
         exit.write(match save_window_png(&buffer, size, &capture.path) {
             Ok(()) => {
-                info!("window saved to {}", capture.path.display());
+                let [frame, simulation, raster] = capture.means();
+                info!(
+                    "window saved to {} after {} frames: {frame:.2} ms a frame on average, {simulation:.2} ms \
+                     simulation, {raster:.2} ms raster",
+                    capture.path.display(),
+                    capture.shown
+                );
                 AppExit::Success
             }
             Err(error) => {

@@ -125,8 +125,9 @@ impl Framebuffer {
             let (before, rest) = row.split_at_mut(left.min(width));
             let (view, after) = rest.split_at_mut(shown);
             before.fill(fill);
-            for (pixel, &[r, g, b, _]) in view.iter_mut().zip(source) {
-                *pixel = xrgb([r, g, b]);
+            for (pixel, &rgba) in view.iter_mut().zip(source) {
+                // R, G, B, A in memory -> 0x00RRGGBB, in a form that compiles to byte shuffles.
+                *pixel = u32::from_le_bytes(rgba).swap_bytes() >> 8;
             }
             after.fill(fill);
         }
