@@ -159,11 +159,15 @@ fn play(scene: PathBuf, capture: Option<WindowCapture>, pacing: FramePacing) -> 
         eprintln!("{}: no such scene file", scene.display());
         return ExitCode::from(1);
     }
-    if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+    let set = |name: &str| std::env::var_os(name).is_some_and(|value| !value.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
         let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let dump = capture.as_ref().and_then(|c| c.dump.clone());
         let out = capture.map_or_else(|| std::env::temp_dir().join(format!("canopy-{stem}.png")), |c| c.path);
-        eprintln!("no display available (DISPLAY is not set): rendering {} headless instead", scene.display());
+        eprintln!(
+            "no display available (neither DISPLAY nor WAYLAND_DISPLAY is set): rendering {} headless instead",
+            scene.display()
+        );
         let options =
             RunOptions { scene, frames: FIXED_HZ as u64, timeline: None, size: UVec2::new(1280, 720), log: true };
         return match run_headless(&options).map_err(|e| e.to_string()).and_then(|output| {
