@@ -12,7 +12,7 @@ done
 
 # The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then
-    xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 20
+    xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 120
     echo "docs/images/window.png"
 else
     echo "xvfb-run not found: docs/images/window.png left as it is" >&2

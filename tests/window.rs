@@ -1,6 +1,6 @@
-//! The real window, driven as a user would: keys, clicks on the panel and in the view, and a
-//! drag to orbit, sent with `xdotool` to the app under a virtual X server. Checks the state the
-//! app dumps and the window it saves when done.
+//! The real window, driven as a user would: keys, clicks on the panel and in the view, a drag
+//! to orbit and a resize, sent with `xdotool` to the app under a virtual X server. Checks the
+//! state the app dumps and the window it saves when done.
 //!
 //! Needs `Xvfb` and `xdotool`, so it is ignored by `cargo test`; `.ci/run` runs it with
 //! `cargo test --test window -- --ignored`.
@@ -13,6 +13,9 @@ use std::time::{Duration, Instant};
 
 /// Frames the app shows before it saves the window and exits: room for every action below.
 const FRAMES: u32 = 900;
+
+/// The window's size after the resize at the end, in pixels.
+const RESIZED: (u32, u32) = (1000, 600);
 
 /// The scene played: a tree, whose supports are picked by clicking them in the view.
 const SCENE: &str = "scenes/tree.yaml";
@@ -30,7 +33,7 @@ mod at {
     /// start).
     pub const TREE_ROW: (u32, u32) = (995, 422);
     pub const GROUND_ROW: (u32, u32) = (995, 401);
-    /// Inside the key help window, which opens at the view's top-left corner.
+    /// Inside the key help window, which opens at the view's top-left corner (the window's).
     pub const HELP: (u32, u32) = (30, 30);
     /// Empty ground in the view, where a drag starts.
     pub const DRAG_FROM: (u32, u32) = (250, 620);
@@ -135,6 +138,9 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     sleep(Duration::from_millis(300));
     click(&x, &window, at::KEYS);
     click(&x, &window, at::PAUSE);
+    // A smaller window: the panel keeps to the right edge, the view takes the rest.
+    x.xdotool(&["windowsize", &window, &RESIZED.0.to_string(), &RESIZED.1.to_string()]);
+    sleep(Duration::from_millis(500));
     let acted = started.elapsed();
 
     let deadline = Instant::now() + Duration::from_secs(120);
@@ -168,10 +174,12 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     assert!(frame < u64::from(FRAMES) * 3 / 4, "the Pause button stops the clock: {frame} steps in {FRAMES} frames");
 
     let window = image::open(&shot).unwrap().to_rgb8();
-    assert_eq!(window.dimensions(), (1280, 720));
-    let [r, g, b] = pixel(&window, at::TREE_ROW);
+    assert_eq!(window.dimensions(), RESIZED, "the window is composed at its new size");
+    // The panel moved with the right edge.
+    let right = |(x, y): (u32, u32)| (x - (1280 - RESIZED.0), y);
+    let [r, g, b] = pixel(&window, right(at::TREE_ROW));
     assert!(b > 100 && r < 60 && g > 60, "clicking the trunk selects the tree's row in the panel: {:?}", [r, g, b]);
-    assert_ne!(pixel(&window, at::GROUND_ROW), [r, g, b], "only the tree's row is selected");
+    assert_ne!(pixel(&window, right(at::GROUND_ROW)), [r, g, b], "only the tree's row is selected");
     let help = pixel(&window, at::HELP);
     assert!(help.iter().all(|&c| c < 80), "the Keys button opens the key help over the view: {help:?}");
 

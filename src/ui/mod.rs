@@ -27,7 +27,6 @@ use crate::foundation::schedule::{FixedStepTime, RenderSystems};
 use crate::raster::plugin::{RasterTarget, RenderView};
 use crate::scene::{ActiveScene, SceneStatus};
 use bevy::camera::{Camera, RenderTargetInfo};
-use bevy::ecs::system::NonSendMarker;
 use bevy::prelude::*;
 use bevy::window::{PrimaryWindow, RawHandleWrapper};
 use bevy_egui::{
@@ -190,7 +189,6 @@ fn present_window(
     capture: Option<Res<WindowCapture>>,
     mut times: ResMut<WindowTimes>,
     mut exit: MessageWriter<AppExit>,
-    _main_thread: NonSendMarker,
 ) {
     let Ok((mut egui, egui_output)) = egui.single_mut() else { return };
     painter.take_textures(std::mem::take(&mut egui.textures_delta));
