@@ -8,7 +8,7 @@
 use bevy::math::UVec2;
 use canopy::app::headless_app;
 use canopy::raster::plugin::RenderPolicy;
-use canopy::scene::{ActiveScene, SceneStatus};
+use canopy::run::update_until_loaded;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -20,16 +20,7 @@ const MEASURED: u32 = 200;
 
 fn frame_time(scene: &Path) -> Result<Duration, String> {
     let mut app = headless_app(scene, VIEW, false).map_err(|e| e.to_string())?;
-    let started = Instant::now();
-    while app.world().resource::<ActiveScene>().status == SceneStatus::Loading {
-        if started.elapsed() > Duration::from_secs(60) {
-            return Err("did not load within a minute".into());
-        }
-        app.update();
-    }
-    if app.world().resource::<ActiveScene>().status == SceneStatus::Failed {
-        return Err("failed to load".into());
-    }
+    update_until_loaded(&mut app, scene).map_err(|e| e.to_string())?;
     app.world_mut().resource_mut::<RenderPolicy>().every_frame = true;
     for _ in 0..WARM_UP {
         app.update();

@@ -11,8 +11,9 @@ use crate::foundation::yaml::FileError;
 use crate::raster::Framebuffer;
 use crate::raster::plugin::{RasterTarget, RenderPolicy};
 use crate::scene::{ActiveScene, SceneStatus};
+use bevy::app::App;
 use bevy::math::UVec2;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// How long a scene may take to load before the run gives up (wall-clock).
@@ -61,6 +62,24 @@ pub enum RunError {
     Load(String),
 }
 
+/// Updates a headless app of `scene` until the scene is live; fails if it failed to load or
+/// did not load within [`LOAD_TIMEOUT`].
+pub fn update_until_loaded(app: &mut App, scene: &Path) -> Result<(), RunError> {
+    let started = Instant::now();
+    loop {
+        app.update();
+        let active = app.world().resource::<ActiveScene>();
+        match active.status {
+            SceneStatus::Live => return Ok(()),
+            SceneStatus::Failed => return Err(RunError::Load(active.error.clone().unwrap_or_default())),
+            SceneStatus::Loading if started.elapsed() > LOAD_TIMEOUT => {
+                return Err(RunError::Load(format!("{}: the scene did not load within a minute", scene.display())));
+            }
+            SceneStatus::Loading => std::thread::yield_now(),
+        }
+    }
+}
+
 /// Runs a scene headless.
 pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
     // Check the files first, so that errors come out before any app is built.
@@ -69,22 +88,7 @@ pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
 
     let mut app = headless_app(&options.scene, options.size, options.log)
         .map_err(|error| RunError::Load(format!("{}: {error}", options.scene.display())))?;
-    let started = Instant::now();
-    loop {
-        app.update();
-        let scene = app.world().resource::<ActiveScene>();
-        match scene.status {
-            SceneStatus::Live => break,
-            SceneStatus::Failed => return Err(RunError::Load(scene.error.clone().unwrap_or_default())),
-            SceneStatus::Loading if started.elapsed() > LOAD_TIMEOUT => {
-                return Err(RunError::Load(format!(
-                    "{}: the scene did not load within a minute",
-                    options.scene.display()
-                )));
-            }
-            SceneStatus::Loading => std::thread::yield_now(),
-        }
-    }
+    update_until_loaded(&mut app, &options.scene)?;
 
     if let Some(timeline) = timeline {
         timeline

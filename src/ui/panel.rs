@@ -1,7 +1,8 @@
 //! The panel: scene information, the frame's timings and the selected entity's parameters in
 //! a side panel, the key help and load errors over the view. The 3D view fills the room the
-//! panel leaves (the framebuffer is sized to it); dragging on it orbits the camera, the wheel
-//! zooms, a click selects; all go through the camera's parameters like every other edit.
+//! panel leaves (the framebuffer is sized to it); dragging on it orbits the camera and the
+//! wheel zooms, both through the camera's parameters like every other edit; a click is handed
+//! to the scene's kinds (trees pick the support under it).
 
 use super::{ViewArea, WindowTimes};
 use crate::controls::HelpVisible;
