@@ -9,6 +9,7 @@ use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
+use crate::terrain::TerrainKind;
 use crate::tree::TreeKind;
 use crate::ui::pacing::FramePacing;
 use crate::ui::{UiPlugin, WindowCapture};
@@ -24,7 +25,7 @@ use std::sync::Arc;
 /// built (a kind's checks see what the kinds before it built). A new kind is its folder and
 /// one line here.
 pub fn entity_kinds() -> KindRegistry {
-    Kinds::new().with::<ShapeKind>().with::<MuscleKind>().with::<TreeKind>().with::<SlothKind>().build()
+    Kinds::new().with::<ShapeKind>().with::<MuscleKind>().with::<TreeKind>().with::<SlothKind>().with::<TerrainKind>().build()
 }
 
 /// The fixed simulation rate, steps per second.

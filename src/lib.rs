@@ -10,7 +10,7 @@
 //! | layer | modules | what it holds |
 //! |---|---|---|
 //! | app | [`app`], [`run`], [`ui`], `main` | the plugin group and the list of kinds, headless runs, the window |
-//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
+//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`terrain`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
 //! | scene | [`scene`] | loading, checking, spawning and saving through the kind registry, naming no kind |
 //! | foundation | [`foundation`] | the entity marker, the kind trait, checked values, located errors, parameters, dumps, keys, panel sections, the schedule |
 //! | rasterizer | the `canopy_raster` crate | pixels from plain data |
@@ -30,6 +30,7 @@
 //! | [`MusclePlugin`](muscle::MusclePlugin) | [`muscle`] | the `muscle` entity kind |
 //! | [`TreePlugin`](tree::TreePlugin) | [`tree`] | the `tree` entity kind: supports, queries, editing |
 //! | [`SlothPlugin`](sloth::SlothPlugin) | [`sloth`] | the `sloth` entity kind: rig, IK, gait, footholds |
+//! | [`TerrainPlugin`](terrain::TerrainPlugin) | [`terrain`] | the `terrain` entity kind: heightmaps, the visible section, bands |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: the frame and the egui panel composed on the CPU, key help |
 //!
@@ -63,6 +64,7 @@ pub mod run;
 pub mod scene;
 pub mod shape;
 pub mod sloth;
+pub mod terrain;
 pub mod tree;
 pub mod ui;
 pub mod view;

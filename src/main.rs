@@ -1,5 +1,5 @@
-//! The `canopy` command: play a scene in a window, run it headless, check scene files, or
-//! generate tree scenes.
+//! The `canopy` command: play a scene in a window, run it headless, check scene files,
+//! generate tree scenes and heightmaps, and measure.
 
 use bevy::math::UVec2;
 use canopy::app::{FIXED_HZ, entity_kinds, window_app};
@@ -8,7 +8,14 @@ use canopy::raster::MAX_TARGET_SIZE;
 use canopy::run::{RunOptions, run_headless};
 use canopy::tree::GeneratorSettings;
 use canopy::tree::generate::{generate, scene_text};
+use canopy::terrain::bands::{Band, band_texture};
+use canopy::terrain::def::draw_seed;
+use canopy::terrain::experiment;
+use canopy::terrain::generate::{DiamondSquareLayer, HillsLayer, Layer, PerlinLayer, Recipe};
+use canopy::terrain::heightmap::Heightmap;
+use canopy::terrain::image_io::{self, Encoding};
 use canopy::ui::WindowCapture;
+use canopy::ui::plot::save_timing_plot;
 use canopy::ui::pacing::FramePacing;
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -58,6 +65,108 @@ enum Command {
     Tree {
         #[command(subcommand)]
         action: TreeCommand,
+    },
+    /// Heightmap tools.
+    Terrain {
+        #[command(subcommand)]
+        action: TerrainCommand,
+    },
+    /// Measurements.
+    Bench {
+        #[command(subcommand)]
+        action: BenchCommand,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum TerrainCommand {
+    /// Generate a heightmap and write it as a grayscale PNG or BMP; the same settings and
+    /// seed always give the same bytes.
+    Generate(TerrainGenerateArgs),
+    /// Print heightmap images' size, lowest, highest and mean height, and checksum.
+    Stats {
+        /// PNG or BMP heightmaps.
+        #[arg(required = true)]
+        maps: Vec<PathBuf>,
+    },
+    /// Write the project's five band textures (water, sand, grass, rock, snow) as PNG files.
+    Textures {
+        /// The folder to write them to.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum GeneratorName {
+    /// Fractal Perlin noise.
+    Perlin,
+    /// Diamond-square midpoint displacement.
+    DiamondSquare,
+    /// Random paraboloids.
+    Hills,
+}
+
+#[derive(Args, Debug)]
+struct TerrainGenerateArgs {
+    /// The file to write: `.png` (8 or 16 bit) or `.bmp` (8 bit).
+    #[arg(long, value_name = "MAP.png")]
+    out: PathBuf,
+    /// Bits a sample: 8 or 16 (PNG only).
+    #[arg(long, default_value_t = 8)]
+    bits: u8,
+    /// Samples along x.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Samples along z.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// The generator.
+    #[arg(long, value_enum, default_value_t = GeneratorName::Perlin)]
+    generator: GeneratorName,
+    /// The seed; -1 draws one and prints it.
+    #[arg(long, default_value_t = -1, allow_negative_numbers = true)]
+    seed: i64,
+    /// Perlin: samples per lattice unit of the first octave.
+    #[arg(long, default_value_t = 64.0)]
+    scale: f32,
+    /// Perlin: octaves.
+    #[arg(long, default_value_t = 1)]
+    octaves: u32,
+    /// Perlin: frequency multiplier per octave.
+    #[arg(long, default_value_t = 2.0)]
+    lacunarity: f32,
+    /// Perlin: amplitude multiplier per octave.
+    #[arg(long, default_value_t = 0.5)]
+    persistence: f32,
+    /// Diamond-square: displacement kept per finer level, in (0, 1].
+    #[arg(long, default_value_t = 0.5)]
+    roughness: f32,
+    /// Hills: how many.
+    #[arg(long, default_value_t = 200)]
+    hills: u32,
+    /// Hills: smallest and largest radius in samples.
+    #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], default_values_t = [4.0, 32.0])]
+    radius: Vec<f32>,
+    /// Replace `--out` if it exists (otherwise an existing file is never overwritten).
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Subcommand, Debug)]
+enum BenchCommand {
+    /// The source's experiment: time to produce the image of the visible section against its
+    /// size, with and without shadows; prints the table and draws the plot.
+    Terrain {
+        /// The plot to write (PNG).
+        #[arg(long, value_name = "PLOT.png")]
+        out: PathBuf,
+        /// Runs of each configuration.
+        #[arg(long, default_value_t = 10)]
+        runs: usize,
+        /// Section sizes (vertices a side, 2 to 512).
+        #[arg(long, num_args = 1.., default_values_t = canopy::terrain::experiment::SIZES)]
+        sizes: Vec<u32>,
     },
 }
 
@@ -145,6 +254,10 @@ fn main() -> ExitCode {
         Command::Run(args) => run(args),
         Command::Check { scenes } => check(&scenes),
         Command::Tree { action: TreeCommand::Generate(args) } => generate_trees(&args),
+        Command::Terrain { action: TerrainCommand::Generate(args) } => generate_heightmap(&args),
+        Command::Terrain { action: TerrainCommand::Stats { maps } } => heightmap_stats(&maps),
+        Command::Terrain { action: TerrainCommand::Textures { out } } => write_band_textures(&out),
+        Command::Bench { action: BenchCommand::Terrain { out, runs, sizes } } => bench_terrain(&out, runs, &sizes),
     }
 }
 
@@ -255,6 +368,120 @@ fn generate_trees(args: &GenerateArgs) -> ExitCode {
         }
         Err(error) => {
             eprintln!("{}: cannot write the scene: {error}", args.out.display());
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn generate_heightmap(args: &TerrainGenerateArgs) -> ExitCode {
+    let encoding = match Encoding::for_path(&args.out, args.bits) {
+        Ok(encoding) => encoding,
+        Err(error) => {
+            eprintln!("canopy terrain generate: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    let layer = match args.generator {
+        GeneratorName::Perlin => Layer {
+            perlin: Some(PerlinLayer {
+                scale: args.scale,
+                octaves: args.octaves,
+                lacunarity: args.lacunarity,
+                persistence: args.persistence,
+            }),
+            ..Layer::default()
+        },
+        GeneratorName::DiamondSquare => {
+            Layer { diamond_square: Some(DiamondSquareLayer { roughness: args.roughness }), ..Layer::default() }
+        }
+        GeneratorName::Hills => {
+            let radius = [args.radius[0], args.radius[1]];
+            Layer { hills: Some(HillsLayer { count: args.hills, radius }), ..Layer::default() }
+        }
+    };
+    let recipe = Recipe { size: [args.width, args.height], seed: args.seed, layers: vec![layer], apply: Vec::new() };
+    if let Err(error) = recipe.check() {
+        eprintln!("canopy terrain generate: {error}");
+        return ExitCode::from(2);
+    }
+    if args.out.exists() && !args.force {
+        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
+        return ExitCode::from(1);
+    }
+    let seed = recipe.seed_used(draw_seed);
+    let map = match recipe.generate(seed) {
+        Ok(map) => map,
+        Err(error) => {
+            eprintln!("canopy terrain generate: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    match image_io::save(&map, &args.out, encoding) {
+        Ok(()) => {
+            println!("{}: seed {seed}, {}", args.out.display(), describe(&map));
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("{}: cannot write the heightmap: {error}", args.out.display());
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// A heightmap's figures on one line.
+fn describe(map: &Heightmap) -> String {
+    let stats = map.stats();
+    format!(
+        "{} x {} samples, heights {:.4} to {:.4}, mean {:.4}, checksum {:016x}",
+        stats.width, stats.height, stats.min, stats.max, stats.mean, stats.checksum
+    )
+}
+
+fn heightmap_stats(maps: &[PathBuf]) -> ExitCode {
+    let mut valid = true;
+    for path in maps {
+        match std::fs::read(path).map_err(|e| e.to_string()).and_then(|bytes| image_io::decode(&bytes).map_err(|e| e.to_string())) {
+            Ok(map) => println!("{}: {}", path.display(), describe(&map)),
+            Err(error) => {
+                eprintln!("{}: {error}", path.display());
+                valid = false;
+            }
+        }
+    }
+    if valid { ExitCode::SUCCESS } else { ExitCode::from(1) }
+}
+
+fn write_band_textures(folder: &Path) -> ExitCode {
+    if let Err(error) = std::fs::create_dir_all(folder) {
+        eprintln!("{}: {error}", folder.display());
+        return ExitCode::from(1);
+    }
+    for band in Band::ALL {
+        let path = folder.join(format!("{}.png", band.key()));
+        if let Err(error) = band_texture(band).save_png(&path) {
+            eprintln!("{}: {error}", path.display());
+            return ExitCode::from(1);
+        }
+        println!("{}", path.display());
+    }
+    ExitCode::SUCCESS
+}
+
+fn bench_terrain(out: &Path, runs: usize, sizes: &[u32]) -> ExitCode {
+    if let Some(bad) = sizes.iter().find(|s| !(2..=512).contains(*s)) {
+        eprintln!("canopy bench terrain: a section size is 2 to 512 vertices a side, not {bad}");
+        return ExitCode::from(2);
+    }
+    let pool = bevy::tasks::TaskPool::new();
+    let timings = experiment::run(sizes, runs.max(1), UVec2::new(1280, 720), &pool);
+    print!("{}", experiment::table(&timings));
+    match save_timing_plot(&timings, out) {
+        Ok(()) => {
+            println!("plot: {}", out.display());
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("{}: cannot write the plot: {error}", out.display());
             ExitCode::from(1)
         }
     }

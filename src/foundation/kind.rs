@@ -18,7 +18,7 @@
 //! | spawn | [`EntityKind::spawn`] | its definition, what its build made, the world |
 //! | save | [`EntityKind::saved`], [`EntityKind::save_live`] | the definition, the live entity |
 
-use crate::foundation::yaml::{FileError, locate_key};
+use crate::foundation::yaml::{FileError, locate_key, locate_key_after};
 use bevy::app::Plugin;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::math::Vec3;
@@ -170,6 +170,12 @@ impl EntityContext<'_> {
     /// about the whole file when the key cannot be found.
     pub fn locate(&self, key: &str, nth: usize, message: String) -> FileError {
         locate_key(self.path, self.text, key, nth, message)
+    }
+
+    /// An error at the `nth` (from 0) occurrence of mapping key `key` inside this entity's
+    /// entry, which is the `earlier`-th (from 0) entity of its kind in the file.
+    pub fn locate_within(&self, earlier: usize, key: &str, nth: usize, message: String) -> FileError {
+        locate_key_after(self.path, self.text, (self.key, earlier), key, nth, message)
     }
 
     /// An error about the scene file as a whole.

@@ -8,6 +8,7 @@
 //! | [`yaml`] | reading user-written YAML with errors at file, line, column and field |
 //! | [`params`] | named parameters through reflection: timelines, keys and the panel edit them |
 //! | [`dump`] | the JSON state dump each kind contributes to |
+//! | [`random`] | a seeded stream of numbers, the same on every machine |
 //! | [`keys`] | the key help every plugin registers its keys with |
 //! | [`messages`] | the app-wide requests: reload, screenshot, view clicked, select |
 //! | [`panel`] | the kinds' sections of the window's panel |
@@ -20,6 +21,7 @@ pub mod kind;
 pub mod messages;
 pub mod panel;
 pub mod params;
+pub mod random;
 pub mod schedule;
 pub mod values;
 pub mod yaml;

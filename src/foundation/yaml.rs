@@ -124,6 +124,27 @@ pub fn locate_key(path: &Path, text: &str, key: &str, nth: usize, message: Strin
     }
 }
 
+/// An error at the `nth` (from 0) mapping key `key` after the `anchor_nth` occurrence of the
+/// mapping key `anchor` (an entity's kind key, say), or about the whole file when either
+/// cannot be found.
+pub fn locate_key_after(
+    path: &Path,
+    text: &str,
+    (anchor, anchor_nth): (&str, usize),
+    key: &str,
+    nth: usize,
+    message: String,
+) -> FileError {
+    let found = key_offsets(text, anchor)
+        .nth(anchor_nth)
+        .and_then(|start| key_offsets(text, key).filter(|&at| at >= start).nth(nth))
+        .map(|at| line_column(text.as_bytes(), at));
+    match found {
+        Some((line, column)) => FileError::at(path, line, column, message),
+        None => FileError::whole_file(path, message),
+    }
+}
+
 /// The 1-based line and column of the `nth` (from 0) mapping key `key` in `text`.
 pub fn find_nth_key(text: &str, key: &str, nth: usize) -> Option<(usize, usize)> {
     key_offsets(text, key).nth(nth).map(|at| line_column(text.as_bytes(), at))

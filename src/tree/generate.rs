@@ -7,6 +7,7 @@
 //! can be written to a scene file and edited like a hand-written one.
 
 use super::model::{Shape, SupportSpec};
+use crate::foundation::random::Random;
 use bevy::math::Vec3;
 use std::fmt::Write;
 
@@ -61,28 +62,9 @@ impl GeneratorSettings {
     }
 }
 
-/// SplitMix64: a small, fast, well-mixed stream of 64-bit numbers.
-struct Random(u64);
-
-impl Random {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A number in `[low, high)`.
-    fn between(&mut self, low: f32, high: f32) -> f32 {
-        let unit = (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
-        low + (high - low) * unit
-    }
-}
-
 /// The trees of `settings`, each as its supports (trunk first).
 pub fn generate(settings: &GeneratorSettings) -> Vec<Vec<SupportSpec>> {
-    let mut random = Random(settings.seed);
+    let mut random = Random::new(settings.seed);
     let columns = (settings.trunks as f32).sqrt().ceil() as u32;
     (0..settings.trunks)
         .map(|index| {

@@ -8,6 +8,7 @@
 //! | [`compose`] | the window's pixels from the frame and the panel's paint jobs; pure |
 //! | [`surface`] | the primary window's `softbuffer` surface |
 //! | [`pacing`] | the frame rate cap |
+//! | [`plot`] | plots written as image files, painted without a window |
 //!
 //! | schedule | system | what it does |
 //! |---|---|---|
@@ -20,6 +21,7 @@
 pub mod compose;
 pub mod pacing;
 pub mod panel;
+pub mod plot;
 pub mod surface;
 
 use crate::foundation::dump::{dump_state, write_dump};

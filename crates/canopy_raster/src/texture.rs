@@ -113,6 +113,12 @@ impl Texture {
         self.height
     }
 
+    /// Writes the texture as an 8-bit RGB PNG file.
+    pub fn save_png(&self, path: &std::path::Path) -> image::ImageResult<()> {
+        let bytes: Vec<u8> = self.texels.iter().flat_map(|w| <[u8; 3]>::try_from(&w.to_le_bytes()[..3]).unwrap_or([0; 3])).collect();
+        image::save_buffer_with_format(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
+    }
+
     /// The colour at texture coordinates `uv`.
     pub fn sample(&self, uv: Vec2, sampler: Sampler) -> Vec3 {
         let [r, g, b] = self.sample_lanes(Vec4::splat(uv.x), Vec4::splat(uv.y), sampler);

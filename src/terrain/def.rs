@@ -1,0 +1,366 @@
+//! The `terrain:` entry of a scene file, and the kind that reads, builds, spawns and saves it.
+
+use super::bands::BandRule;
+use super::generate::{Function, Layer, Recipe};
+use super::heightmap::Heightmap;
+use super::image_io;
+use super::plugin::{TerrainPlugin, spawn_terrain};
+use super::section::Section;
+use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use crate::foundation::values::{Degrees, FolderFile, Point, PositiveMetres, checked_number};
+use crate::foundation::yaml::FileError;
+use crate::raster::texture::{ImageFile, TextureDef};
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
+use bevy::math::Vec3;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+checked_number!(
+    /// A scale factor: positive and at most 1000.
+    Factor(f32),
+    "a factor greater than 0 and at most 1000",
+    |v| v > 0.0 && v <= 1000.0
+);
+
+/// Where the heights come from: an image file, or a generator recipe; functions of the map
+/// algebra apply to either.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeightDef {
+    /// A grayscale PNG (8 or 16 bit) or BMP in the scene's folder: brightness is height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image: Option<FolderFile<ImageFile>>,
+    /// Samples along x and z of a generated map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<[u32; 2]>,
+    /// The generator's seed; -1 (the default) draws one, which is printed and dumped.
+    #[serde(default = "random_seed")]
+    pub seed: i64,
+    /// The generator layers of a generated map.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<Layer>,
+    /// Functions applied to the map, in order.
+    #[serde(default, with = "serde_yaml::with::singleton_map_recursive", skip_serializing_if = "Vec::is_empty")]
+    pub apply: Vec<Function>,
+    /// The decoded image, filled in when the scene is resolved.
+    #[serde(skip)]
+    pub decoded: Option<Arc<Heightmap>>,
+}
+
+fn random_seed() -> i64 {
+    -1
+}
+
+impl HeightDef {
+    /// The recipe of a generated map (whatever `image` says).
+    pub fn recipe(&self) -> Recipe {
+        Recipe { size: self.size.unwrap_or([0, 0]), seed: self.seed, layers: self.layers.clone(), apply: self.apply.clone() }
+    }
+}
+
+/// The visible section: its first vertex in the map and its size in vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionDef {
+    /// The map sample `[x, z]` at the section's first vertex; `[0, 0]` by default.
+    #[serde(default)]
+    pub origin: [u32; 2],
+    /// Vertices along x and z (2 up to the map's size); 64 x 64 by default (the source's
+    /// demonstration), or the map if it is smaller.
+    #[serde(default = "default_section_size")]
+    pub size: [u32; 2],
+}
+
+fn default_section_size() -> [u32; 2] {
+    [64, 64]
+}
+
+impl Default for SectionDef {
+    fn default() -> Self {
+        Self { origin: [0, 0], size: default_section_size() }
+    }
+}
+
+/// The height bands and their textures.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BandsDef {
+    /// Map heights where sand, grass, rock and snow begin.
+    #[serde(default = "default_thresholds")]
+    pub thresholds: [f32; 4],
+    /// Faces steeper than this (degrees from horizontal) are rock; off by default (the source
+    /// banded by height alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rock_slope_deg: Option<f32>,
+    /// Cells one repetition of a band texture covers; 8 by default.
+    #[serde(default = "default_texture_cells")]
+    pub texture_cells: Factor,
+    /// A texture per band; a band without one uses the project's own.
+    #[serde(default, skip_serializing_if = "BandTextures::is_empty")]
+    pub textures: BandTextures,
+}
+
+fn default_thresholds() -> [f32; 4] {
+    BandRule::default().thresholds
+}
+
+fn default_texture_cells() -> Factor {
+    Factor(8.0)
+}
+
+impl Default for BandsDef {
+    fn default() -> Self {
+        Self {
+            thresholds: default_thresholds(),
+            rock_slope_deg: None,
+            texture_cells: default_texture_cells(),
+            textures: BandTextures::default(),
+        }
+    }
+}
+
+impl BandsDef {
+    /// The banding rule.
+    pub fn rule(&self) -> BandRule {
+        BandRule { thresholds: self.thresholds, rock_slope_deg: self.rock_slope_deg }
+    }
+}
+
+/// Texture files per band.
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BandTextures {
+    /// Water.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water: Option<TextureDef>,
+    /// Sand.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sand: Option<TextureDef>,
+    /// Grass.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grass: Option<TextureDef>,
+    /// Rock.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rock: Option<TextureDef>,
+    /// Snow.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snow: Option<TextureDef>,
+}
+
+impl BandTextures {
+    fn is_empty(&self) -> bool {
+        self.all().iter().all(|texture| texture.is_none())
+    }
+
+    /// Each band's texture, in [`Band::ALL`] order.
+    pub fn all(&self) -> [&Option<TextureDef>; 5] {
+        [&self.water, &self.sand, &self.grass, &self.rock, &self.snow]
+    }
+
+    fn all_mut(&mut self) -> [&mut Option<TextureDef>; 5] {
+        [&mut self.water, &mut self.sand, &mut self.grass, &mut self.rock, &mut self.snow]
+    }
+}
+
+/// A `terrain` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainDef {
+    /// The heightmap.
+    pub height: HeightDef,
+    /// The visible section.
+    #[serde(default)]
+    pub section: SectionDef,
+    /// Metres between neighbouring samples; 0.25 by default.
+    #[serde(default = "default_cell")]
+    pub cell_m: PositiveMetres,
+    /// Metres of height for a map height of 1; 8 by default.
+    #[serde(default = "default_height")]
+    pub height_m: PositiveMetres,
+    /// Where the section's centre stands, metres (its heights above this point's); the origin
+    /// by default.
+    #[serde(default = "origin")]
+    pub position: Point,
+    /// Turn about the vertical axis through the section's centre, degrees; 0 by default.
+    #[serde(default = "no_turn")]
+    pub rotation_deg: Degrees,
+    /// Scale along x, y and z about the section's centre; 1 by default.
+    #[serde(default = "unit_scale")]
+    pub scale: [Factor; 3],
+    /// Height bands and their textures.
+    #[serde(default)]
+    pub bands: BandsDef,
+}
+
+fn default_cell() -> PositiveMetres {
+    PositiveMetres(0.25)
+}
+
+fn default_height() -> PositiveMetres {
+    PositiveMetres(8.0)
+}
+
+fn origin() -> Point {
+    Point(Vec3::ZERO)
+}
+
+fn no_turn() -> Degrees {
+    Degrees(0.0)
+}
+
+fn unit_scale() -> [Factor; 3] {
+    [Factor(1.0); 3]
+}
+
+/// What a terrain's build made: its map and the seed it was made with.
+#[derive(Debug, Clone)]
+pub struct TerrainBuilt {
+    /// The heightmap.
+    pub map: Arc<Heightmap>,
+    /// The seed a generated map was made with (drawn when the file says -1).
+    pub seed: Option<u64>,
+}
+
+/// A seed from the clock, for `seed: -1`.
+pub fn draw_seed() -> u64 {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    crate::foundation::random::Random::new(nanos as u64).next_u64()
+}
+
+/// The `terrain` kind.
+pub struct TerrainKind;
+
+impl TerrainKind {
+    /// An error at `key`, the `nth` occurrence of it inside this entity's entry.
+    fn error_at(cx: &BuildContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
+        let earlier = cx.earlier::<TerrainKind>().count();
+        cx.entity.locate_within(earlier, key, nth, format!("{}: {message}", cx.entity.field(field)))
+    }
+}
+
+impl EntityKind for TerrainKind {
+    const KEY: &'static str = "terrain";
+    type Def = TerrainDef;
+    type Built = TerrainBuilt;
+    type Plugin = TerrainPlugin;
+
+    fn references(def: &TerrainDef) -> Vec<String> {
+        let image = def.height.image.iter().map(|file| file.path.clone());
+        let textures = def.bands.textures.all().into_iter().flat_map(|t| TextureDef::reference(t.as_ref()));
+        image.chain(textures).collect()
+    }
+
+    fn resolve(def: &mut TerrainDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        if def.height.image.as_ref().is_some_and(|image| image.path == file.file) {
+            let map = file.decoded(|path, bytes| {
+                image_io::decode(bytes)
+                    .map_err(|error| FileError::whole_file(path, format!("{}: {error}", cx.field("height.image"))))
+            })?;
+            def.height.decoded = Some(map);
+        }
+        for texture in def.bands.textures.all_mut().into_iter().flatten() {
+            texture.resolve(file, cx)?;
+        }
+        Ok(())
+    }
+
+    fn build(def: &TerrainDef, cx: &BuildContext) -> Result<TerrainBuilt, FileError> {
+        let height = &def.height;
+        let (map, seed) = match (&height.image, height.size.is_some() || !height.layers.is_empty()) {
+            (Some(_), true) => {
+                return Err(Self::error_at(cx, "image", 0, "height", "heights come from an image or from size and layers, not both"));
+            }
+            (None, false) => {
+                return Err(Self::error_at(cx, "height", 0, "height", "expected `image: FILE`, or `size` and `layers` to generate the map"));
+            }
+            (Some(_), false) => {
+                let Some(map) = &height.decoded else {
+                    return Err(Self::error_at(cx, "image", 0, "height.image", "the image was not read"));
+                };
+                let mut map = (**map).clone();
+                for function in &height.apply {
+                    function.apply(&mut map);
+                }
+                (map, None)
+            }
+            (None, true) => {
+                let recipe = height.recipe();
+                recipe.check().map_err(|error| {
+                    let key = if error.key == "size" && height.size.is_none() { "height" } else { error.key };
+                    Self::error_at(cx, key, error.nth, &format!("height.{}", error.field), &error.message)
+                })?;
+                let seed = recipe.seed_used(draw_seed);
+                if recipe.seed == -1 {
+                    println!("{}: seed -1 drew seed {seed}", cx.entity.field("height.seed"));
+                }
+                let map = recipe.generate(seed).map_err(|error| Self::error_at(cx, "height", 0, "height", error))?;
+                (map, Some(seed))
+            }
+        };
+        if map.values().iter().any(|h| !h.is_finite()) {
+            return Err(Self::error_at(cx, "height", 0, "height", "the map algebra made heights that are not finite numbers"));
+        }
+        let section = Section { origin: def.section.origin, size: def.section.size };
+        // The default size fits small maps; a size the file asks for must fit.
+        let section = if def.section.size == default_section_size() { section.clamped(&map) } else { section };
+        section.check(&map).map_err(|error| Self::error_at(cx, "section", 0, "section.size", error))?;
+        let [x, z] = section.origin;
+        if x + section.size[0] > map.width() || z + section.size[1] > map.height() {
+            let message = format!(
+                "a section of {} x {} vertices at [{x}, {z}] reaches beyond the map's {} x {} samples",
+                section.size[0],
+                section.size[1],
+                map.width(),
+                map.height()
+            );
+            return Err(Self::error_at(cx, "section", 0, "section.origin", message));
+        }
+        def.bands.rule().check().map_err(|message| Self::error_at(cx, "bands", 0, "bands", message))?;
+        Ok(TerrainBuilt { map: Arc::new(map), seed })
+    }
+
+    fn spawn(def: &TerrainDef, built: &TerrainBuilt, entity: &mut EntityWorldMut) {
+        spawn_terrain(entity, def, built);
+    }
+
+    fn saved(def: &TerrainDef) -> TerrainDef {
+        let mut saved = def.clone();
+        saved.height.decoded = None;
+        saved
+    }
+
+    fn save_live(def: &mut TerrainDef, entity: EntityRef) {
+        super::plugin::save_live(def, entity);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_sources() {
+        let def: TerrainDef = serde_yaml::from_str("height: {size: [128, 128], layers: [{perlin: {}}]}").unwrap();
+        assert_eq!(def.section, SectionDef { origin: [0, 0], size: [64, 64] });
+        assert_eq!(def.height.seed, -1);
+        let perlin = def.height.layers[0].perlin.unwrap();
+        assert_eq!((perlin.octaves, perlin.lacunarity, perlin.persistence), (1, 2.0, 0.5));
+        assert_eq!(def.bands.rule(), BandRule::default());
+    }
+
+    #[test]
+    fn unknown_fields_and_bad_numbers_are_refused_where_they_are() {
+        for (yaml, expected) in [
+            ("height: {image: a.png}\nsection: {origin: [0, 0], sise: [3, 3]}", "unknown field `sise`"),
+            ("height: {image: ../a.png}", "inside the scene's folder"),
+            ("height: {image: a.jpg}", "a .png or .bmp file"),
+            ("height: {image: a.png}\ncell_m: .nan", "greater than 0"),
+            ("height: {image: a.png}\nscale: [1, 0, 1]", "a factor greater than 0"),
+            ("height: {image: a.png}\nheight_m: -3", "greater than 0"),
+            ("height: {image: a.png}\nsection: {size: [-3, 3]}", "expected u32"),
+        ] {
+            let error = serde_yaml::from_str::<TerrainDef>(yaml).unwrap_err().to_string();
+            assert!(error.contains(expected), "{yaml}: {error}");
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! The `terrain` entity kind: a heightmap, generated or read from an image, of which a visible
+//! section is shown as a textured mesh that can be moved over the map, turned and scaled.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`def`] | the `terrain:` entry of a scene file and [`TerrainKind`] |
+//! | [`plugin`] | [`TerrainPlugin`] and its set [`TerrainSystems`]: parameters, keys, regeneration off the main thread, meshes, dump |
+//! | [`panel`] | the window's terrain section: figures, new seed, save |
+//! | [`heightmap`] | the grid of heights and the map algebra |
+//! | [`noise`] | Perlin noise and fBm: the reference formula and the fast row path |
+//! | [`generate`] | the generators (fBm, diamond-square, hills) and the layered recipe |
+//! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
+//! | [`section`] | the visible section and its mesh, split by band |
+//! | [`bands`] | the height bands, their rule and the project's band textures |
+//! | [`experiment`] | the source's timing experiment: image time against section size, with and without shadows |
+//!
+//! Parameters (`<name>.<parameter>`, all from [`TerrainParams`]): `section.{x,z}` (the
+//! section's first map sample), `section.{width,depth}` (vertices), `rotation_deg`,
+//! `scale.{x,y,z}`, `position.{x,y,z}` (metres), `height_m`, and for generated maps
+//! `noise.{seed,scale,octaves,lacunarity,persistence}` (the first Perlin layer's; a change
+//! makes the map again).
+
+pub mod bands;
+pub mod def;
+pub mod experiment;
+pub mod generate;
+pub mod heightmap;
+pub mod image_io;
+pub mod noise;
+pub mod panel;
+pub mod plugin;
+pub mod section;
+
+pub use def::{TerrainDef, TerrainKind};
+pub use heightmap::Heightmap;
+pub use plugin::{TerrainBody, TerrainParams, TerrainPlugin, TerrainSystems};

@@ -1,0 +1,286 @@
+//! The visible section of a heightmap and its mesh: `w x h` vertices at an integer origin in
+//! the map, two triangles per cell, vertex normals from the adjacent faces, texture
+//! coordinates fixed to the map, and the triangles sorted into one mesh per height band.
+//!
+//! Normals at the section's border come from the map beyond it wherever the map has data, so
+//! a section moved across the map shows the same normals where it overlaps its old place, and
+//! two sections side by side meet without a seam.
+
+use super::bands::{Band, BandRule};
+use super::heightmap::Heightmap;
+use bevy::math::{Vec2, Vec3};
+use canopy_raster::MeshData;
+
+/// Which part of the map is shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Section {
+    /// The map sample at the section's first vertex, `(x, z)`.
+    pub origin: [u32; 2],
+    /// Vertices along x and z, each at least 2.
+    pub size: [u32; 2],
+}
+
+/// Why a section does not fit its map.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SectionError {
+    /// Fewer than two vertices along a side.
+    #[error("a section of {0} x {1} vertices: it needs at least 2 along each side")]
+    TooSmall(u32, u32),
+    /// Larger than the map.
+    #[error("a section of {0} x {1} vertices does not fit a map of {2} x {3} samples")]
+    TooLarge(u32, u32, u32, u32),
+}
+
+impl Section {
+    /// Whether the section's size fits `map` (the origin is clamped by [`Section::clamped`]).
+    pub fn check(&self, map: &Heightmap) -> Result<(), SectionError> {
+        let [w, h] = self.size;
+        if w < 2 || h < 2 {
+            return Err(SectionError::TooSmall(w, h));
+        }
+        if w > map.width() || h > map.height() {
+            return Err(SectionError::TooLarge(w, h, map.width(), map.height()));
+        }
+        Ok(())
+    }
+
+    /// The section with its size limited to the map and its origin moved so that it lies
+    /// inside the map.
+    pub fn clamped(self, map: &Heightmap) -> Self {
+        let size = [self.size[0].clamp(2.min(map.width()), map.width()), self.size[1].clamp(2.min(map.height()), map.height())];
+        let origin = [self.origin[0].min(map.width() - size[0]), self.origin[1].min(map.height() - size[1])];
+        Self { origin, size }
+    }
+
+    /// The section moved by `(dx, dz)` samples (the source's Move), stopping at the map's
+    /// edges.
+    pub fn moved(self, dx: i64, dz: i64, map: &Heightmap) -> Self {
+        let shift = |origin: u32, d: i64| (i64::from(origin) + d).max(0) as u32;
+        Self { origin: [shift(self.origin[0], dx), shift(self.origin[1], dz)], ..self }.clamped(map)
+    }
+}
+
+/// How map units become metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Geometry {
+    /// Metres between neighbouring samples.
+    pub cell_m: f32,
+    /// Metres of height for a map height of 1.
+    pub height_m: f32,
+    /// Cells one repetition of a band texture covers.
+    pub texture_cells: f32,
+}
+
+/// The section's meshes and figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionMesh {
+    /// One mesh per band, in [`Band::ALL`] order, positions relative to `barycentre`.
+    pub bands: [MeshData; 5],
+    /// Triangles per band.
+    pub counts: [usize; 5],
+    /// The mean of the section's vertices in metres, the section's first vertex at the
+    /// origin: the centre it turns and scales about.
+    pub barycentre: Vec3,
+}
+
+/// The two triangles of cell `(x, z)` as corner offsets, counter-clockwise seen from above:
+/// `a c d` and `a d b` with `a = (x, z)`, `b = (x + 1, z)`, `c = (x, z + 1)`, `d = (x + 1, z + 1)`.
+const CELL_TRIANGLES: [[(u32, u32); 3]; 2] = [[(0, 0), (0, 1), (1, 1)], [(0, 0), (1, 1), (1, 0)]];
+
+/// The mesh of `section` (which must fit `map`), banded by `rule`.
+pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
+    let [x0, z0] = section.origin;
+    let [w, h] = section.size;
+    let position = |x: u32, z: u32| {
+        Vec3::new((x - x0) as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, (z - z0) as f32 * geometry.cell_m)
+    };
+    let normals = vertex_normals(map, section, geometry);
+    let count = (w * h) as usize;
+    let barycentre = (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).fold(Vec3::ZERO, |sum, (i, j)| sum + position(x0 + i, z0 + j))
+        / count as f32;
+
+    let mut bands: [MeshData; 5] = Default::default();
+    let mut counts = [0; 5];
+    // Each band's index of every section vertex it uses; `u32::MAX` where unused.
+    let mut remap = vec![[u32::MAX; 5]; count];
+    for j in 0..h - 1 {
+        for i in 0..w - 1 {
+            for corners in CELL_TRIANGLES {
+                let vertices = corners.map(|(di, dj)| (i + di, j + dj));
+                let points = vertices.map(|(vi, vj)| position(x0 + vi, z0 + vj));
+                let up = (points[1] - points[0]).cross(points[2] - points[0]).normalize_or_zero().y;
+                let mean = vertices.iter().map(|&(vi, vj)| map.at(x0 + vi, z0 + vj)).sum::<f32>() / 3.0;
+                let band = rule.band(mean, up).index();
+                let mesh = &mut bands[band];
+                let triangle = vertices.map(|(vi, vj)| {
+                    let local = (vj * w + vi) as usize;
+                    let slot = &mut remap[local][band];
+                    if *slot == u32::MAX {
+                        *slot = mesh.positions.len() as u32;
+                        mesh.positions.push(position(x0 + vi, z0 + vj) - barycentre);
+                        mesh.normals.push(normals[local]);
+                        mesh.uvs.push(Vec2::new((x0 + vi) as f32, (z0 + vj) as f32) / geometry.texture_cells);
+                    }
+                    *slot
+                });
+                mesh.triangles.push(triangle);
+                counts[band] += 1;
+            }
+        }
+    }
+    SectionMesh { bands, counts, barycentre }
+}
+
+/// Unit normals of the section's vertices, row by row: the sum of the (area-weighted) normals
+/// of the up to six map triangles around each vertex.
+fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
+    let [x0, z0] = section.origin;
+    let [w, h] = section.size;
+    // The cells touching the section, one ring beyond it where the map has them.
+    let (cx0, cz0) = (x0.saturating_sub(1), z0.saturating_sub(1));
+    let (cx1, cz1) = ((x0 + w).min(map.width() - 1), (z0 + h).min(map.height() - 1));
+    let columns = (cx1 - cx0) as usize;
+    let corner = |x: u32, z: u32| Vec3::new(x as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, z as f32 * geometry.cell_m);
+    let faces: Vec<[Vec3; 2]> = (cz0..cz1)
+        .flat_map(|z| (cx0..cx1).map(move |x| (x, z)))
+        .map(|(x, z)| {
+            CELL_TRIANGLES.map(|t| {
+                let [a, b, c] = t.map(|(dx, dz)| corner(x + dx, z + dz));
+                (b - a).cross(c - a)
+            })
+        })
+        .collect();
+    let face = |x: i64, z: i64, which: usize| {
+        let inside = (i64::from(cx0)..i64::from(cx1)).contains(&x) && (i64::from(cz0)..i64::from(cz1)).contains(&z);
+        if inside { faces[(z - i64::from(cz0)) as usize * columns + (x - i64::from(cx0)) as usize][which] } else { Vec3::ZERO }
+    };
+    (z0..z0 + h)
+        .flat_map(|z| (x0..x0 + w).map(move |x| (i64::from(x), i64::from(z))))
+        .map(|(x, z)| {
+            // As corner a of its own cell (both triangles), b of the cell to the left (the
+            // second), c of the cell above (the first) and d of the cell diagonally before it
+            // (both).
+            let sum = face(x, z, 0) + face(x, z, 1) + face(x - 1, z, 1) + face(x, z - 1, 0) + face(x - 1, z - 1, 0) + face(x - 1, z - 1, 1);
+            sum.try_normalize().unwrap_or(Vec3::Y)
+        })
+        .collect()
+}
+
+/// The band each triangle of a section fell into, counted: for dumps.
+pub fn band_counts(mesh: &SectionMesh) -> impl Iterator<Item = (Band, usize)> + '_ {
+    Band::ALL.into_iter().zip(mesh.counts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    fn geometry() -> Geometry {
+        Geometry { cell_m: 0.5, height_m: 4.0, texture_cells: 8.0 }
+    }
+
+    fn bumpy(width: u32, height: u32) -> Heightmap {
+        Heightmap::from_fn(width, height, |x, z| ((x as f32 * 0.3).sin() * (z as f32 * 0.2).cos() + 1.0) * 0.5).unwrap()
+    }
+
+    /// Every position of every band mesh, in metres from the section's first vertex, with its
+    /// normal.
+    fn vertices(mesh: &SectionMesh) -> Vec<(Vec3, Vec3)> {
+        mesh.bands.iter().flat_map(|m| m.positions.iter().zip(&m.normals).map(|(p, n)| (*p + mesh.barycentre, *n))).collect()
+    }
+
+    #[test]
+    fn two_triangles_a_cell_and_the_surface_is_closed() {
+        let map = bumpy(20, 16);
+        let section = Section { origin: [3, 2], size: [9, 7] };
+        let mesh = mesh_section(&map, section, geometry(), &BandRule::default());
+        assert_eq!(mesh.counts.iter().sum::<usize>(), 2 * 8 * 6);
+        // Every interior edge is shared by exactly two triangles (across bands, by position),
+        // every border edge by one: the surface has no holes and no overlaps.
+        let mut edges: HashMap<[[u32; 3]; 2], usize> = HashMap::new();
+        let key = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        for band in &mesh.bands {
+            for t in &band.triangles {
+                for k in 0..3 {
+                    let (a, b) = (key(band.positions[t[k] as usize]), key(band.positions[t[(k + 1) % 3] as usize]));
+                    *edges.entry(if a < b { [a, b] } else { [b, a] }).or_default() += 1;
+                }
+            }
+        }
+        let border = 2 * (8 + 6);
+        assert_eq!(edges.values().filter(|&&n| n == 1).count(), border);
+        assert!(edges.values().all(|&n| n == 1 || n == 2));
+        // Front faces point up.
+        for band in &mesh.bands {
+            for t in &band.triangles {
+                let [a, b, c] = t.map(|i| band.positions[i as usize]);
+                assert!((b - a).cross(c - a).y > 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn normals_are_unit_point_up_and_match_a_flat_or_sloped_plane() {
+        let slope = Heightmap::from_fn(10, 10, |x, _| x as f32 * 0.1).unwrap();
+        let mesh = mesh_section(&slope, Section { origin: [0, 0], size: [10, 10] }, geometry(), &BandRule::default());
+        // Height rises 0.4 m per 0.5 m along x: the normal is (-0.4, 0.5, 0) normalised.
+        let expected = Vec3::new(-0.4, 0.5, 0.0).normalize();
+        for (_, normal) in vertices(&mesh) {
+            assert!(normal.distance(expected) < 1e-5, "{normal}");
+        }
+    }
+
+    #[test]
+    fn a_moved_section_keeps_the_normals_where_it_overlaps() {
+        let map = bumpy(40, 30);
+        let rule = BandRule::default();
+        let at = |origin| {
+            let mesh = mesh_section(&map, Section { origin, size: [12, 10] }, geometry(), &rule);
+            let shift = Vec3::new(origin[0] as f32, 0.0, origin[1] as f32) * geometry().cell_m;
+            vertices(&mesh).into_iter().map(|(p, n)| (((p + shift) * 2.0).round().as_ivec3(), n)).collect::<HashMap<_, _>>()
+        };
+        let (first, moved) = (at([5, 5]), at([15, 8]));
+        let shared: Vec<_> = first.iter().filter_map(|(p, n)| moved.get(p).map(|m| (n, m))).collect();
+        assert!(shared.len() >= 10, "the sections overlap");
+        for (a, b) in shared {
+            assert!(a.distance(*b) < 1e-5, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn moves_stop_at_the_edges_and_sizes_fit() {
+        let map = bumpy(64, 48);
+        let section = Section { origin: [10, 10], size: [32, 32] };
+        assert_eq!(section.moved(10, 0, &map).origin, [20, 10]);
+        assert_eq!(section.moved(100, 100, &map).origin, [32, 16]);
+        assert_eq!(section.moved(-100, 0, &map).origin, [0, 10]);
+        assert_eq!(Section { origin: [0, 0], size: [65, 2] }.check(&map), Err(SectionError::TooLarge(65, 2, 64, 48)));
+        assert_eq!(Section { origin: [0, 0], size: [1, 2] }.check(&map), Err(SectionError::TooSmall(1, 2)));
+        assert_eq!(Section { origin: [60, 0], size: [8, 8] }.clamped(&map).origin, [56, 0]);
+    }
+
+    #[test]
+    fn triangles_fall_into_bands_by_height() {
+        // Heights rising along x by 0.01 a sample: the triangles of cell x have mean heights
+        // (3x + 1) / 300 and (3x + 2) / 300, none at a threshold; two rows of cells.
+        let map = Heightmap::from_fn(101, 3, |x, _| x as f32 / 100.0).unwrap();
+        let rule = BandRule::default();
+        let mesh = mesh_section(&map, Section { origin: [0, 0], size: [101, 3] }, geometry(), &rule);
+        let mut expected = [0; 5];
+        for x in 0..100 {
+            for t in 1..=2 {
+                expected[rule.band((3 * x + t) as f32 / 300.0, 1.0).index()] += 2;
+            }
+        }
+        assert_eq!(mesh.counts, expected);
+        assert!(expected.iter().all(|&c| c > 0), "{expected:?}");
+        for (band, band_mesh) in Band::ALL.iter().zip(&mesh.bands) {
+            assert_eq!(band_mesh.triangles.len(), mesh.counts[band.index()]);
+            for t in &band_mesh.triangles {
+                let mean = t.iter().map(|&i| (band_mesh.positions[i as usize] + mesh.barycentre).y).sum::<f32>() / 3.0;
+                assert_eq!(rule.band(mean / geometry().height_m, 1.0), *band, "mean height {mean}");
+            }
+        }
+    }
+}
