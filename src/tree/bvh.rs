@@ -156,7 +156,9 @@ impl SegmentBvh {
         }
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
-            if box_distance(&node, p) > limit {
+            // A surface distance is negative inside a segment, but a box's is never below 0,
+            // so a box holding `p` stays open however deep inside the best segment `p` lies.
+            if box_distance(&node, p) > limit.max(0.0) {
                 continue;
             }
             if node.count > 0 {
