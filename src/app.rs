@@ -25,7 +25,13 @@ use std::sync::Arc;
 /// built (a kind's checks see what the kinds before it built). A new kind is its folder and
 /// one line here.
 pub fn entity_kinds() -> KindRegistry {
-    Kinds::new().with::<ShapeKind>().with::<MuscleKind>().with::<TreeKind>().with::<SlothKind>().with::<TerrainKind>().build()
+    Kinds::new()
+        .with::<ShapeKind>()
+        .with::<MuscleKind>()
+        .with::<TreeKind>()
+        .with::<SlothKind>()
+        .with::<TerrainKind>()
+        .build()
 }
 
 /// The fixed simulation rate, steps per second.

@@ -6,17 +6,17 @@ use canopy::app::{FIXED_HZ, entity_kinds, window_app};
 use canopy::foundation::dump::write_dump;
 use canopy::raster::MAX_TARGET_SIZE;
 use canopy::run::{RunOptions, run_headless};
-use canopy::tree::GeneratorSettings;
-use canopy::tree::generate::{generate, scene_text};
 use canopy::terrain::bands::{Band, band_texture};
 use canopy::terrain::def::draw_seed;
 use canopy::terrain::experiment;
 use canopy::terrain::generate::{DiamondSquareLayer, HillsLayer, Layer, PerlinLayer, Recipe};
 use canopy::terrain::heightmap::Heightmap;
 use canopy::terrain::image_io::{self, Encoding};
+use canopy::tree::GeneratorSettings;
+use canopy::tree::generate::{generate, scene_text};
 use canopy::ui::WindowCapture;
-use canopy::ui::plot::save_timing_plot;
 use canopy::ui::pacing::FramePacing;
+use canopy::ui::plot::save_timing_plot;
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -440,7 +440,10 @@ fn describe(map: &Heightmap) -> String {
 fn heightmap_stats(maps: &[PathBuf]) -> ExitCode {
     let mut valid = true;
     for path in maps {
-        match std::fs::read(path).map_err(|e| e.to_string()).and_then(|bytes| image_io::decode(&bytes).map_err(|e| e.to_string())) {
+        match std::fs::read(path)
+            .map_err(|e| e.to_string())
+            .and_then(|bytes| image_io::decode(&bytes).map_err(|e| e.to_string()))
+        {
             Ok(map) => println!("{}: {}", path.display(), describe(&map)),
             Err(error) => {
                 eprintln!("{}: {error}", path.display());

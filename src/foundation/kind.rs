@@ -156,6 +156,8 @@ pub struct EntityContext<'a> {
     pub text: &'a str,
     /// The entity's place among the file's entities, from 0.
     pub index: usize,
+    /// The entity's place among the file's entities of its kind, from 0.
+    pub kind_index: usize,
     /// The entity's kind key.
     pub key: &'static str,
 }
@@ -172,10 +174,10 @@ impl EntityContext<'_> {
         locate_key(self.path, self.text, key, nth, message)
     }
 
-    /// An error at the `nth` (from 0) occurrence of mapping key `key` inside this entity's
-    /// entry, which is the `earlier`-th (from 0) entity of its kind in the file.
-    pub fn locate_within(&self, earlier: usize, key: &str, nth: usize, message: String) -> FileError {
-        locate_key_after(self.path, self.text, (self.key, earlier), key, nth, message)
+    /// An error at the `nth` (from 0) occurrence of mapping key `key` from this entity's entry
+    /// on (its kind key, the `kind_index`-th in the file).
+    pub fn locate_within(&self, key: &str, nth: usize, message: String) -> FileError {
+        locate_key_after(self.path, self.text, (self.key, self.kind_index), key, nth, message)
     }
 
     /// An error about the scene file as a whole.
@@ -298,7 +300,7 @@ mod tests {
     #[test]
     fn a_shared_value_is_made_once_per_kind_and_type() {
         let shared = SharedBuilds::default();
-        let entity = |key| EntityContext { path: Path::new("s.yaml"), text: "", index: 0, key };
+        let entity = |key| EntityContext { path: Path::new("s.yaml"), text: "", index: 0, kind_index: 0, key };
         let cx = |key| BuildContext { entity: entity(key), entities: &[], shared: &shared };
         let mut made = 0;
         let first = cx("sloth").shared(|| {

@@ -279,7 +279,8 @@ impl KindRegistry {
         let scene = (self.read)(path, bytes)?;
         let text = String::from_utf8_lossy(bytes);
         for (index, entity) in scene.entities.iter().enumerate() {
-            let cx = EntityContext { path, text: &text, index, key: entity.key };
+            let kind_index = scene.kind_index(index);
+            let cx = EntityContext { path, text: &text, index, kind_index, key: entity.key };
             self.kind_of(entity, index, path)?.validate(&*entity.def, &cx)?;
         }
         Ok(scene)
@@ -314,6 +315,7 @@ impl KindRegistry {
             .enumerate()
             .map(|(index, entity)| self.kind_of(entity, index, path))
             .collect::<Result<Vec<_>, _>>()?;
+        let kind_indices: Vec<usize> = (0..scene.entities.len()).map(|index| scene.kind_index(index)).collect();
         for file in files {
             let mut decoded: HashMap<TypeId, Arc<dyn Any + Send + Sync>> = HashMap::new();
             for (index, entity) in scene.entities.iter_mut().enumerate() {
@@ -321,7 +323,7 @@ impl KindRegistry {
                 if !kind.references(&*entity.def).contains(&file.file) {
                     continue;
                 }
-                let cx = EntityContext { path, text: &text, index, key: entity.key };
+                let cx = EntityContext { path, text: &text, index, kind_index: kind_indices[index], key: entity.key };
                 let mut referenced = ReferencedFile::new(&file.file, &file.path, &file.contents, &mut decoded);
                 kind.resolve(&mut *entity.def, &mut referenced, &cx)?;
             }
@@ -345,7 +347,13 @@ impl KindRegistry {
             let mut made = Vec::new();
             for (index, entity) in scene.entities.iter().enumerate().filter(|(_, e)| e.key == kind.key()) {
                 let cx = BuildContext {
-                    entity: EntityContext { path, text: &text, index, key: entity.key },
+                    entity: EntityContext {
+                        path,
+                        text: &text,
+                        index,
+                        kind_index: kind_indices[index],
+                        key: entity.key,
+                    },
                     entities: &records,
                     shared: &shared,
                 };

@@ -326,6 +326,12 @@ impl<'de, L: KindList> Deserialize<'de> for ReadEntity<L> {
 }
 
 impl SceneDef {
+    /// How many entities of the same kind come before entity `index`.
+    pub fn kind_index(&self, index: usize) -> usize {
+        let key = self.entities[index].key;
+        self.entities[..index].iter().filter(|entity| entity.key == key).count()
+    }
+
     /// A scene holding one kind's standalone configuration, framed by its view.
     pub(super) fn of_standalone(key: &'static str, standalone: Standalone<Box<dyn KindDef>>) -> Self {
         let view = standalone.view;

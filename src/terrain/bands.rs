@@ -3,8 +3,8 @@
 //! textures the project makes itself.
 
 use super::noise::{FbmSettings, Perlin};
-use canopy_raster::Texture;
 use bevy::math::Vec3;
+use canopy_raster::Texture;
 use serde::{Deserialize, Serialize};
 
 /// A height band.
@@ -109,7 +109,7 @@ pub fn band_texture(band: Band) -> Texture {
             let period = cells << octave;
             let per_texel = period as f32 / TEXTURE_SIDE as f32;
             let (u, v) = (x as f32 * per_texel, y as f32 * per_texel);
-            sum += amplitude * perlin.sample_periodic(u, v * stretch as f32, period as i32, (period * stretch) as i32);
+            sum += amplitude * perlin.sample_periodic(u, v * stretch as f32, period, period * stretch);
             total += amplitude;
             amplitude *= settings.persistence;
         }
@@ -158,14 +158,19 @@ mod tests {
         let mut means = Vec::new();
         for band in Band::ALL {
             let texture = band_texture(band);
-            let texel = |x: u32, y: u32| texture.sample(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) / TEXTURE_SIDE as f32, sampler);
+            let texel = |x: u32, y: u32| {
+                texture.sample(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) / TEXTURE_SIDE as f32, sampler)
+            };
             // Opposite edges continue each other: neighbours across the seam differ no more
             // than neighbours inside the tile do.
             let last = TEXTURE_SIDE - 1;
             let across: f32 = (0..TEXTURE_SIDE).map(|y| texel(last, y).distance(texel(0, y))).sum();
             let inside: f32 = (0..TEXTURE_SIDE).map(|y| texel(last - 1, y).distance(texel(last, y))).sum();
             assert!(across <= 2.0 * inside + 0.05, "{band:?}: across {across}, inside {inside}");
-            let mean = (0..TEXTURE_SIDE).flat_map(|y| (0..TEXTURE_SIDE).map(move |x| (x, y))).map(|(x, y)| texel(x, y)).sum::<Vec3>();
+            let mean = (0..TEXTURE_SIDE)
+                .flat_map(|y| (0..TEXTURE_SIDE).map(move |x| (x, y)))
+                .map(|(x, y)| texel(x, y))
+                .sum::<Vec3>();
             means.push(mean / (TEXTURE_SIDE * TEXTURE_SIDE) as f32);
         }
         for (i, a) in means.iter().enumerate() {

@@ -54,7 +54,12 @@ fn random_seed() -> i64 {
 impl HeightDef {
     /// The recipe of a generated map (whatever `image` says).
     pub fn recipe(&self) -> Recipe {
-        Recipe { size: self.size.unwrap_or([0, 0]), seed: self.seed, layers: self.layers.clone(), apply: self.apply.clone() }
+        Recipe {
+            size: self.size.unwrap_or([0, 0]),
+            seed: self.seed,
+            layers: self.layers.clone(),
+            apply: self.apply.clone(),
+        }
     }
 }
 
@@ -230,12 +235,9 @@ pub fn draw_seed() -> u64 {
 /// The `terrain` kind.
 pub struct TerrainKind;
 
-impl TerrainKind {
-    /// An error at `key`, the `nth` occurrence of it inside this entity's entry.
-    fn error_at(cx: &BuildContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
-        let earlier = cx.earlier::<TerrainKind>().count();
-        cx.entity.locate_within(earlier, key, nth, format!("{}: {message}", cx.entity.field(field)))
-    }
+/// An error at `key`, the `nth` occurrence of it inside the entity's entry, about `field`.
+fn error_at(cx: &EntityContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
+    cx.locate_within(key, nth, format!("{}: {message}", cx.field(field)))
 }
 
 impl EntityKind for TerrainKind {
@@ -243,6 +245,23 @@ impl EntityKind for TerrainKind {
     type Def = TerrainDef;
     type Built = TerrainBuilt;
     type Plugin = TerrainPlugin;
+
+    fn validate(def: &TerrainDef, cx: &EntityContext) -> Result<(), FileError> {
+        let height = &def.height;
+        match (&height.image, height.size.is_some() || !height.layers.is_empty()) {
+            (Some(_), true) => {
+                Err(error_at(cx, "image", 0, "height", "heights come from an image or from size and layers, not both"))
+            }
+            (None, false) => Err(error_at(
+                cx,
+                "height",
+                0,
+                "height",
+                "expected `image: FILE`, or `size` and `layers` to generate the map",
+            )),
+            _ => Ok(()),
+        }
+    }
 
     fn references(def: &TerrainDef) -> Vec<String> {
         let image = def.height.image.iter().map(|file| file.path.clone());
@@ -252,10 +271,9 @@ impl EntityKind for TerrainKind {
 
     fn resolve(def: &mut TerrainDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
         if def.height.image.as_ref().is_some_and(|image| image.path == file.file) {
-            let map = file.decoded(|path, bytes| {
-                image_io::decode(bytes)
-                    .map_err(|error| FileError::whole_file(path, format!("{}: {error}", cx.field("height.image"))))
-            })?;
+            let map = file.decoded(|_, bytes| image_io::decode(bytes).map_err(|error| error.to_string())).map_err(
+                |error| error_at(cx, "image", 0, "height.image", format!("{}: {error}", file.path.display())),
+            )?;
             def.height.decoded = Some(map);
         }
         for texture in def.bands.textures.all_mut().into_iter().flatten() {
@@ -266,16 +284,10 @@ impl EntityKind for TerrainKind {
 
     fn build(def: &TerrainDef, cx: &BuildContext) -> Result<TerrainBuilt, FileError> {
         let height = &def.height;
-        let (map, seed) = match (&height.image, height.size.is_some() || !height.layers.is_empty()) {
-            (Some(_), true) => {
-                return Err(Self::error_at(cx, "image", 0, "height", "heights come from an image or from size and layers, not both"));
-            }
-            (None, false) => {
-                return Err(Self::error_at(cx, "height", 0, "height", "expected `image: FILE`, or `size` and `layers` to generate the map"));
-            }
-            (Some(_), false) => {
+        let (map, seed) = match &height.image {
+            Some(_) => {
                 let Some(map) = &height.decoded else {
-                    return Err(Self::error_at(cx, "image", 0, "height.image", "the image was not read"));
+                    return Err(error_at(&cx.entity, "image", 0, "height.image", "the image was not read"));
                 };
                 let mut map = (**map).clone();
                 for function in &height.apply {
@@ -283,27 +295,33 @@ impl EntityKind for TerrainKind {
                 }
                 (map, None)
             }
-            (None, true) => {
+            None => {
                 let recipe = height.recipe();
                 recipe.check().map_err(|error| {
                     let key = if error.key == "size" && height.size.is_none() { "height" } else { error.key };
-                    Self::error_at(cx, key, error.nth, &format!("height.{}", error.field), &error.message)
+                    error_at(&cx.entity, key, error.nth, &format!("height.{}", error.field), &error.message)
                 })?;
                 let seed = recipe.seed_used(draw_seed);
                 if recipe.seed == -1 {
                     println!("{}: seed -1 drew seed {seed}", cx.entity.field("height.seed"));
                 }
-                let map = recipe.generate(seed).map_err(|error| Self::error_at(cx, "height", 0, "height", error))?;
+                let map = recipe.generate(seed).map_err(|error| error_at(&cx.entity, "height", 0, "height", error))?;
                 (map, Some(seed))
             }
         };
         if map.values().iter().any(|h| !h.is_finite()) {
-            return Err(Self::error_at(cx, "height", 0, "height", "the map algebra made heights that are not finite numbers"));
+            return Err(error_at(
+                &cx.entity,
+                "height",
+                0,
+                "height",
+                "the map algebra made heights that are not finite numbers",
+            ));
         }
         let section = Section { origin: def.section.origin, size: def.section.size };
         // The default size fits small maps; a size the file asks for must fit.
         let section = if def.section.size == default_section_size() { section.clamped(&map) } else { section };
-        section.check(&map).map_err(|error| Self::error_at(cx, "section", 0, "section.size", error))?;
+        section.check(&map).map_err(|error| error_at(&cx.entity, "section", 0, "section.size", error))?;
         let [x, z] = section.origin;
         if x + section.size[0] > map.width() || z + section.size[1] > map.height() {
             let message = format!(
@@ -313,9 +331,9 @@ impl EntityKind for TerrainKind {
                 map.width(),
                 map.height()
             );
-            return Err(Self::error_at(cx, "section", 0, "section.origin", message));
+            return Err(error_at(&cx.entity, "section", 0, "section.origin", message));
         }
-        def.bands.rule().check().map_err(|message| Self::error_at(cx, "bands", 0, "bands", message))?;
+        def.bands.rule().check().map_err(|message| error_at(&cx.entity, "bands", 0, "bands", message))?;
         Ok(TerrainBuilt { map: Arc::new(map), seed })
     }
 

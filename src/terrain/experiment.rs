@@ -10,7 +10,7 @@
 use super::bands::{Band, BandRule, band_texture};
 use super::generate::{PerlinLayer, perlin};
 use super::section::{Geometry, Section, mesh_section};
-use crate::raster::{Camera, Framebuffer, Frame, Instance, Light, Material, RenderSettings, Renderer};
+use crate::raster::{Camera, Frame, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
 use bevy::math::{Mat4, UVec2, Vec3};
 use bevy::tasks::TaskPool;
 use std::sync::Arc;
@@ -67,8 +67,15 @@ pub fn run(sizes: &[u32], runs: usize, frame: UVec2, pool: &TaskPool) -> Vec<Tim
                     material: Material { texture: Some(texture.clone()), ..Material::colored(Vec3::ONE) },
                 })
                 .collect();
-            let camera = Camera { eye: Vec3::new(0.0, 0.8, 0.9), target: Vec3::ZERO, fov_y: 90f32.to_radians(), near: 0.05, far: 10.0 };
-            let light = Light { direction: Vec3::new(-0.5, -1.0, -0.3).normalize(), diffuse: 1.0, fill: 0.0, ambient: 0.175 };
+            let camera = Camera {
+                eye: Vec3::new(0.0, 0.8, 0.9),
+                target: Vec3::ZERO,
+                fov_y: 90f32.to_radians(),
+                near: 0.05,
+                far: 10.0,
+            };
+            let light =
+                Light { direction: Vec3::new(-0.5, -1.0, -0.3).normalize(), diffuse: 1.0, fill: 0.0, ambient: 0.175 };
             let frame = Frame {
                 camera,
                 light,
@@ -103,7 +110,9 @@ fn summary(size: u32, shadows: bool, mut runs: Vec<Duration>) -> Timing {
 /// The experiment's table as text: per size, the medians and spreads with and without
 /// shadows and their ratio.
 pub fn table(timings: &[Timing]) -> String {
-    let mut out = String::from("| size | no shadows, median (min-max) ms | shadows, median (min-max) ms | shadows / none |\n|---|---|---|---|\n");
+    let mut out = String::from(
+        "| size | no shadows, median (min-max) ms | shadows, median (min-max) ms | shadows / none |\n|---|---|---|---|\n",
+    );
     let mut sizes: Vec<u32> = timings.iter().map(|t| t.size).collect();
     sizes.dedup();
     for size in sizes {

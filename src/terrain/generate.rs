@@ -293,11 +293,17 @@ impl Recipe {
     /// Every check of the recipe, with the field at fault. `seed` is checked too: -1 or a
     /// non-negative number.
     pub fn check(&self) -> Result<(), RecipeError> {
-        let error = |field: String, key: &'static str, nth: usize, message: String| RecipeError { field, key, nth, message };
+        let error =
+            |field: String, key: &'static str, nth: usize, message: String| RecipeError { field, key, nth, message };
         let [width, height] = self.size;
         check_size(width, height).map_err(|e| error("size".into(), "size", 0, e.to_string()))?;
         if self.seed < -1 {
-            return Err(error("seed".into(), "seed", 0, format!("expected -1 (a random seed) or a seed of 0 or more, found {}", self.seed)));
+            return Err(error(
+                "seed".into(),
+                "seed",
+                0,
+                format!("expected -1 (a random seed) or a seed of 0 or more, found {}", self.seed),
+            ));
         }
         if self.layers.is_empty() {
             return Err(error("layers".into(), "layers", 0, "a recipe needs at least one layer".into()));
@@ -314,8 +320,12 @@ impl Recipe {
                 Generator::DiamondSquare(d) => {
                     squares += 1;
                     let valid = d.roughness.is_finite() && d.roughness > 0.0 && d.roughness <= 1.0;
-                    (if valid { Ok(()) } else { Err(format!("roughness: expected a number greater than 0 and at most 1, found {}", d.roughness)) })
-                        .map_err(|m| error(field("diamond_square"), "diamond_square", squares - 1, m))
+                    (if valid {
+                        Ok(())
+                    } else {
+                        Err(format!("roughness: expected a number greater than 0 and at most 1, found {}", d.roughness))
+                    })
+                    .map_err(|m| error(field("diamond_square"), "diamond_square", squares - 1, m))
                 }
                 Generator::Hills(h) => {
                     hills += 1;
@@ -327,7 +337,12 @@ impl Recipe {
                 return Err(error(field("op"), "op", 0, "the first layer starts the map: it takes no `op`".into()));
             }
             if !(layer.weight.is_finite() && layer.weight.abs() <= 1e6) {
-                return Err(error(field("weight"), "weight", 0, format!("expected a number between -1e6 and 1e6, found {}", layer.weight)));
+                return Err(error(
+                    field("weight"),
+                    "weight",
+                    0,
+                    format!("expected a number between -1e6 and 1e6, found {}", layer.weight),
+                ));
             }
             for function in &layer.apply {
                 function.check().map_err(|m| error(field("apply"), "apply", applies, m))?;
@@ -379,7 +394,10 @@ impl Recipe {
 
 fn check_perlin(p: PerlinLayer) -> Result<(), String> {
     if !(p.scale.is_finite() && p.scale > 0.0 && p.scale <= 1e6) {
-        return Err(format!("scale: expected samples per lattice unit greater than 0 and at most 1e6, found {}", p.scale));
+        return Err(format!(
+            "scale: expected samples per lattice unit greater than 0 and at most 1e6, found {}",
+            p.scale
+        ));
     }
     if !(1..=MAX_OCTAVES).contains(&p.octaves) {
         return Err(format!("octaves: expected 1 to {MAX_OCTAVES}, found {}", p.octaves));
@@ -400,11 +418,16 @@ fn check_hills(h: HillsLayer, width: u32, height: u32) -> Result<(), String> {
     let [low, high] = h.radius;
     let limit = MAX_SIDE as f32;
     if !(low.is_finite() && high.is_finite() && low > 0.0 && low <= high && high <= limit) {
-        return Err(format!("radius: expected [smallest, largest] with 0 < smallest <= largest <= {limit}, found [{low}, {high}]"));
+        return Err(format!(
+            "radius: expected [smallest, largest] with 0 < smallest <= largest <= {limit}, found [{low}, {high}]"
+        ));
     }
     let touched = f64::from(2.0 * high + 1.0).powi(2).min(f64::from(width) * f64::from(height));
     if f64::from(h.count) * touched > MAX_HILL_WORK {
-        return Err(format!("{} hills of radius up to {high} are too much work for one map; use fewer or smaller hills", h.count));
+        return Err(format!(
+            "{} hills of radius up to {high} are too much work for one map; use fewer or smaller hills",
+            h.count
+        ));
     }
     Ok(())
 }
@@ -452,7 +475,7 @@ pub fn diamond_square(layer: DiamondSquareLayer, seed: u64, width: u32, height: 
         }
         // Square: the midpoint of each edge from its (three or four) neighbours.
         for z in (0..side).step_by(half) {
-            let first = if (z / half) % 2 == 0 { half } else { 0 };
+            let first = if (z / half).is_multiple_of(2) { half } else { 0 };
             for x in (first..side).step_by(step) {
                 let neighbours = [
                     (x >= half).then(|| grid[z * side + x - half]),
@@ -513,7 +536,8 @@ mod tests {
 
     #[test]
     fn the_same_seed_makes_the_same_map() {
-        for layer in ["{perlin: {scale: 16, octaves: 4}}", "{diamond_square: {roughness: 0.6}}", "{hills: {count: 30}}"] {
+        for layer in ["{perlin: {scale: 16, octaves: 4}}", "{diamond_square: {roughness: 0.6}}", "{hills: {count: 30}}"]
+        {
             let r = recipe(&format!("{{size: [65, 40], seed: 3, layers: [{layer}]}}"));
             r.check().unwrap();
             let (a, b, c) = (r.generate(3).unwrap(), r.generate(3).unwrap(), r.generate(4).unwrap());
@@ -528,21 +552,21 @@ mod tests {
     fn layers_combine_by_their_ops_weights_and_functions() {
         let base = recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}]}");
         let single = base.generate(1).unwrap();
-        let doubled = recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}, weight: 2}]}").generate(1).unwrap();
+        let doubled =
+            recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}, weight: 2}]}").generate(1).unwrap();
         for (a, b) in single.values().iter().zip(doubled.values()) {
             assert_eq!(a * 2.0, *b);
         }
-        let squared = recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}], apply: [{power: 2}, {offset: 1}]}")
-            .generate(1)
-            .unwrap();
+        let squared =
+            recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}], apply: [{power: 2}, {offset: 1}]}")
+                .generate(1)
+                .unwrap();
         for (a, b) in single.values().iter().zip(squared.values()) {
             assert_eq!(a.powf(2.0) + 1.0, *b);
         }
         // A second layer equal to the first (same seed stream offset aside) subtracted: the
         // first layer minus another map.
-        let two = recipe(
-            "{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}, {hills: {count: 5}, op: max}]}",
-        );
+        let two = recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}, {hills: {count: 5}, op: max}]}");
         two.check().unwrap();
         let hills_alone = hills(HillsLayer { count: 5, radius: [4.0, 32.0] }, 1 + 0x1_0000, 32, 32).unwrap();
         let combined = two.generate(1).unwrap();

@@ -70,8 +70,11 @@ impl Heightmap {
     /// A map holding `values`, row by row; `None` when their count is not `width * height` or
     /// the size is out of range.
     pub fn from_values(width: u32, height: u32, values: Vec<f32>) -> Option<Self> {
-        (check_size(width, height).is_ok() && values.len() == width as usize * height as usize)
-            .then_some(Self { width, height, values })
+        (check_size(width, height).is_ok() && values.len() == width as usize * height as usize).then_some(Self {
+            width,
+            height,
+            values,
+        })
     }
 
     /// Width in samples (along x).
@@ -115,7 +118,8 @@ impl Heightmap {
 
     /// The map's figures.
     pub fn stats(&self) -> Stats {
-        let (min, max) = self.values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let (min, max) =
+            self.values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         let sum: f64 = self.values.iter().map(|&v| f64::from(v)).sum();
         Stats {
             width: self.width,
@@ -130,9 +134,10 @@ impl Heightmap {
     /// FNV-1a over the bits of every height, row by row: equal maps give equal checksums on
     /// every machine.
     pub fn checksum(&self) -> u64 {
-        self.values.iter().flat_map(|v| v.to_bits().to_le_bytes()).fold(0xcbf2_9ce4_8422_2325, |hash, byte| {
-            (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3)
-        })
+        self.values
+            .iter()
+            .flat_map(|v| v.to_bits().to_le_bytes())
+            .fold(0xcbf2_9ce4_8422_2325, |hash, byte| (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3))
     }
 
     /// Combines every height with the other map's height at the same place.

@@ -91,8 +91,12 @@ pub fn encode(map: &Heightmap, encoding: Encoding) -> Result<Vec<u8>, ImageError
     let level = |h: f32, top: f32| (h.clamp(0.0, 1.0) * top).round();
     let image = match encoding {
         Encoding::Png16 => DynamicImage::ImageLuma16(
-            image::ImageBuffer::from_raw(width, height, map.values().iter().map(|&h| level(h, 65535.0) as u16).collect())
-                .ok_or(ImageError::Size(width, height))?,
+            image::ImageBuffer::from_raw(
+                width,
+                height,
+                map.values().iter().map(|&h| level(h, 65535.0) as u16).collect(),
+            )
+            .ok_or(ImageError::Size(width, height))?,
         ),
         Encoding::Png8 | Encoding::Bmp8 => DynamicImage::ImageLuma8(
             image::ImageBuffer::from_raw(width, height, map.values().iter().map(|&h| level(h, 255.0) as u8).collect())

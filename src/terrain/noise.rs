@@ -175,7 +175,10 @@ impl Fbm {
 
     /// The raw sum at map position `(x, z)`, by the reference formula.
     fn sum(&self, x: f32, z: f32) -> f32 {
-        self.octaves.iter().map(|(perlin, frequency, amplitude)| amplitude * perlin.sample(x * frequency, z * frequency)).sum()
+        self.octaves
+            .iter()
+            .map(|(perlin, frequency, amplitude)| amplitude * perlin.sample(x * frequency, z * frequency))
+            .sum()
     }
 
     /// The height at map position `(x, z)` (in samples) by the reference formula, in `[0, 1]`.

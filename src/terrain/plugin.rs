@@ -218,7 +218,8 @@ pub(super) fn spawn_terrain(entity: &mut EntityWorldMut, def: &TerrainDef, built
     };
     entity.insert((params.transform(Vec3::ZERO), params, body)).with_children(|children| {
         for band in Band::ALL {
-            children.spawn((TerrainBand(band), RasterMesh { mesh: Arc::default(), material: band_material(def, band) }));
+            children
+                .spawn((TerrainBand(band), RasterMesh { mesh: Arc::default(), material: band_material(def, band) }));
         }
     });
 }
@@ -282,6 +283,7 @@ impl Plugin for TerrainPlugin {
     fn build(&self, app: &mut App) {
         let help = |key, action| KeyHelp { key, action, scope: KeyScope::Kind("terrain") };
         app.register_params::<TerrainParams>()
+            .register_dump::<TerrainParams>()
             .register_dump::<TerrainBody>()
             .register_keys(&MOVE_KEYS.map(|(key, action, ..)| help(key, action)))
             .register_keys(&MODEL_KEYS.map(|(key, action, ..)| help(key, action)))
@@ -331,7 +333,8 @@ fn shape_with_keys(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut terrain
     for mut params in &mut terrains {
         params.rotation_deg = wrap_degrees(params.rotation_deg + turn * TURN_DEG_PER_S * dt);
         let (horizontal, vertical) = (SCALE_PER_S.powf(wide * dt), SCALE_PER_S.powf(tall * dt));
-        params.scale = (params.scale * Vec3::new(horizontal, vertical, horizontal)).clamp(Vec3::splat(1e-3), Vec3::splat(1000.0));
+        params.scale =
+            (params.scale * Vec3::new(horizontal, vertical, horizontal)).clamp(Vec3::splat(1e-3), Vec3::splat(1000.0));
     }
 }
 
@@ -435,9 +438,15 @@ fn regenerate(mut terrains: Query<(&TerrainParams, &mut TerrainBody)>) {
     }
 }
 
+/// What write-back reads and writes of a terrain.
+type TerrainWriteBack<'a> = (&'a TerrainParams, &'a mut TerrainBody, &'a mut Transform, &'a Children);
+
+/// A terrain whose parameters or map changed since write-back last ran.
+type TerrainChanged = Or<(Changed<TerrainParams>, Changed<TerrainBody>)>;
+
 /// Re-meshes a terrain whose section, height scale or map changed, and writes its transform.
 fn write_back_terrain(
-    mut terrains: Query<(&TerrainParams, &mut TerrainBody, &mut Transform, &Children), Or<(Changed<TerrainParams>, Changed<TerrainBody>)>>,
+    mut terrains: Query<TerrainWriteBack, TerrainChanged>,
     mut bands: Query<(&TerrainBand, &mut RasterMesh)>,
 ) {
     for (params, mut body, mut transform, children) in &mut terrains {
@@ -446,7 +455,8 @@ fn write_back_terrain(
         if body.shown != Some((section, height_m)) {
             let started = Instant::now();
             let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
-            let SectionMesh { bands: meshes, counts, barycentre } = mesh_section(&body.map, section, geometry, &body.rule);
+            let SectionMesh { bands: meshes, counts, barycentre } =
+                mesh_section(&body.map, section, geometry, &body.rule);
             let mut meshes = meshes.map(Some);
             for child in children.iter() {
                 if let Ok((band, mut raster)) = bands.get_mut(child) {
@@ -462,6 +472,14 @@ fn write_back_terrain(
     }
 }
 
+impl DumpState for TerrainParams {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("rotation_deg".into(), json!(self.rotation_deg));
+        out.insert("scale".into(), json!(self.scale.to_array()));
+        out.insert("position".into(), json!(self.position.to_array()));
+    }
+}
+
 impl DumpState for TerrainBody {
     fn dump(&self, out: &mut Map<String, Value>) {
         let stats = self.map.stats();
@@ -473,7 +491,8 @@ impl DumpState for TerrainBody {
         out.insert("height".into(), json!({ "min": stats.min, "max": stats.max, "mean": stats.mean }));
         out.insert("checksum".into(), json!(format!("{:016x}", stats.checksum)));
         out.insert("seed".into(), self.seed.map_or(Value::Null, |seed| json!(seed)));
-        let bands: Map<String, Value> = Band::ALL.iter().zip(self.counts).map(|(band, n)| (band.key().to_string(), json!(n))).collect();
+        let bands: Map<String, Value> =
+            Band::ALL.iter().zip(self.counts).map(|(band, n)| (band.key().to_string(), json!(n))).collect();
         out.insert("triangles_per_band".into(), Value::Object(bands));
         if let Some(message) = &self.message {
             out.insert("message".into(), json!(message));
@@ -487,11 +506,16 @@ mod tests {
 
     #[test]
     fn edits_of_the_noise_make_a_checked_recipe() {
-        let recipe: Recipe = serde_yaml::from_str("{size: [16, 16], seed: 2, layers: [{hills: {count: 3}}, {perlin: {scale: 8}}]}").unwrap();
+        let recipe: Recipe =
+            serde_yaml::from_str("{size: [16, 16], seed: 2, layers: [{hills: {count: 3}}, {perlin: {scale: 8}}]}")
+                .unwrap();
         let noise = NoiseParams { seed: 5.0, scale: 4.0, octaves: 3.2, lacunarity: 2.5, persistence: 0.4 };
         let (edited, seed) = edited_recipe(&recipe, &noise).unwrap();
         assert_eq!(seed, 5);
-        assert_eq!(edited.layers[1].perlin, Some(PerlinLayer { scale: 4.0, octaves: 3, lacunarity: 2.5, persistence: 0.4 }));
+        assert_eq!(
+            edited.layers[1].perlin,
+            Some(PerlinLayer { scale: 4.0, octaves: 3, lacunarity: 2.5, persistence: 0.4 })
+        );
         assert_eq!(edited.layers[0], recipe.layers[0]);
         assert!(edited_recipe(&recipe, &NoiseParams { octaves: 0.0, ..noise }).unwrap_err().contains("octaves"));
         assert!(edited_recipe(&recipe, &NoiseParams { seed: -1.0, ..noise }).unwrap_err().contains("seed"));

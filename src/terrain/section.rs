@@ -47,7 +47,10 @@ impl Section {
     /// The section with its size limited to the map and its origin moved so that it lies
     /// inside the map.
     pub fn clamped(self, map: &Heightmap) -> Self {
-        let size = [self.size[0].clamp(2.min(map.width()), map.width()), self.size[1].clamp(2.min(map.height()), map.height())];
+        let size = [
+            self.size[0].clamp(2.min(map.width()), map.width()),
+            self.size[1].clamp(2.min(map.height()), map.height()),
+        ];
         let origin = [self.origin[0].min(map.width() - size[0]), self.origin[1].min(map.height() - size[1])];
         Self { origin, size }
     }
@@ -92,12 +95,17 @@ pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule:
     let [x0, z0] = section.origin;
     let [w, h] = section.size;
     let position = |x: u32, z: u32| {
-        Vec3::new((x - x0) as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, (z - z0) as f32 * geometry.cell_m)
+        Vec3::new(
+            (x - x0) as f32 * geometry.cell_m,
+            map.at(x, z) * geometry.height_m,
+            (z - z0) as f32 * geometry.cell_m,
+        )
     };
     let normals = vertex_normals(map, section, geometry);
     let count = (w * h) as usize;
-    let barycentre = (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).fold(Vec3::ZERO, |sum, (i, j)| sum + position(x0 + i, z0 + j))
-        / count as f32;
+    let barycentre =
+        (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).fold(Vec3::ZERO, |sum, (i, j)| sum + position(x0 + i, z0 + j))
+            / count as f32;
 
     let mut bands: [MeshData; 5] = Default::default();
     let mut counts = [0; 5];
@@ -140,7 +148,9 @@ fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<
     let (cx0, cz0) = (x0.saturating_sub(1), z0.saturating_sub(1));
     let (cx1, cz1) = ((x0 + w).min(map.width() - 1), (z0 + h).min(map.height() - 1));
     let columns = (cx1 - cx0) as usize;
-    let corner = |x: u32, z: u32| Vec3::new(x as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, z as f32 * geometry.cell_m);
+    let corner = |x: u32, z: u32| {
+        Vec3::new(x as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, z as f32 * geometry.cell_m)
+    };
     let faces: Vec<[Vec3; 2]> = (cz0..cz1)
         .flat_map(|z| (cx0..cx1).map(move |x| (x, z)))
         .map(|(x, z)| {
@@ -152,7 +162,11 @@ fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<
         .collect();
     let face = |x: i64, z: i64, which: usize| {
         let inside = (i64::from(cx0)..i64::from(cx1)).contains(&x) && (i64::from(cz0)..i64::from(cz1)).contains(&z);
-        if inside { faces[(z - i64::from(cz0)) as usize * columns + (x - i64::from(cx0)) as usize][which] } else { Vec3::ZERO }
+        if inside {
+            faces[(z - i64::from(cz0)) as usize * columns + (x - i64::from(cx0)) as usize][which]
+        } else {
+            Vec3::ZERO
+        }
     };
     (z0..z0 + h)
         .flat_map(|z| (x0..x0 + w).map(move |x| (i64::from(x), i64::from(z))))
@@ -160,7 +174,12 @@ fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<
             // As corner a of its own cell (both triangles), b of the cell to the left (the
             // second), c of the cell above (the first) and d of the cell diagonally before it
             // (both).
-            let sum = face(x, z, 0) + face(x, z, 1) + face(x - 1, z, 1) + face(x, z - 1, 0) + face(x - 1, z - 1, 0) + face(x - 1, z - 1, 1);
+            let sum = face(x, z, 0)
+                + face(x, z, 1)
+                + face(x - 1, z, 1)
+                + face(x, z - 1, 0)
+                + face(x - 1, z - 1, 0)
+                + face(x - 1, z - 1, 1);
             sum.try_normalize().unwrap_or(Vec3::Y)
         })
         .collect()
@@ -187,7 +206,10 @@ mod tests {
     /// Every position of every band mesh, in metres from the section's first vertex, with its
     /// normal.
     fn vertices(mesh: &SectionMesh) -> Vec<(Vec3, Vec3)> {
-        mesh.bands.iter().flat_map(|m| m.positions.iter().zip(&m.normals).map(|(p, n)| (*p + mesh.barycentre, *n))).collect()
+        mesh.bands
+            .iter()
+            .flat_map(|m| m.positions.iter().zip(&m.normals).map(|(p, n)| (*p + mesh.barycentre, *n)))
+            .collect()
     }
 
     #[test]
@@ -238,7 +260,10 @@ mod tests {
         let at = |origin| {
             let mesh = mesh_section(&map, Section { origin, size: [12, 10] }, geometry(), &rule);
             let shift = Vec3::new(origin[0] as f32, 0.0, origin[1] as f32) * geometry().cell_m;
-            vertices(&mesh).into_iter().map(|(p, n)| (((p + shift) * 2.0).round().as_ivec3(), n)).collect::<HashMap<_, _>>()
+            vertices(&mesh)
+                .into_iter()
+                .map(|(p, n)| (((p + shift) * 2.0).round().as_ivec3(), n))
+                .collect::<HashMap<_, _>>()
         };
         let (first, moved) = (at([5, 5]), at([15, 8]));
         let shared: Vec<_> = first.iter().filter_map(|(p, n)| moved.get(p).map(|m| (n, m))).collect();

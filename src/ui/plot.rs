@@ -53,7 +53,9 @@ pub fn save_timing_plot(timings: &[Timing], path: &Path) -> image::ImageResult<(
     let point = |t: &Timing, ms: f64| [f64::from(t.size).log2(), ms.max(1e-3).log10()];
     save_egui_png(UVec2::new(900, 560), path, |ui| {
         ui.heading("Time to produce the image of the visible section");
-        ui.label("meshing the section and drawing a 1280 x 720 frame; median of the runs, dots at the fastest and slowest");
+        ui.label(
+            "meshing the section and drawing a 1280 x 720 frame; median of the runs, dots at the fastest and slowest",
+        );
         Plot::new("terrain-timing")
             .legend(Legend::default().position(egui_plot::Corner::LeftTop))
             .x_axis_label("section size (vertices)")
@@ -74,7 +76,8 @@ pub fn save_timing_plot(timings: &[Timing], path: &Path) -> image::ImageResult<(
                     let runs = series(shadows);
                     let medians: PlotPoints = runs.iter().map(|t| point(t, t.median_ms)).collect();
                     plot.line(Line::new(name, medians).color(color).width(2.0));
-                    let spread: PlotPoints = runs.iter().flat_map(|t| [point(t, t.min_ms), point(t, t.max_ms)]).collect();
+                    let spread: PlotPoints =
+                        runs.iter().flat_map(|t| [point(t, t.min_ms), point(t, t.max_ms)]).collect();
                     plot.points(Points::new(name, spread).color(color).radius(2.5));
                 }
             });

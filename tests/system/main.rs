@@ -8,5 +8,6 @@ mod muscle;
 mod scene;
 mod shape;
 mod sloth;
+mod terrain;
 mod tree;
 mod view;

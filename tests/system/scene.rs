@@ -94,12 +94,24 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("muscle_file_outside.yaml", Some(4), &["entities[0].muscle.file", "inside the scene's folder", "../../scenes"]),
     ("muscle_file_and_inline.yaml", Some(5), &["entities[0].muscle.file", "either inline or from a file, not both"]),
     ("deep_nesting.yaml", Some(1), &["entities[0]: invalid type: sequence", "expected an entity"]),
+    ("terrain_zero_size.yaml", Some(4), &["entities[0].terrain.height.size", "0 x 64", "from 1 to 4096"]),
+    ("terrain_section_too_large.yaml", Some(7), &["entities[0].terrain.section.size", "40 x 40", "does not fit"]),
+    ("terrain_section_beyond.yaml", Some(9), &["entities[1].terrain.section.origin", "reaches beyond"]),
+    ("terrain_nan_scale.yaml", Some(8), &["entities[0].terrain.height.layers[1].perlin", "scale", "found NaN"]),
+    ("terrain_unknown_generator.yaml", Some(6), &["height.layers[0]", "unknown field `ridged`", "`hills`"]),
+    ("terrain_colour_image.yaml", Some(4), &["entities[0].terrain.height.image", "colour.png", "grayscale"]),
+    ("terrain_image_outside.yaml", Some(4), &["entities[0].terrain.height.image", "inside the scene's folder"]),
+    ("terrain_image_and_layers.yaml", Some(4), &["entities[0].terrain.height", "an image or from size and layers"]),
+    ("terrain_bad_thresholds.yaml", Some(7), &["entities[0].terrain.bands", "four rising heights"]),
 ];
 
 #[test]
 fn malformed_scenes_name_their_line_and_field() {
     let folder = root().join("tests/malformed");
-    let files = std::fs::read_dir(&folder).unwrap().count();
+    let files = std::fs::read_dir(&folder)
+        .unwrap()
+        .filter(|entry| entry.as_ref().unwrap().path().extension().is_some_and(|e| e == "yaml"))
+        .count();
     assert_eq!(files, MALFORMED.len(), "every malformed file has an expectation");
     for &(file, line, words) in MALFORMED {
         let path = folder.join(file);

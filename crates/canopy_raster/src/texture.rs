@@ -115,8 +115,16 @@ impl Texture {
 
     /// Writes the texture as an 8-bit RGB PNG file.
     pub fn save_png(&self, path: &std::path::Path) -> image::ImageResult<()> {
-        let bytes: Vec<u8> = self.texels.iter().flat_map(|w| <[u8; 3]>::try_from(&w.to_le_bytes()[..3]).unwrap_or([0; 3])).collect();
-        image::save_buffer_with_format(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
+        let bytes: Vec<u8> =
+            self.texels.iter().flat_map(|w| <[u8; 3]>::try_from(&w.to_le_bytes()[..3]).unwrap_or([0; 3])).collect();
+        image::save_buffer_with_format(
+            path,
+            &bytes,
+            self.width,
+            self.height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
     }
 
     /// The colour at texture coordinates `uv`.
