@@ -278,8 +278,7 @@ impl KindRegistry {
         }
         let scene = (self.read)(path, bytes)?;
         let text = String::from_utf8_lossy(bytes);
-        for (index, entity) in scene.entities.iter().enumerate() {
-            let kind_index = scene.kind_index(index);
+        for ((index, entity), kind_index) in scene.entities.iter().enumerate().zip(scene.kind_indices()) {
             let cx = EntityContext { path, text: &text, index, kind_index, key: entity.key };
             self.kind_of(entity, index, path)?.validate(&*entity.def, &cx)?;
         }
@@ -315,7 +314,7 @@ impl KindRegistry {
             .enumerate()
             .map(|(index, entity)| self.kind_of(entity, index, path))
             .collect::<Result<Vec<_>, _>>()?;
-        let kind_indices: Vec<usize> = (0..scene.entities.len()).map(|index| scene.kind_index(index)).collect();
+        let kind_indices = scene.kind_indices();
         for file in files {
             let mut decoded: HashMap<TypeId, Arc<dyn Any + Send + Sync>> = HashMap::new();
             for (index, entity) in scene.entities.iter_mut().enumerate() {

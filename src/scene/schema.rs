@@ -16,6 +16,7 @@ use canopy_raster::Shading;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeMap, SerializeSeq, SerializeStruct};
 use serde::{Deserialize, Serialize, Serializer};
+use std::collections::HashMap;
 use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
@@ -326,10 +327,17 @@ impl<'de, L: KindList> Deserialize<'de> for ReadEntity<L> {
 }
 
 impl SceneDef {
-    /// How many entities of the same kind come before entity `index`.
-    pub fn kind_index(&self, index: usize) -> usize {
-        let key = self.entities[index].key;
-        self.entities[..index].iter().filter(|entity| entity.key == key).count()
+    /// For every entity, in file order, how many entities of its kind come before it.
+    pub fn kind_indices(&self) -> Vec<usize> {
+        let mut seen: HashMap<&str, usize> = HashMap::new();
+        self.entities
+            .iter()
+            .map(|entity| {
+                let count = seen.entry(entity.key).or_default();
+                *count += 1;
+                *count - 1
+            })
+            .collect()
     }
 
     /// A scene holding one kind's standalone configuration, framed by its view.

@@ -185,10 +185,9 @@ impl EntityKind for SlothKind {
     fn build(def: &SlothDef, cx: &BuildContext) -> Result<(Sloth, Arc<Supports>), FileError> {
         let supports = cx.shared(|| Supports::new(cx.built::<TreeKind>()));
         let entity = &cx.entity;
-        let nth = cx.earlier::<SlothKind>().count();
-        let sloth = def
-            .place(&supports, def.speed.0)
-            .map_err(|error| entity.locate("support", nth, format!("{}: {error}", entity.field("support"))))?;
+        let sloth = def.place(&supports, def.speed.0).map_err(|error| {
+            entity.locate("support", entity.kind_index, format!("{}: {error}", entity.field("support")))
+        })?;
         Ok((sloth, supports))
     }
 
