@@ -26,7 +26,7 @@ impl FileType for ImageFile {
 pub struct TextureDef {
     /// The image file.
     pub file: FolderFile<ImageFile>,
-    /// `nearest` or `bilinear` (the default).
+    /// `nearest`, `bilinear` or `trilinear` (the default: mip-mapped, no moire at a distance).
     #[serde(default)]
     pub filter: Filter,
     /// `repeat` (the default) or `clamp`.

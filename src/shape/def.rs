@@ -115,7 +115,7 @@ mod tests {
     fn texture_settings_parse_with_defaults_and_paths_stay_inside() {
         let def: ShapeDef = serde_yaml::from_str("{primitive: plane, texture: {file: textures/checker.png}}").unwrap();
         let texture = def.texture.unwrap();
-        assert_eq!((texture.filter, texture.address), (Filter::Bilinear, Address::Repeat));
+        assert_eq!((texture.filter, texture.address), (Filter::Trilinear, Address::Repeat));
         let def: ShapeDef = serde_yaml::from_str(
             "{primitive: box, texture: {file: a.bmp, filter: nearest, address: clamp, repeat: [2, 3]}}",
         )

@@ -11,7 +11,7 @@
 //! `spin_deg_per_s.{x,y,z}`.
 //!
 //! A shape may carry a texture: a PNG or BMP file in the scene's folder, modulated by its
-//! colour, read with nearest or bilinear filtering, repeated or clamped at its edges.
+//! colour, read with nearest, bilinear or trilinear (mip-mapped) filtering, repeated or clamped at its edges.
 
 pub mod def;
 pub mod plugin;

@@ -1,6 +1,6 @@
 //! The `terrain:` entry of a scene file, and the kind that reads, builds, spawns and saves it.
 
-use super::bands::BandRule;
+use super::bands::{BandBlend, BandRule};
 use super::generate::{Function, Layer, Recipe};
 use super::heightmap::Heightmap;
 use super::image_io;
@@ -97,6 +97,10 @@ pub struct BandsDef {
     /// banded by height alone).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rock_slope_deg: Option<f32>,
+    /// How far bands fade into each other at their borders; off by default (the source's
+    /// bands meet along triangle edges).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<BandBlend>,
     /// Cells one repetition of a band texture covers; 8 by default.
     #[serde(default = "default_texture_cells")]
     pub texture_cells: Factor,
@@ -118,6 +122,7 @@ impl Default for BandsDef {
         Self {
             thresholds: default_thresholds(),
             rock_slope_deg: None,
+            blend: None,
             texture_cells: default_texture_cells(),
             textures: BandTextures::default(),
         }
@@ -127,7 +132,7 @@ impl Default for BandsDef {
 impl BandsDef {
     /// The banding rule.
     pub fn rule(&self) -> BandRule {
-        BandRule { thresholds: self.thresholds, rock_slope_deg: self.rock_slope_deg }
+        BandRule { thresholds: self.thresholds, rock_slope_deg: self.rock_slope_deg, blend: self.blend }
     }
 }
 
@@ -291,6 +296,7 @@ impl EntityKind for TerrainKind {
                 };
                 let mut map = (**map).clone();
                 for function in &height.apply {
+                    function.check().map_err(|message| error_at(&cx.entity, "apply", 0, "height.apply", message))?;
                     function.apply(&mut map);
                 }
                 (map, None)

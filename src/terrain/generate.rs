@@ -155,7 +155,7 @@ impl Function {
     }
 
     /// Why the function's number makes no sense, if it does not.
-    fn check(self) -> Result<(), String> {
+    pub fn check(self) -> Result<(), String> {
         let finite = |v: f32| v.is_finite() && v.abs() <= 1e6;
         match self {
             Function::Power(p) if !(finite(p) && p > 0.0 && p <= 64.0) => {
@@ -289,6 +289,10 @@ impl Layer {
     }
 }
 
+/// Bits of a drawn seed: few enough that the seed, as a parameter (a double), stays exact and
+/// one more is another seed.
+pub const DRAWN_SEED_BITS: u32 = 52;
+
 impl Recipe {
     /// Every check of the recipe, with the field at fault. `seed` is checked too: -1 or a
     /// non-negative number.
@@ -337,10 +341,13 @@ impl Recipe {
                 return Err(error(field("op"), "op", 0, "the first layer starts the map: it takes no `op`".into()));
             }
             if !(layer.weight.is_finite() && layer.weight.abs() <= 1e6) {
+                // The layers before that give a weight (one of 1, the default, is not told
+                // from none).
+                let written = self.layers[..index].iter().filter(|l| l.weight != 1.0).count();
                 return Err(error(
                     field("weight"),
                     "weight",
-                    0,
+                    written,
                     format!("expected a number between -1e6 and 1e6, found {}", layer.weight),
                 ));
             }
@@ -355,9 +362,10 @@ impl Recipe {
         Ok(())
     }
 
-    /// The seed the map is made with: the recipe's, or one drawn from `draw` for -1.
+    /// The seed the map is made with: the recipe's, or one drawn from `draw` for -1 (kept to
+    /// [`DRAWN_SEED_BITS`] bits).
     pub fn seed_used(&self, draw: impl FnOnce() -> u64) -> u64 {
-        u64::try_from(self.seed).unwrap_or_else(|_| draw() >> 1)
+        u64::try_from(self.seed).unwrap_or_else(|_| draw() >> (64 - DRAWN_SEED_BITS))
     }
 
     /// The map of this (checked) recipe with `seed`.

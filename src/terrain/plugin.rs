@@ -8,7 +8,7 @@ use super::generate::{PerlinLayer, Recipe};
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
 use super::panel;
-use super::section::{Geometry, Section, SectionMesh, mesh_section};
+use super::section::{BORDERS, Geometry, Section, SectionMesh, mesh_section};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::panel::RegisterPanel;
@@ -16,7 +16,7 @@ use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::{first_free_path, wrap_degrees};
 use crate::raster::texture::material;
-use crate::raster::{Material, MeshData, RasterMesh, Texture};
+use crate::raster::{Material, RasterMesh, Texture};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
@@ -152,9 +152,14 @@ struct PendingMap {
 /// Frames between a regeneration request and taking its map in.
 const GENERATION_FRAMES: u32 = 3;
 
-/// Marks one band's mesh, a child of the terrain entity.
-#[derive(Component, Debug, Clone, Copy)]
-pub struct TerrainBand(pub Band);
+/// What one mesh of a terrain shows, a child of the terrain entity.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TerrainSurface {
+    /// The triangles showing one band alone.
+    Band(Band),
+    /// With blending, the triangles where the pair of bands at this index of [`BORDERS`] meet.
+    Border(usize),
+}
 
 /// The project's band textures, made once.
 fn project_textures() -> &'static [Arc<Texture>; 5] {
@@ -218,8 +223,14 @@ pub(super) fn spawn_terrain(entity: &mut EntityWorldMut, def: &TerrainDef, built
     };
     entity.insert((params.transform(Vec3::ZERO), params, body)).with_children(|children| {
         for band in Band::ALL {
-            children
-                .spawn((TerrainBand(band), RasterMesh { mesh: Arc::default(), material: band_material(def, band) }));
+            let material = band_material(def, band);
+            children.spawn((TerrainSurface::Band(band), RasterMesh { mesh: Arc::default(), material }));
+        }
+        if def.bands.blend.is_some() {
+            for (index, (lower, upper)) in BORDERS.into_iter().enumerate() {
+                let material = Material { blend: band_material(def, upper).texture, ..band_material(def, lower) };
+                children.spawn((TerrainSurface::Border(index), RasterMesh { mesh: Arc::default(), material }));
+            }
         }
     });
 }
@@ -303,18 +314,21 @@ impl Plugin for TerrainPlugin {
     }
 }
 
-fn move_with_keys(keys: Res<ButtonInput<KeyCode>>, mut terrains: Query<&mut TerrainParams>) {
-    let factor = if keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]) { 10.0 } else { 1.0 };
-    let (mut dx, mut dz) = (0.0, 0.0);
+/// Moves the sections by whole samples (the source's Move), stopping at the map's edges so
+/// that a key pressed towards an edge never moves the parameters past what is shown.
+fn move_with_keys(keys: Res<ButtonInput<KeyCode>>, mut terrains: Query<(&mut TerrainParams, &TerrainBody)>) {
+    let factor = if keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]) { 10 } else { 1 };
+    let (mut dx, mut dz) = (0, 0);
     for (key, _, x, z) in MOVE_KEYS {
         if keys.just_pressed(key) {
-            (dx, dz) = (dx + x as f32 * factor, dz + z as f32 * factor);
+            (dx, dz) = (dx + x * factor, dz + z * factor);
         }
     }
-    if (dx, dz) != (0.0, 0.0) {
-        for mut params in &mut terrains {
-            params.section.x = (params.section.x + dx).max(0.0);
-            params.section.z = (params.section.z + dz).max(0.0);
+    if (dx, dz) != (0, 0) {
+        for (mut params, body) in &mut terrains {
+            let moved = params.section.section(&body.map).moved(dx, dz, &body.map);
+            params.section.x = moved.origin[0] as f32;
+            params.section.z = moved.origin[1] as f32;
         }
     }
 }
@@ -447,7 +461,7 @@ type TerrainChanged = Or<(Changed<TerrainParams>, Changed<TerrainBody>)>;
 /// Re-meshes a terrain whose section, height scale or map changed, and writes its transform.
 fn write_back_terrain(
     mut terrains: Query<TerrainWriteBack, TerrainChanged>,
-    mut bands: Query<(&TerrainBand, &mut RasterMesh)>,
+    mut surfaces: Query<(&TerrainSurface, &mut RasterMesh)>,
 ) {
     for (params, mut body, mut transform, children) in &mut terrains {
         let section = params.section.section(&body.map);
@@ -455,12 +469,16 @@ fn write_back_terrain(
         if body.shown != Some((section, height_m)) {
             let started = Instant::now();
             let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
-            let SectionMesh { bands: meshes, counts, barycentre } =
+            let SectionMesh { bands, borders, counts, barycentre } =
                 mesh_section(&body.map, section, geometry, &body.rule);
-            let mut meshes = meshes.map(Some);
+            let (mut bands, mut borders) = (bands.map(Some), borders.map(Some));
             for child in children.iter() {
-                if let Ok((band, mut raster)) = bands.get_mut(child) {
-                    raster.mesh = Arc::new(meshes[band.0.index()].take().unwrap_or_else(MeshData::default));
+                if let Ok((surface, mut raster)) = surfaces.get_mut(child) {
+                    let mesh = match *surface {
+                        TerrainSurface::Band(band) => bands[band.index()].take(),
+                        TerrainSurface::Border(index) => borders.get_mut(index).and_then(Option::take),
+                    };
+                    raster.mesh = Arc::new(mesh.unwrap_or_default());
                 }
             }
             body.counts = counts;

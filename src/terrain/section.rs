@@ -74,12 +74,31 @@ pub struct Geometry {
     pub texture_cells: f32,
 }
 
+/// The pairs of bands that can meet in a blended triangle, lower band first.
+pub const BORDERS: [(Band, Band); 10] = [
+    (Band::Water, Band::Sand),
+    (Band::Water, Band::Grass),
+    (Band::Water, Band::Rock),
+    (Band::Water, Band::Snow),
+    (Band::Sand, Band::Grass),
+    (Band::Sand, Band::Rock),
+    (Band::Sand, Band::Snow),
+    (Band::Grass, Band::Rock),
+    (Band::Grass, Band::Snow),
+    (Band::Rock, Band::Snow),
+];
+
 /// The section's meshes and figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SectionMesh {
-    /// One mesh per band, in [`Band::ALL`] order, positions relative to `barycentre`.
+    /// One mesh per band, in [`Band::ALL`] order, positions relative to `barycentre`: the
+    /// triangles showing that band alone.
     pub bands: [MeshData; 5],
-    /// Triangles per band.
+    /// With blending, one mesh per pair of [`BORDERS`]: the triangles where the two bands
+    /// meet, textured with the lower band fading into the upper by the vertices' blend
+    /// weights (the upper band's share of the two).
+    pub borders: [MeshData; 10],
+    /// Triangles per band by the per-triangle rule (the source's count, blended or not).
     pub counts: [usize; 5],
     /// The mean of the section's vertices in metres, the section's first vertex at the
     /// origin: the centre it turns and scales about.
@@ -107,10 +126,21 @@ pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule:
         (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).fold(Vec3::ZERO, |sum, (i, j)| sum + position(x0 + i, z0 + j))
             / count as f32;
 
-    let mut bands: [MeshData; 5] = Default::default();
+    // Each vertex's share of every band, when blending.
+    let weights: Vec<[f32; 5]> = match rule.blend {
+        Some(_) => (0..count)
+            .map(|local| {
+                let (vi, vj) = (local as u32 % w, local as u32 / w);
+                rule.weights(map.at(x0 + vi, z0 + vj), normals[local].y)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    // The five bands' meshes, then the borders'.
+    let mut surfaces: [MeshData; 15] = Default::default();
     let mut counts = [0; 5];
-    // Each band's index of every section vertex it uses; `u32::MAX` where unused.
-    let mut remap = vec![[u32::MAX; 5]; count];
+    // Each surface's index of every section vertex it uses; `u32::MAX` where unused.
+    let mut remap = vec![[u32::MAX; 15]; count];
     for j in 0..h - 1 {
         for i in 0..w - 1 {
             for corners in CELL_TRIANGLES {
@@ -118,25 +148,69 @@ pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule:
                 let points = vertices.map(|(vi, vj)| position(x0 + vi, z0 + vj));
                 let up = (points[1] - points[0]).cross(points[2] - points[0]).normalize_or_zero().y;
                 let mean = vertices.iter().map(|&(vi, vj)| map.at(x0 + vi, z0 + vj)).sum::<f32>() / 3.0;
-                let band = rule.band(mean, up).index();
-                let mesh = &mut bands[band];
-                let triangle = vertices.map(|(vi, vj)| {
-                    let local = (vj * w + vi) as usize;
-                    let slot = &mut remap[local][band];
+                let band = rule.band(mean, up);
+                counts[band.index()] += 1;
+                let locals = vertices.map(|(vi, vj)| (vj * w + vi) as usize);
+                let (surface, border) = match weights.is_empty() {
+                    true => (band.index(), None),
+                    false => blended_surface(locals.map(|local| &weights[local])),
+                };
+                let mesh = &mut surfaces[surface];
+                let triangle = std::array::from_fn(|k| {
+                    let ((vi, vj), local) = (vertices[k], locals[k]);
+                    let slot = &mut remap[local][surface];
                     if *slot == u32::MAX {
                         *slot = mesh.positions.len() as u32;
                         mesh.positions.push(position(x0 + vi, z0 + vj) - barycentre);
                         mesh.normals.push(normals[local]);
                         mesh.uvs.push(Vec2::new((x0 + vi) as f32, (z0 + vj) as f32) / geometry.texture_cells);
+                        if let Some(border) = border {
+                            mesh.blend.push(border.upper_share(&weights[local]));
+                        }
                     }
                     *slot
                 });
                 mesh.triangles.push(triangle);
-                counts[band] += 1;
             }
         }
     }
-    SectionMesh { bands, counts, barycentre }
+    let [water, sand, grass, rock, snow, borders @ ..] = surfaces;
+    SectionMesh { bands: [water, sand, grass, rock, snow], borders, counts, barycentre }
+}
+
+/// The two bands a blended triangle shows.
+#[derive(Debug, Clone, Copy)]
+struct Border {
+    lower: Band,
+    upper: Band,
+    /// Whether the upper band has the more weight over the triangle.
+    upper_leads: bool,
+}
+
+impl Border {
+    /// The upper band's share of the two at a vertex of band `weights`; a vertex showing
+    /// neither (where three bands meet) takes the triangle's leading band.
+    fn upper_share(self, weights: &[f32; 5]) -> f32 {
+        let (low, high) = (weights[self.lower.index()], weights[self.upper.index()]);
+        if low + high > 1e-6 { high / (low + high) } else { f32::from(u8::from(self.upper_leads)) }
+    }
+}
+
+/// The surface a blended triangle is drawn in, from its vertices' band weights: the band
+/// with the most weight over the three vertices alone, or with the runner-up the border of
+/// the two (at [`BORDERS`]' index plus five).
+fn blended_surface(weights: [&[f32; 5]; 3]) -> (usize, Option<Border>) {
+    let total: [f32; 5] = std::array::from_fn(|b| weights.iter().map(|w| w[b]).sum());
+    let order = |a: &usize, b: &usize| total[*a].total_cmp(&total[*b]).then(b.cmp(a));
+    let first = (0..5).max_by(order).unwrap_or(0);
+    let second = (0..5).filter(|&b| b != first).max_by(order).unwrap_or(0);
+    // Less than a thousandth of one vertex: the runner-up does not show.
+    if total[second] < 1e-3 {
+        return (first, None);
+    }
+    let (lower, upper) = (Band::ALL[first.min(second)], Band::ALL[first.max(second)]);
+    let index = BORDERS.iter().position(|&pair| pair == (lower, upper)).unwrap_or(0);
+    (5 + index, Some(Border { lower, upper, upper_leads: first > second }))
 }
 
 /// Unit normals of the section's vertices, row by row: the sum of the (area-weighted) normals
@@ -193,6 +267,7 @@ pub fn band_counts(mesh: &SectionMesh) -> impl Iterator<Item = (Band, usize)> + 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::terrain::bands::BandBlend;
     use std::collections::HashMap;
 
     fn geometry() -> Geometry {
@@ -240,6 +315,65 @@ mod tests {
                 assert!((b - a).cross(c - a).y > 0.0);
             }
         }
+    }
+
+    /// The mix of bands each triangle shows at each of its corners, keyed by the corner's
+    /// position: one band alone, or a border's two by the corner's blend weight.
+    fn corner_mixes(mesh: &SectionMesh) -> HashMap<[u32; 3], Vec<[f32; 5]>> {
+        let mut mixes: HashMap<[u32; 3], Vec<[f32; 5]>> = HashMap::new();
+        let key = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let surfaces = mesh.bands.iter().enumerate().map(|(b, m)| (m, Some(b), None));
+        let borders = mesh.borders.iter().zip(BORDERS).map(|(m, pair)| (m, None, Some(pair)));
+        for (part, band, border) in surfaces.chain(borders) {
+            for &index in part.triangles.iter().flatten() {
+                let mut mix = [0.0; 5];
+                match (band, border) {
+                    (Some(band), _) => mix[band] = 1.0,
+                    (_, Some((lower, upper))) => {
+                        let upper_share = part.blend[index as usize];
+                        mix[lower.index()] = 1.0 - upper_share;
+                        mix[upper.index()] = upper_share;
+                    }
+                    _ => unreachable!(),
+                }
+                mixes.entry(key(part.positions[index as usize])).or_default().push(mix);
+            }
+        }
+        mixes
+    }
+
+    /// The share of vertices where the triangles around show different mixes of bands.
+    fn seams(mesh: &SectionMesh) -> f64 {
+        let mixes = corner_mixes(mesh);
+        let differ = |a: &[f32; 5], b: &[f32; 5]| a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-4);
+        let seams = mixes.values().filter(|m| m.iter().any(|mix| differ(mix, &m[0]))).count();
+        seams as f64 / mixes.len() as f64
+    }
+
+    #[test]
+    fn blended_bands_meet_without_a_seam() {
+        // Heights across every threshold, and slopes across the rock slope.
+        let map = Heightmap::from_fn(48, 48, |x, z| {
+            (x as f32 / 47.0 * 0.9 + 0.05 + 0.03 * (z as f32 * 0.7).sin()).clamp(0.0, 1.0)
+        })
+        .unwrap();
+        let section = Section { origin: [0, 0], size: [48, 48] };
+        let hard = BandRule { rock_slope_deg: Some(30.0), ..BandRule::default() };
+        let blended = BandRule { blend: Some(BandBlend { height: 0.02, slope_deg: 5.0 }), ..hard };
+        let (hard_mesh, mesh) =
+            (mesh_section(&map, section, geometry(), &hard), mesh_section(&map, section, geometry(), &blended));
+        // Every triangle is drawn once, in a band or a border, and counted by the rule alike.
+        let drawn: usize = mesh.bands.iter().chain(&mesh.borders).map(|m| m.triangles.len()).sum();
+        assert_eq!(drawn, 2 * 47 * 47);
+        assert_eq!(mesh.counts, hard_mesh.counts);
+        assert!(mesh.borders.iter().filter(|m| !m.triangles.is_empty()).count() >= 4, "borders used");
+        assert!(mesh.borders.iter().all(|m| m.blend.len() == m.positions.len()));
+        assert!(mesh.borders.iter().flat_map(|m| &m.blend).all(|b| (0.0..=1.0).contains(b)));
+        // Hard bands change along triangle edges; blended ones agree at every shared vertex
+        // but a few where three bands meet.
+        let (hard_seams, blended_seams) = (seams(&hard_mesh), seams(&mesh));
+        assert!(hard_seams > 0.05, "hard bands: {hard_seams}");
+        assert!(blended_seams < 0.01, "blended: {blended_seams}");
     }
 
     #[test]

@@ -49,14 +49,33 @@ fn the_terrain_scene_shows_its_section_banded_and_dumps_its_map() {
 
 #[test]
 fn the_sources_demonstrations_move_turn_and_scale_the_section() {
-    let timeline = "- { at: 0, set: { land.section.x: 130, land.rotation_deg: 45, land.scale.y: 1.5 } }";
-    let output = run("scenes/terrain.yaml", 2, Some(timeline), SMALL);
-    let land = entity(&output.dump, "land");
-    assert_eq!(section(land).0, vec![130, 176], "moved 10 vertices along x");
-    assert_eq!(land["rotation_deg"], 45.0);
-    assert_eq!(vec3(&land["scale"]).y, 1.5);
-    let still = run("scenes/terrain.yaml", 2, None, SMALL);
-    assert_ne!(still.framebuffer.color(), output.framebuffer.color(), "the picture changed");
+    let timeline = std::fs::read_to_string(path("timelines/terrain_demonstrations.yaml")).unwrap();
+    // The state half a second after each event of the timeline (one a second from 1 s).
+    let at = |seconds: f64| run("scenes/terrain.yaml", (seconds * 60.0) as u64, Some(&timeline), SMALL);
+    let start = run("scenes/terrain.yaml", 30, None, SMALL);
+    let moved = at(1.5);
+    assert_eq!(section(entity(&moved.dump, "land")).0, vec![130, 176], "moved 10 vertices along x");
+    assert_ne!(start.framebuffer.color(), moved.framebuffer.color(), "the picture changed");
+    let turned = at(2.5);
+    assert_eq!(entity(&turned.dump, "land")["rotation_deg"], 45.0);
+    let scaled = at(3.5);
+    let scale = vec3(&entity(&scaled.dump, "land")["scale"]);
+    assert_eq!((scale.x, scale.y, scale.z), (1.5, 2.0, 1.5));
+    let lit = at(4.5);
+    assert_eq!(entity(&lit.dump, "light")["azimuth_deg"], -60.0);
+    assert_ne!(scaled.framebuffer.color(), lit.framebuffer.color(), "the light moved");
+    let (without, with) = (at(5.5), at(6.5));
+    assert_eq!(
+        (entity(&without.dump, "render")["shadows"].as_bool(), entity(&with.dump, "render")["shadows"].as_bool()),
+        (Some(false), Some(true))
+    );
+    // Shadows only darken: the picture with them is darker somewhere and nowhere brighter.
+    let brightness = |output: &canopy::run::RunOutput| -> Vec<u32> {
+        output.framebuffer.color().chunks_exact(4).map(|p| p[..3].iter().map(|&c| u32::from(c)).sum()).collect()
+    };
+    let (dark, light) = (brightness(&with), brightness(&without));
+    assert!(dark.iter().zip(&light).all(|(d, l)| d <= l), "a shadow brightened a pixel");
+    assert!(dark.iter().zip(&light).filter(|(d, l)| d < l).count() > 50, "no shadow fell");
     // A section pushed past the map's edge stops at it.
     let far = run("scenes/terrain.yaml", 2, Some("- { at: 0, set: { land.section.x: 1000 } }"), SMALL);
     assert_eq!(section(entity(&far.dump, "land")).0, vec![192, 176]);

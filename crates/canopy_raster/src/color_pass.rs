@@ -25,6 +25,7 @@ use crate::shade::{
 };
 use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
+use crate::texture::{Filter, Texture};
 use bevy_math::{Vec3, Vec4};
 use std::iter::Peekable;
 use std::marker::PhantomData;
@@ -438,7 +439,24 @@ fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS
         }
     }
     if textured && let Some(texture) = material.texture.as_deref() {
-        let texels = texture.sample_lanes(value(slot::UV), value(slot::UV + 1), material.sampler);
+        let (u, v) = (value(slot::UV), value(slot::UV + 1));
+        let lod = match material.sampler.filter {
+            Filter::Trilinear => texture_lod(shading, texture, u, v, w),
+            Filter::Nearest | Filter::Bilinear => Vec4::ZERO,
+        };
+        let mut texels = texture.sample_lanes(u, v, lod, material.sampler);
+        if let Some(blend) = material.blend.as_deref() {
+            // Both images are read at the level their own sizes give.
+            let lod = match material.sampler.filter {
+                Filter::Trilinear => texture_lod(shading, blend, u, v, w),
+                Filter::Nearest | Filter::Bilinear => Vec4::ZERO,
+            };
+            let others = blend.sample_lanes(u, v, lod, material.sampler);
+            let weight = value(slot::BLEND).clamp(Vec4::ZERO, Vec4::ONE);
+            for (texel, other) in texels.iter_mut().zip(others) {
+                *texel += (other - *texel) * weight;
+            }
+        }
         for (c, texel) in rgb.iter_mut().zip(texels) {
             *c *= texel;
         }
@@ -446,6 +464,27 @@ fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS
     let [r, g, b] = rgb.map(unit_bytes);
     let alpha = if shadowed { unit_bytes(diffuse) } else { u32x4::splat(0xff) };
     r | g << 8 | b << 16 | alpha << 24
+}
+
+/// The level of detail of the texture at a run's pixels, whose texture coordinates are `u` and
+/// `v` and whose `w` is `w`: from the coordinates' derivatives across the screen, which a
+/// perspective-correct interpolation of `t = (t / w) / (1 / w)` gives as
+/// `dt/dx = w (d(t / w)/dx - t d(1 / w)/dx)` (and along y alike).
+#[inline(always)]
+fn texture_lod(shading: &TriangleShading, texture: &Texture, u: Vec4, v: Vec4, w: Vec4) -> Vec4 {
+    let planes = shading.planes;
+    let steps = |k: usize| (planes[k / LANES].dx[k % LANES], planes[k / LANES].dy[k % LANES]);
+    let (inv_w_dx, inv_w_dy) = steps(INV_W);
+    let derivatives = |k: usize, t: Vec4| {
+        let (dx, dy) = steps(k);
+        if shading.affine {
+            (Vec4::splat(dx), Vec4::splat(dy))
+        } else {
+            ((Vec4::splat(dx) - t * inv_w_dx) * w, (Vec4::splat(dy) - t * inv_w_dy) * w)
+        }
+    };
+    let ((du_dx, du_dy), (dv_dx, dv_dy)) = (derivatives(slot::UV, u), derivatives(slot::UV + 1, v));
+    texture.lod_lanes(du_dx, dv_dx, du_dy, dv_dy)
 }
 
 /// Whether `pass` stores each pixel's interpolated colour pack (red, green, blue and the

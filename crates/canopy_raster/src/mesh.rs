@@ -6,8 +6,8 @@ use std::f32::consts::{PI, TAU};
 /// An indexed triangle mesh in model space.
 ///
 /// Front faces wind counter-clockwise seen from outside (the right-handed convention of
-/// `glam`); `normals` has one unit normal per position. `uvs` and `colors` are either empty or
-/// hold one entry per position.
+/// `glam`); `normals` has one unit normal per position. `uvs`, `colors` and `blend` are either
+/// empty or hold one entry per position.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {
     /// Vertex positions in model units.
@@ -18,6 +18,9 @@ pub struct MeshData {
     pub uvs: Vec<Vec2>,
     /// Linear RGB vertex colours multiplying the material colour, or empty (white).
     pub colors: Vec<Vec3>,
+    /// How far each vertex's texture fades into the material's blend texture, in `[0, 1]`,
+    /// one per position, or empty (the texture alone).
+    pub blend: Vec<f32>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
 }

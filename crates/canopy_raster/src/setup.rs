@@ -446,8 +446,8 @@ mod tests {
         fn affine_interpolation_stays_within_tolerance(
             inv_w in 0.2f32..5.0,
             spread in prop::array::uniform3(0.0f32..0.01),
-            v1 in prop::array::uniform9(-1.0f32..1.0),
-            v2 in prop::array::uniform9(-1.0f32..1.0),
+            v1 in prop::array::uniform::<_, VARYINGS>(-1.0f32..1.0),
+            v2 in prop::array::uniform::<_, VARYINGS>(-1.0f32..1.0),
             weights in (0.0f32..1.0, 0.0f32..1.0),
         ) {
             let inv_w = spread.map(|s| inv_w * (1.0 + s));

@@ -51,7 +51,10 @@ pub struct Material {
     pub color: Vec3,
     /// An image modulating the colour, read at the mesh's texture coordinates.
     pub texture: Option<Arc<Texture>>,
-    /// How the texture is read.
+    /// A second image the texture fades into by the mesh's blend weights, read at the same
+    /// coordinates with the same sampler: two textures meet at a border without a seam.
+    pub blend: Option<Arc<Texture>>,
+    /// How the textures are read.
     pub sampler: Sampler,
     /// Texture repetitions along `u` and `v` (texture coordinates are multiplied by it).
     pub uv_scale: Vec2,
@@ -60,12 +63,12 @@ pub struct Material {
 impl Material {
     /// A plain untextured colour.
     pub fn colored(color: Vec3) -> Self {
-        Self { color, texture: None, sampler: Sampler::default(), uv_scale: Vec2::ONE }
+        Self { color, texture: None, blend: None, sampler: Sampler::default(), uv_scale: Vec2::ONE }
     }
 }
 
 /// Number of values interpolated across triangles.
-pub const VARYINGS: usize = 9;
+pub const VARYINGS: usize = 10;
 
 /// The values a vertex hands to the pixels of its triangles, indexed by the [`slot`] constants.
 pub type Varyings = [f32; VARYINGS];
@@ -81,6 +84,8 @@ pub mod slot {
     pub const NORMAL: usize = 4;
     /// Texture coordinates, uv.
     pub const UV: usize = 7;
+    /// The weight of the material's blend texture against its texture.
+    pub const BLEND: usize = 9;
 }
 
 /// How far each value may be off when a triangle is interpolated in screen space instead of
@@ -92,7 +97,7 @@ pub(crate) fn affine_tolerances(pass: Pass, texture: Option<&Texture>) -> Varyin
     let texels = texture.map_or(1, |t| t.width().max(t.height())) as f32;
     std::array::from_fn(|index| match index {
         _ if !pass.uses(index) => f32::INFINITY,
-        slot::UV.. => 1.0 / (16.0 * texels),
+        slot::UV | 8 => 1.0 / (16.0 * texels),
         _ => 1.0 / (16.0 * 255.0),
     })
 }

@@ -144,5 +144,6 @@ fn vertex_varyings(
     varyings[slot::DIFFUSE] = diffuse;
     varyings[slot::NORMAL..slot::NORMAL + 3].copy_from_slice(&normal.to_array());
     varyings[slot::UV..slot::UV + 2].copy_from_slice(&uv.to_array());
+    varyings[slot::BLEND] = mesh.blend.get(local).copied().unwrap_or(0.0);
     varyings
 }

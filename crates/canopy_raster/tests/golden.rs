@@ -89,6 +89,7 @@ fn steep_plane() -> (Camera, Instance) {
     let material = Material {
         color: Vec3::ONE,
         texture: Some(Arc::new(texture)),
+        blend: None,
         sampler: Sampler { filter: Filter::Nearest, address: Address::Clamp },
         uv_scale: Vec2::ONE,
     };
@@ -104,6 +105,7 @@ fn steep_plane() -> (Camera, Instance) {
         normals: vec![Vec3::Y; 4],
         uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
         colors: vec![],
+        blend: vec![],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     };
     let camera =
@@ -144,6 +146,74 @@ fn textures_are_perspective_correct_on_a_steep_plane() {
     }
     assert!(checked > 20, "only {checked} rows checked");
     assert!(largest_affine_error > 0.2, "affine and perspective agree too well: {largest_affine_error}");
+}
+
+/// A ground plane 200 m square seen from 1.5 m above it, checkered in black and white squares
+/// of 25 cm, read with `filter`; at 320 x 240 pixels, and which rows of the image see the ground
+/// farther than 15 m (where a pixel spans more than two squares) and nearer than 4 m.
+fn receding_checkerboard(filter: Filter) -> (Framebuffer, Vec<u32>, Vec<u32>) {
+    // Eight by eight squares of eight texels; the plane repeats the texture every 2 m.
+    let texture = Texture::from_fn(64, 64, |x, y| Vec3::splat(((x / 8 + y / 8) % 2) as f32));
+    let material = Material {
+        color: Vec3::ONE,
+        texture: Some(Arc::new(texture)),
+        blend: None,
+        sampler: Sampler { filter, address: Address::Repeat },
+        uv_scale: Vec2::splat(100.0),
+    };
+    let ground = Instance {
+        mesh: Arc::new(MeshData::plane(1)),
+        model: Mat4::from_translation(Vec3::new(0.0, 0.0, -99.5)) * Mat4::from_scale(Vec3::new(200.0, 1.0, 200.0)),
+        material,
+    };
+    let camera =
+        Camera { eye: Vec3::new(0.0, 1.5, 0.0), target: Vec3::new(0.0, 0.0, -6.0), fov_y: 1.0, near: 0.1, far: 300.0 };
+    let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
+    let (width, height) = (320, 240);
+    let mut image = Framebuffer::new(width, height);
+    let frame =
+        Frame { camera, light: full, background: SKY, instances: &[ground], settings: RenderSettings::default() };
+    Renderer::default().render(&mut image, &TaskPool::new(), &frame);
+
+    // The distance at which the ray through the middle of each row meets the ground.
+    let world_from_ndc = camera.view_projection(width as f32 / height as f32).inverse();
+    let distance = |py: u32| {
+        let ndc_y = 1.0 - (py as f32 + 0.5) / height as f32 * 2.0;
+        let a = world_from_ndc.project_point3(Vec3::new(0.0, ndc_y, 0.0));
+        let b = world_from_ndc.project_point3(Vec3::new(0.0, ndc_y, 1.0));
+        let t = a.y / (a.y - b.y);
+        (t > 0.0 && b.y < a.y).then(|| (a + (b - a) * t).distance(camera.eye))
+    };
+    let far = (0..height).filter(|&py| distance(py).is_some_and(|d| (15.0..150.0).contains(&d))).collect();
+    let near = (0..height).filter(|&py| distance(py).is_some_and(|d| d < 4.0)).collect();
+    (image, far, near)
+}
+
+/// How far the pixels of `rows` lie from mid grey, the mean of black and white squares, on
+/// average, in steps of the 8-bit channel.
+fn deviation_from_grey(image: &Framebuffer, rows: &[u32]) -> f64 {
+    let pixels = rows.iter().flat_map(|&y| (0..image.width()).map(move |x| (x, y)));
+    let deviations: Vec<f64> = pixels.map(|(x, y)| (f64::from(image.pixel(x, y)[1]) - 127.5).abs()).collect();
+    deviations.iter().sum::<f64>() / deviations.len() as f64
+}
+
+#[test]
+fn textures_fade_to_their_mean_at_a_distance() {
+    let (trilinear, far, near) = receding_checkerboard(Filter::Trilinear);
+    assert_golden("receding_checkerboard", &trilinear);
+    assert!(far.len() >= 15 && near.len() >= 15, "{} far rows, {} near rows", far.len(), near.len());
+    // Far off, mip maps leave the mean of many squares in each pixel: no moire.
+    let far_trilinear = deviation_from_grey(&trilinear, &far);
+    assert!(far_trilinear < 12.0, "far rows stray {far_trilinear:.1} from grey on average");
+    // Reading only the image, each far pixel is one point of a square, black or white: the
+    // pattern aliases into moire (and the measure above tells the two apart).
+    let (bilinear, _, _) = receding_checkerboard(Filter::Bilinear);
+    let far_bilinear = deviation_from_grey(&bilinear, &far);
+    assert!(far_bilinear > 60.0, "the image alone strays only {far_bilinear:.1}");
+    // Close by, the squares stay black and white: the levels are chosen per pixel, not blurred
+    // everywhere.
+    let near_trilinear = deviation_from_grey(&trilinear, &near);
+    assert!(near_trilinear > 100.0, "near rows stray only {near_trilinear:.1}");
 }
 
 /// A box standing on a plane, lit from the upper left.
@@ -224,6 +294,7 @@ fn a_triangle_crossing_the_near_plane_is_cut() {
         normals: vec![Vec3::Y; 3],
         uvs: vec![],
         colors: vec![Vec3::X, Vec3::Y, Vec3::Z],
+        blend: vec![],
         triangles: vec![[0, 1, 2]],
     };
     let camera =
@@ -274,4 +345,37 @@ fn interpenetrating_triangles_meet_on_their_intersection() {
         assert_eq!(image.pixel(40, y), [255, 0, 0, 255], "row {y}");
         assert_eq!(image.pixel(120, y), [0, 255, 0, 255], "row {y}");
     }
+}
+
+#[test]
+fn blend_weights_fade_one_texture_into_another() {
+    // A square facing the camera, red on the left edge's vertices and blue on the right's.
+    let plain = |color: Vec3| Some(Arc::new(Texture::from_fn(4, 4, move |_, _| color)));
+    let material = Material { texture: plain(Vec3::X), blend: plain(Vec3::Z), ..Material::colored(Vec3::ONE) };
+    let mesh = MeshData {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        colors: vec![],
+        blend: vec![0.0, 1.0, 1.0, 0.0],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, fov_y: 0.9, near: 0.1, far: 10.0 };
+    let full = Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
+    let square = Instance { mesh: Arc::new(mesh), model: Mat4::IDENTITY, material };
+    let (image, _) = render(camera, full, &[square], RenderSettings::default());
+    // Along the middle row red falls and blue rises steadily; red and blue always sum to one.
+    let row: Vec<[u8; 4]> = (0..160).map(|x| image.pixel(x, 60)).filter(|p| *p != SKY).collect();
+    assert!(row.len() > 60, "{} pixels of the square", row.len());
+    assert!(row[0][0] > 240 && row[0][2] < 15, "left edge {:?}", row[0]);
+    assert!(row[row.len() - 1][2] > 240 && row[row.len() - 1][0] < 15, "right edge {:?}", row[row.len() - 1]);
+    for pair in row.windows(2) {
+        assert!(pair[1][0] <= pair[0][0] && pair[1][2] >= pair[0][2], "{pair:?}");
+    }
+    assert!(row.iter().all(|p| (i32::from(p[0]) + i32::from(p[2]) - 255).abs() <= 2 && p[1] == 0), "{row:?}");
 }
