@@ -4,11 +4,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-scenes=(demo biceps tree forest sloth generated_forest)
+scenes=(demo biceps tree forest sloth generated_forest terrain)
 for name in "${scenes[@]}"; do
     cargo run --quiet -- run "scenes/$name.yaml" --frames 60 --size 640x360 --screenshot "docs/images/$name.png"
     echo "docs/images/$name.png"
 done
+# The terrain after the source's demonstrations (moved, turned, scaled, the light moved).
+cargo run --quiet -- run scenes/terrain.yaml --input timelines/terrain_demonstrations.yaml --seconds 4.5 \
+    --size 640x360 --screenshot docs/images/terrain_turned.png
+echo "docs/images/terrain_turned.png"
 
 # The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then

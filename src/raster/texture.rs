@@ -51,14 +51,14 @@ impl TextureDef {
     }
 
     /// Decodes the image from `file` when it is this texture's (once per file, shared by
-    /// every entity); a file that is no image is an error at the entity's `texture.file`.
-    pub fn resolve(&mut self, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+    /// every entity); a file that is no image is an error at the entity's `field` (the path of
+    /// this texture's `file` within the kind, e.g. `texture.file`).
+    pub fn resolve(&mut self, file: &mut ReferencedFile, cx: &EntityContext, field: &str) -> Result<(), FileError> {
         if self.file.path != file.file {
             return Ok(());
         }
         let image = file.decoded(|path, bytes| {
-            Texture::decode(bytes)
-                .map_err(|error| FileError::whole_file(path, format!("{}: {error}", cx.field("texture.file"))))
+            Texture::decode(bytes).map_err(|error| FileError::whole_file(path, format!("{}: {error}", cx.field(field))))
         })?;
         self.image = Some(image);
         Ok(())

@@ -75,7 +75,7 @@ impl EntityKind for ShapeKind {
     }
 
     fn resolve(def: &mut ShapeDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx))
+        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx, "texture.file"))
     }
 
     fn build(_def: &ShapeDef, _cx: &BuildContext) -> Result<(), FileError> {

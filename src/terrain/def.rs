@@ -1,6 +1,6 @@
 //! The `terrain:` entry of a scene file, and the kind that reads, builds, spawns and saves it.
 
-use super::bands::{BandBlend, BandRule};
+use super::bands::{Band, BandBlend, BandRule};
 use super::generate::{Function, Layer, Recipe};
 use super::heightmap::Heightmap;
 use super::image_io;
@@ -281,8 +281,10 @@ impl EntityKind for TerrainKind {
             )?;
             def.height.decoded = Some(map);
         }
-        for texture in def.bands.textures.all_mut().into_iter().flatten() {
-            texture.resolve(file, cx)?;
+        for (band, texture) in Band::ALL.iter().zip(def.bands.textures.all_mut()) {
+            if let Some(texture) = texture {
+                texture.resolve(file, cx, &format!("bands.textures.{}.file", band.key()))?;
+            }
         }
         Ok(())
     }

@@ -18,7 +18,7 @@
 //! same bits on every machine.
 
 use crate::foundation::random::Random;
-use wide::f32x8;
+use wide::{f32x8, i32x8};
 
 /// The lattice repeats every this many units.
 const PERIOD: usize = 256;
@@ -239,9 +239,14 @@ fn row_octave(
     let step = f32x8::from(std::array::from_fn::<f32, 8, _>(|k| k as f32));
     for start in (0..lanes).step_by(8) {
         let x = (f32x8::splat((x0 + start as i32) as f32) + step) * f32x8::splat(frequency);
-        let floor = x.floor();
-        let fx = x - floor;
-        let cells = floor.round_int().to_array();
+        // The baseline x86-64 target has no rounding instruction (and `floor` would call the C
+        // library lane by lane): truncate, then step back down the lanes that truncation moved
+        // up, the negative fractions (a true comparison is all ones, minus one as an integer).
+        let truncated = x.fast_trunc_int();
+        let moved_up: i32x8 = bytemuck::cast(x.simd_lt(truncated.round_float()));
+        let whole = truncated + moved_up;
+        let fx = x - whole.round_float();
+        let cells = whole.to_array();
         let (mut slope0, mut offset0, mut slope1, mut offset1) = ([0.0; 8], [0.0; 8], [0.0; 8], [0.0; 8]);
         for lane in 0..8 {
             [slope0[lane], offset0[lane]] = column(cells[lane]);

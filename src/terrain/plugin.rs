@@ -78,7 +78,8 @@ pub struct NoiseParams {
 pub struct TerrainParams {
     /// The visible section.
     pub section: SectionParams,
-    /// Turn about the vertical axis through the section's centre, degrees in `[-180, 180)`.
+    /// Turn about the vertical axis through the section's centre, degrees (the keys keep it in
+    /// `[-180, 180)`).
     pub rotation_deg: f32,
     /// Scale along x, y and z about the section's centre.
     pub scale: Vec3,

@@ -110,72 +110,112 @@ pub struct SectionMesh {
 const CELL_TRIANGLES: [[(u32, u32); 3]; 2] = [[(0, 0), (0, 1), (1, 1)], [(0, 0), (1, 1), (1, 0)]];
 
 /// The mesh of `section` (which must fit `map`), banded by `rule`.
+///
+/// Two passes: the first decides each triangle's surface (a band, or with blending a border)
+/// and numbers the vertices each surface uses; the second fills every mesh at its final size,
+/// so that nothing is moved as the meshes grow.
 pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
     let [x0, z0] = section.origin;
-    let [w, h] = section.size;
-    let position = |x: u32, z: u32| {
-        Vec3::new(
-            (x - x0) as f32 * geometry.cell_m,
-            map.at(x, z) * geometry.height_m,
-            (z - z0) as f32 * geometry.cell_m,
-        )
-    };
+    let [w, h] = section.size.map(|n| n as usize);
+    let count = w * h;
+    // The section's heights and positions, row by row, the first vertex at the origin.
+    let heights: Vec<f32> =
+        (z0..z0 + h as u32).flat_map(|z| map.row(z)[x0 as usize..x0 as usize + w].iter().copied()).collect();
+    let positions: Vec<Vec3> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .zip(&heights)
+        .map(|((i, j), &height)| {
+            Vec3::new(i as f32 * geometry.cell_m, height * geometry.height_m, j as f32 * geometry.cell_m)
+        })
+        .collect();
     let normals = vertex_normals(map, section, geometry);
-    let count = (w * h) as usize;
-    let barycentre =
-        (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).fold(Vec3::ZERO, |sum, (i, j)| sum + position(x0 + i, z0 + j))
-            / count as f32;
-
+    let barycentre = positions.iter().fold(Vec3::ZERO, |sum, &p| sum + p) / count as f32;
     // Each vertex's share of every band, when blending.
     let weights: Vec<[f32; 5]> = match rule.blend {
-        Some(_) => (0..count)
-            .map(|local| {
-                let (vi, vj) = (local as u32 % w, local as u32 / w);
-                rule.weights(map.at(x0 + vi, z0 + vj), normals[local].y)
-            })
-            .collect(),
+        Some(_) => heights.iter().zip(&normals).map(|(&height, normal)| rule.weights(height, normal.y)).collect(),
         None => Vec::new(),
     };
-    // The five bands' meshes, then the borders'.
-    let mut surfaces: [MeshData; 15] = Default::default();
+    let surfaces = if weights.is_empty() { 5 } else { 15 };
+
+    // The first pass: each triangle's surface and, per surface, the section vertices it uses
+    // in the order of their indices in its mesh (with their blend weights on borders).
     let mut counts = [0; 5];
-    // Each surface's index of every section vertex it uses; `u32::MAX` where unused.
-    let mut remap = vec![[u32::MAX; 15]; count];
+    let mut chosen: Vec<u8> = Vec::with_capacity(2 * (w - 1) * (h - 1));
+    let mut remap = vec![u32::MAX; count * surfaces];
+    // Each used vertex as its column and row in the section.
+    let mut used: [Vec<[u32; 2]>; 15] = Default::default();
+    let mut blend: [Vec<f32>; 15] = Default::default();
+    let mut triangles = [0usize; 15];
     for j in 0..h - 1 {
         for i in 0..w - 1 {
-            for corners in CELL_TRIANGLES {
-                let vertices = corners.map(|(di, dj)| (i + di, j + dj));
-                let points = vertices.map(|(vi, vj)| position(x0 + vi, z0 + vj));
-                let up = (points[1] - points[0]).cross(points[2] - points[0]).normalize_or_zero().y;
-                let mean = vertices.iter().map(|&(vi, vj)| map.at(x0 + vi, z0 + vj)).sum::<f32>() / 3.0;
+            for (corners, offsets) in cell_triangles(j * w + i, w).into_iter().zip(CELL_TRIANGLES) {
+                let mean = corners.iter().map(|&k| heights[k]).sum::<f32>() / 3.0;
+                // The face's slope matters only to a rock slope.
+                let up = match rule.rock_slope_deg {
+                    Some(_) => {
+                        let [a, b, c] = corners.map(|k| positions[k]);
+                        (b - a).cross(c - a).normalize_or_zero().y
+                    }
+                    None => 1.0,
+                };
                 let band = rule.band(mean, up);
                 counts[band.index()] += 1;
-                let locals = vertices.map(|(vi, vj)| (vj * w + vi) as usize);
                 let (surface, border) = match weights.is_empty() {
                     true => (band.index(), None),
-                    false => blended_surface(locals.map(|local| &weights[local])),
+                    false => blended_surface(corners.map(|k| &weights[k])),
                 };
-                let mesh = &mut surfaces[surface];
-                let triangle = std::array::from_fn(|k| {
-                    let ((vi, vj), local) = (vertices[k], locals[k]);
-                    let slot = &mut remap[local][surface];
+                for (k, (di, dj)) in corners.into_iter().zip(offsets) {
+                    let slot = &mut remap[k * surfaces + surface];
                     if *slot == u32::MAX {
-                        *slot = mesh.positions.len() as u32;
-                        mesh.positions.push(position(x0 + vi, z0 + vj) - barycentre);
-                        mesh.normals.push(normals[local]);
-                        mesh.uvs.push(Vec2::new((x0 + vi) as f32, (z0 + vj) as f32) / geometry.texture_cells);
+                        *slot = used[surface].len() as u32;
+                        used[surface].push([i as u32 + di, j as u32 + dj]);
                         if let Some(border) = border {
-                            mesh.blend.push(border.upper_share(&weights[local]));
+                            blend[surface].push(border.upper_share(&weights[k]));
                         }
                     }
-                    *slot
-                });
-                mesh.triangles.push(triangle);
+                }
+                triangles[surface] += 1;
+                chosen.push(surface as u8);
             }
         }
     }
-    let [water, sand, grass, rock, snow, borders @ ..] = surfaces;
+
+    // The second pass: every mesh at its final size.
+    let mut blend = blend.into_iter();
+    let mut meshes: [MeshData; 15] = std::array::from_fn(|surface| {
+        let vertices = &used[surface];
+        let index = |[i, j]: [u32; 2]| j as usize * w + i as usize;
+        MeshData {
+            positions: vertices.iter().map(|&v| positions[index(v)] - barycentre).collect(),
+            normals: vertices.iter().map(|&v| normals[index(v)]).collect(),
+            uvs: vertices
+                .iter()
+                .map(|&[i, j]| Vec2::new((x0 + i) as f32, (z0 + j) as f32) / geometry.texture_cells)
+                .collect(),
+            colors: Vec::new(),
+            blend: blend.next().unwrap_or_default(),
+            triangles: Vec::with_capacity(triangles[surface]),
+        }
+    });
+    let mut next = chosen.iter();
+    for j in 0..h - 1 {
+        for i in 0..w - 1 {
+            for corners in cell_triangles(j * w + i, w) {
+                let Some(&surface) = next.next() else { break };
+                let surface = usize::from(surface);
+                meshes[surface].triangles.push(corners.map(|k| remap[k * surfaces + surface]));
+            }
+        }
+    }
+    let [water, sand, grass, rock, snow, borders @ ..] = meshes;
     SectionMesh { bands: [water, sand, grass, rock, snow], borders, counts, barycentre }
+}
+
+/// The two triangles of the cell whose first corner is section vertex `a`, in rows of `w`
+/// vertices, as vertex indices (see [`CELL_TRIANGLES`]).
+fn cell_triangles(a: usize, w: usize) -> [[usize; 3]; 2] {
+    let (b, c, d) = (a + 1, a + w, a + w + 1);
+    [[a, c, d], [a, d, b]]
 }
 
 /// The two bands a blended triangle shows.
@@ -216,47 +256,42 @@ fn blended_surface(weights: [&[f32; 5]; 3]) -> (usize, Option<Border>) {
 /// Unit normals of the section's vertices, row by row: the sum of the (area-weighted) normals
 /// of the up to six map triangles around each vertex.
 fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
-    let [x0, z0] = section.origin;
-    let [w, h] = section.size;
-    // The cells touching the section, one ring beyond it where the map has them.
-    let (cx0, cz0) = (x0.saturating_sub(1), z0.saturating_sub(1));
-    let (cx1, cz1) = ((x0 + w).min(map.width() - 1), (z0 + h).min(map.height() - 1));
-    let columns = (cx1 - cx0) as usize;
-    let corner = |x: u32, z: u32| {
-        Vec3::new(x as f32 * geometry.cell_m, map.at(x, z) * geometry.height_m, z as f32 * geometry.cell_m)
+    let [x0, z0] = section.origin.map(i64::from);
+    let [w, h] = section.size.map(|n| n as usize);
+    // The face normals (area-weighted) of the cells around the section's vertices, from one
+    // before the first vertex to the last along each axis, zero where the map has no cell.
+    let (last_x, last_z) = (i64::from(map.width()) - 2, i64::from(map.height()) - 2);
+    let corner = |x: i64, z: i64| {
+        let height = map.at(x as u32, z as u32);
+        Vec3::new(x as f32 * geometry.cell_m, height * geometry.height_m, z as f32 * geometry.cell_m)
     };
-    let faces: Vec<[Vec3; 2]> = (cz0..cz1)
-        .flat_map(|z| (cx0..cx1).map(move |x| (x, z)))
-        .map(|(x, z)| {
-            CELL_TRIANGLES.map(|t| {
-                let [a, b, c] = t.map(|(dx, dz)| corner(x + dx, z + dz));
+    // Two rows of cells at a time: those above a row of vertices and those below it.
+    let row_of_faces = |z: i64, faces: &mut Vec<[Vec3; 2]>| {
+        faces.clear();
+        faces.extend((x0 - 1..x0 + w as i64).map(|x| match (0..=last_x).contains(&x) && (0..=last_z).contains(&z) {
+            true => CELL_TRIANGLES.map(|t| {
+                let [a, b, c] = t.map(|(dx, dz)| corner(x + i64::from(dx), z + i64::from(dz)));
                 (b - a).cross(c - a)
-            })
-        })
-        .collect();
-    let face = |x: i64, z: i64, which: usize| {
-        let inside = (i64::from(cx0)..i64::from(cx1)).contains(&x) && (i64::from(cz0)..i64::from(cz1)).contains(&z);
-        if inside {
-            faces[(z - i64::from(cz0)) as usize * columns + (x - i64::from(cx0)) as usize][which]
-        } else {
-            Vec3::ZERO
-        }
+            }),
+            false => [Vec3::ZERO; 2],
+        }));
     };
-    (z0..z0 + h)
-        .flat_map(|z| (x0..x0 + w).map(move |x| (i64::from(x), i64::from(z))))
-        .map(|(x, z)| {
+    let (mut above, mut below) = (Vec::with_capacity(w + 1), Vec::with_capacity(w + 1));
+    row_of_faces(z0 - 1, &mut above);
+    let mut normals = Vec::with_capacity(w * h);
+    for z in z0..z0 + h as i64 {
+        row_of_faces(z, &mut below);
+        for i in 0..w {
             // As corner a of its own cell (both triangles), b of the cell to the left (the
             // second), c of the cell above (the first) and d of the cell diagonally before it
             // (both).
-            let sum = face(x, z, 0)
-                + face(x, z, 1)
-                + face(x - 1, z, 1)
-                + face(x, z - 1, 0)
-                + face(x - 1, z - 1, 0)
-                + face(x - 1, z - 1, 1);
-            sum.try_normalize().unwrap_or(Vec3::Y)
-        })
-        .collect()
+            let (own, left, up, diagonal) = (below[i + 1], below[i], above[i + 1], above[i]);
+            let sum = own[0] + own[1] + left[1] + up[0] + diagonal[0] + diagonal[1];
+            normals.push(sum.try_normalize().unwrap_or(Vec3::Y));
+        }
+        std::mem::swap(&mut above, &mut below);
+    }
+    normals
 }
 
 /// The band each triangle of a section fell into, counted: for dumps.

@@ -236,7 +236,7 @@ impl EntityKind for TreeKind {
     }
 
     fn resolve(def: &mut TreeDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx))
+        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx, "texture.file"))
     }
 
     /// Builds the tree; an error is located at its support's field, the nth occurrence of that

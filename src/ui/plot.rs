@@ -40,10 +40,17 @@ fn size_label(mark: GridMark, _: &RangeInclusive<f64>) -> String {
     if (mark.value - exponent).abs() < 1e-6 { format!("{0} x {0}", 2f64.powf(exponent)) } else { String::new() }
 }
 
-/// A power of ten on the log axis as milliseconds.
+/// Marks at 1, 2 and 5 times a power of ten on the log axis as milliseconds; the grid lines
+/// between them go unlabelled.
 fn ms_label(mark: GridMark, _: &RangeInclusive<f64>) -> String {
     let ms = 10f64.powf(mark.value);
-    if ms >= 1.0 { format!("{ms:.0} ms") } else { format!("{ms:.2} ms") }
+    let decade = 10f64.powf(mark.value.floor());
+    let round = [1.0, 2.0, 5.0, 10.0].iter().any(|&step| (ms / (step * decade) - 1.0).abs() < 0.01);
+    match round {
+        false => String::new(),
+        true if ms >= 1.0 => format!("{ms:.0} ms"),
+        true => format!("{ms:.2} ms"),
+    }
 }
 
 /// The timing experiment's plot: median time against section size, with and without shadows,
@@ -54,12 +61,11 @@ pub fn save_timing_plot(timings: &[Timing], path: &Path) -> image::ImageResult<(
     save_egui_png(UVec2::new(900, 560), path, |ui| {
         ui.heading("Time to produce the image of the visible section");
         ui.label(
-            "meshing the section and drawing a 1280 x 720 frame; median of the runs, dots at the fastest and slowest",
+            "meshing the section and drawing a 1280 x 720 frame, against the section's vertices a side; \
+             median of the runs, dots at the fastest and slowest; both axes logarithmic",
         );
         Plot::new("terrain-timing")
             .legend(Legend::default().position(egui_plot::Corner::LeftTop))
-            .x_axis_label("section size (vertices)")
-            .y_axis_label("time (log scale)")
             .x_grid_spacer(egui_plot::log_grid_spacer(2))
             .y_grid_spacer(egui_plot::log_grid_spacer(10))
             .x_axis_formatter(size_label)

@@ -103,6 +103,8 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("terrain_image_outside.yaml", Some(4), &["entities[0].terrain.height.image", "inside the scene's folder"]),
     ("terrain_image_and_layers.yaml", Some(4), &["entities[0].terrain.height", "an image or from size and layers"]),
     ("terrain_bad_thresholds.yaml", Some(7), &["entities[0].terrain.bands", "four rising heights"]),
+    ("terrain_image_clamp.yaml", Some(5), &["entities[0].terrain.height.apply", "clamp", "found [1, 0]"]),
+    ("terrain_bad_blend.yaml", Some(8), &["entities[0].terrain.bands", "blend.height", "found 0"]),
 ];
 
 #[test]

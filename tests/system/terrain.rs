@@ -91,6 +91,21 @@ fn keys_move_the_section_by_one_sample_or_ten_with_shift() {
 ";
     let output = run("scenes/terrain.yaml", 20, Some(timeline), SMALL);
     assert_eq!(section(entity(&output.dump, "land")).0, vec![121, 186]);
+    // Pushed against the map's far edge (z 192 for 64 of 256 samples) it stops there, and the
+    // first key back moves it at once.
+    let timeline = "
+- { at: 0.0, press: [ShiftLeft, KeyS] }
+- { at: 0.05, release: [KeyS] }
+- { at: 0.1, press: [KeyS] }
+- { at: 0.15, release: [KeyS] }
+- { at: 0.2, press: [KeyS] }
+- { at: 0.25, release: [ShiftLeft, KeyS] }
+- { at: 0.3, press: [KeyW] }
+- { at: 0.35, release: [KeyW] }
+";
+    let output = run("scenes/terrain.yaml", 30, Some(timeline), SMALL);
+    let land = entity(&output.dump, "land");
+    assert_eq!(section(land).0, vec![120, 191]);
 }
 
 #[test]
