@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 frames="${1:-300}"
 rounds="${2:-3}"
 scenes=(benches/scenes/empty.yaml scenes/demo.yaml scenes/biceps.yaml scenes/tree.yaml scenes/forest.yaml
-    scenes/generated_forest.yaml scenes/sloth.yaml)
+    scenes/generated_forest.yaml scenes/sloth.yaml scenes/terrain.yaml)
 
 cargo build --quiet --bin canopy
 cargo bench --quiet --profile dev --bench headless_frames --no-run 2>/dev/null
