@@ -138,20 +138,25 @@ impl Function {
     pub fn apply(self, map: &mut Heightmap) {
         match self {
             Function::Normalize => map.normalize(),
-            Function::Invert => map.apply(|h| 1.0 - h),
-            Function::Abs => map.apply(f32::abs),
-            Function::Power(p) => map.apply(|h| h.max(0.0).powf(p)),
-            Function::Terraces(n) => {
-                let n = n as f32;
-                map.apply(|h| {
-                    let t = h * n;
-                    (t.floor() + t.fract().powi(4)) / n
-                });
-            }
-            Function::Clamp([low, high]) => map.apply(|h| h.clamp(low, high)),
-            Function::Scale(k) => map.apply(|h| h * k),
-            Function::Offset(c) => map.apply(|h| h + c),
+            function => map.apply(|h| function.of_height(h).unwrap_or(h)),
         }
+    }
+
+    /// The function of one height `h`; `None` for `normalize`, which needs the whole map.
+    pub fn of_height(self, h: f32) -> Option<f32> {
+        Some(match self {
+            Function::Normalize => return None,
+            Function::Invert => 1.0 - h,
+            Function::Abs => h.abs(),
+            Function::Power(p) => h.max(0.0).powf(p),
+            Function::Terraces(n) => {
+                let (n, t) = (n as f32, h * n as f32);
+                (t.floor() + t.fract().powi(4)) / n
+            }
+            Function::Clamp([low, high]) => h.clamp(low, high),
+            Function::Scale(k) => h * k,
+            Function::Offset(c) => h + c,
+        })
     }
 
     /// Why the function's number makes no sense, if it does not.
@@ -368,13 +373,74 @@ impl Recipe {
         u64::try_from(self.seed).unwrap_or_else(|_| draw() >> (64 - DRAWN_SEED_BITS))
     }
 
+    /// Why this recipe cannot make an unbounded world, if it cannot: every height must follow
+    /// from its own position alone, so the layers are Perlin noise (diamond-square and the
+    /// hills are made for a whole finite map) and no function is `normalize` (which needs the
+    /// whole map's range).
+    pub fn check_unbounded(&self) -> Result<(), RecipeError> {
+        let error = |field: String, key: &'static str, nth: usize, message: &str| RecipeError {
+            field,
+            key,
+            nth,
+            message: format!(
+                "{message}: an unbounded world is made piece by piece, each height from its position alone"
+            ),
+        };
+        let mut applies = 0;
+        for (index, layer) in self.layers.iter().enumerate() {
+            // The first such layer is the first of its key in the recipe.
+            let field = format!("layers[{index}]");
+            match layer.generator() {
+                Ok(Generator::DiamondSquare(_)) => {
+                    return Err(error(field, "diamond_square", 0, "diamond-square needs a whole map"));
+                }
+                Ok(Generator::Hills(_)) => {
+                    return Err(error(field, "hills", 0, "the hill algorithm needs a whole map"));
+                }
+                _ => {}
+            }
+            if layer.apply.contains(&Function::Normalize) {
+                return Err(error(format!("layers[{index}].apply"), "apply", applies, "normalize needs a whole map"));
+            }
+            applies += usize::from(!layer.apply.is_empty());
+        }
+        if self.apply.contains(&Function::Normalize) {
+            return Err(error("apply".into(), "apply", applies, "normalize needs a whole map"));
+        }
+        Ok(())
+    }
+
+    /// The heights of this recipe (checked, and unbounded by [`Recipe::check_unbounded`]) with
+    /// `seed` at the world samples `(x0 + i * step, z0 + j * step)` for `i < width`,
+    /// `j < depth`, row by row. A sample's height depends on its position alone: grids that
+    /// share a sample give it bit for bit.
+    pub fn sample_grid(&self, seed: u64, [x0, z0]: [i32; 2], step: i32, [width, depth]: [usize; 2]) -> Vec<f32> {
+        let step = step.max(1);
+        let mut grid = vec![0.0; width * depth];
+        let mut layer_heights = vec![0.0; width * depth];
+        for (index, layer) in self.layers.iter().enumerate() {
+            let Some(perlin) = layer.perlin else { continue };
+            let fbm = Fbm::new(fbm_settings(perlin, layer_seed(seed, index)));
+            for (j, row) in layer_heights.chunks_exact_mut(width.max(1)).enumerate() {
+                fbm.fill_row_every(x0, step, z0 + j as i32 * step, row);
+            }
+            for (sum, &h) in grid.iter_mut().zip(&layer_heights) {
+                let h = layer.apply.iter().fold(h, |h, f| f.of_height(h).unwrap_or(h)) * layer.weight;
+                *sum = if index == 0 { h } else { layer.op.apply(*sum, h) };
+            }
+        }
+        for h in &mut grid {
+            *h = self.apply.iter().fold(*h, |h, f| f.of_height(h).unwrap_or(h));
+        }
+        grid
+    }
+
     /// The map of this (checked) recipe with `seed`.
     pub fn generate(&self, seed: u64) -> Result<Heightmap, SizeError> {
         let [width, height] = self.size;
         let mut map: Option<Heightmap> = None;
         for (index, layer) in self.layers.iter().enumerate() {
-            // Layers draw from streams far apart, so that no two share an octave's tables.
-            let layer_seed = seed.wrapping_add((index as u64).wrapping_mul(0x1_0000));
+            let layer_seed = layer_seed(seed, index);
             let mut heights = match layer.generator() {
                 Ok(Generator::Perlin(p)) => perlin(p, layer_seed, width, height)?,
                 Ok(Generator::DiamondSquare(d)) => diamond_square(d, layer_seed, width, height)?,
@@ -440,16 +506,26 @@ fn check_hills(h: HillsLayer, width: u32, height: u32) -> Result<(), String> {
     Ok(())
 }
 
-/// Fractal Perlin noise of `width x height` samples, in `[0, 1]`.
-pub fn perlin(layer: PerlinLayer, seed: u64, width: u32, height: u32) -> Result<Heightmap, SizeError> {
-    let settings = FbmSettings {
+/// The seed of layer `index` of a recipe with `seed`: layers draw from streams far apart, so
+/// that no two share an octave's tables.
+fn layer_seed(seed: u64, index: usize) -> u64 {
+    seed.wrapping_add((index as u64).wrapping_mul(0x1_0000))
+}
+
+/// The fractal sum of a Perlin layer with `seed`.
+fn fbm_settings(layer: PerlinLayer, seed: u64) -> FbmSettings {
+    FbmSettings {
         seed,
         scale: layer.scale,
         octaves: layer.octaves,
         lacunarity: layer.lacunarity,
         persistence: layer.persistence,
-    };
-    let fbm = Fbm::new(settings);
+    }
+}
+
+/// Fractal Perlin noise of `width x height` samples, in `[0, 1]`.
+pub fn perlin(layer: PerlinLayer, seed: u64, width: u32, height: u32) -> Result<Heightmap, SizeError> {
+    let fbm = Fbm::new(fbm_settings(layer, seed));
     let mut map = Heightmap::filled(width, height, 0.0)?;
     for (z, row) in map.values_mut().chunks_exact_mut(width as usize).enumerate() {
         fbm.fill_row(0, z as i32, row);
@@ -635,6 +711,51 @@ mod tests {
         }
         let error = serde_yaml::from_str::<Recipe>("{size: [5, 5], layers: [{ridged: {}}]}").unwrap_err();
         assert!(error.to_string().contains("unknown field `ridged`"), "{error}");
+    }
+
+    /// A recipe of two Perlin layers, a weight, an operation and pointwise functions.
+    fn unbounded() -> Recipe {
+        recipe(
+            "{size: [40, 30], seed: 5, layers: [{perlin: {scale: 24, octaves: 4}}, \
+             {perlin: {scale: 60, octaves: 2}, op: max, weight: 0.7, apply: [{power: 3}]}], apply: [{terraces: 4}]}",
+        )
+    }
+
+    #[test]
+    fn an_unbounded_grid_is_the_map_and_grids_agree_where_they_meet() {
+        let recipe = unbounded();
+        recipe.check().unwrap();
+        recipe.check_unbounded().unwrap();
+        // At the map's own samples, the grid is the map, bit for bit.
+        let map = recipe.generate(5).unwrap();
+        let grid = recipe.sample_grid(5, [0, 0], 1, [40, 30]);
+        assert!(grid.iter().zip(map.values()).all(|(a, b)| a.to_bits() == b.to_bits()));
+        // A grid elsewhere (negative positions too) and a coarser one give the samples they
+        // share with it bit for bit.
+        let shifted = recipe.sample_grid(5, [-13, 7], 1, [40, 30]);
+        let wide = recipe.sample_grid(5, [-13, -1], 1, [60, 40]);
+        for (j, row) in shifted.chunks_exact(40).enumerate() {
+            assert_eq!(row, &wide[(j + 8) * 60..(j + 8) * 60 + 40]);
+        }
+        let coarse = recipe.sample_grid(5, [-13, -1], 4, [15, 10]);
+        for (j, row) in coarse.chunks_exact(15).enumerate() {
+            for (i, h) in row.iter().enumerate() {
+                assert_eq!(h.to_bits(), wide[j * 4 * 60 + i * 4].to_bits(), "({i}, {j})");
+            }
+        }
+    }
+
+    #[test]
+    fn only_heights_of_their_own_position_make_an_unbounded_world() {
+        let refused = |yaml: &str| recipe(yaml).check_unbounded().unwrap_err();
+        let hills = refused("{size: [8, 8], layers: [{perlin: {scale: 4}}, {hills: {count: 3}}]}");
+        assert_eq!((hills.field.as_str(), hills.key), ("layers[1]", "hills"));
+        let squares = refused("{size: [8, 8], layers: [{diamond_square: {roughness: 0.5}}]}");
+        assert_eq!(squares.key, "diamond_square");
+        let normalize =
+            refused("{size: [8, 8], layers: [{perlin: {scale: 4}, apply: [{power: 2}]}], apply: [normalize]}");
+        assert_eq!((normalize.field.as_str(), normalize.nth), ("apply", 1));
+        assert!(normalize.message.contains("whole map"), "{}", normalize.message);
     }
 
     #[test]
