@@ -11,6 +11,8 @@
 //! | [`generate`] | the generators (fBm, diamond-square, hills) and the layered recipe |
 //! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
 //! | [`section`] | the visible section and its mesh, split by band |
+//! | [`chunk`] | chunks of an unbounded world: heights at world positions and levels of detail, edges shared bit for bit |
+//! | [`stream`] | which chunks to have around a camera: nearest and ahead first, unloaded beyond a larger radius |
 //! | [`bands`] | the height bands, their rule and the project's band textures |
 //! | [`experiment`] | the source's timing experiment: image time against section size, with and without shadows |
 //!
@@ -21,6 +23,7 @@
 //! makes the map again).
 
 pub mod bands;
+pub mod chunk;
 pub mod def;
 pub mod experiment;
 pub mod generate;
@@ -30,6 +33,7 @@ pub mod noise;
 pub mod panel;
 pub mod plugin;
 pub mod section;
+pub mod stream;
 
 pub use def::{TerrainDef, TerrainKind};
 pub use heightmap::Heightmap;

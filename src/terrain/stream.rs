@@ -1,0 +1,220 @@
+//! Which chunks of an unbounded world to have, around a camera: the plan that streaming
+//! carries out each frame.
+//!
+//! Chunks whose centre lies within the load radius of the camera are wanted, each at the level
+//! of detail its distance asks for; they are requested nearest first, those ahead of the camera
+//! before those behind. A chunk is let go only beyond the unload radius, larger than the load
+//! radius, so that a camera moving back and forth across the border makes no churn. Resident
+//! chunks then stay within [`StreamSettings::max_resident`].
+
+use super::chunk::{ChunkKey, LEVELS};
+use bevy::math::Vec2;
+use std::collections::HashMap;
+
+/// Where chunks are wanted and at what detail.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamSettings {
+    /// A chunk's side in metres.
+    pub chunk_m: f32,
+    /// Chunks whose centre is nearer than this (metres, horizontally) are wanted.
+    pub load_radius_m: f32,
+    /// Chunks whose centre is farther than this are let go; more than the load radius.
+    pub unload_radius_m: f32,
+    /// From these distances on (metres, rising) chunks take levels 1, 2, ... of detail.
+    pub level_distances_m: [f32; LEVELS as usize - 1],
+}
+
+impl StreamSettings {
+    /// Why the settings make no sense, if they do not.
+    pub fn check(&self) -> Result<(), String> {
+        let positive = |v: f32| v.is_finite() && v > 0.0;
+        if !positive(self.chunk_m) {
+            return Err(format!("chunk: expected a side in metres greater than 0, found {}", self.chunk_m));
+        }
+        if !(positive(self.load_radius_m) && self.load_radius_m <= 1e5) {
+            return Err(format!(
+                "load_radius_m: expected a distance greater than 0 and at most 1e5, found {}",
+                self.load_radius_m
+            ));
+        }
+        if !(self.unload_radius_m.is_finite() && self.unload_radius_m > self.load_radius_m) {
+            return Err(format!(
+                "unload_radius_m: expected a distance greater than the load radius ({}), found {}",
+                self.load_radius_m, self.unload_radius_m
+            ));
+        }
+        // Beyond this many chunks across the unload radius, a world would hold too many.
+        if self.unload_radius_m / self.chunk_m > 64.0 {
+            return Err(format!(
+                "unload_radius_m: at most 64 chunks of {} m, found {} m",
+                self.chunk_m, self.unload_radius_m
+            ));
+        }
+        let rising = self.level_distances_m.windows(2).all(|w| w[0] <= w[1]);
+        if !(self.level_distances_m.iter().all(|&d| positive(d)) && rising) {
+            return Err(format!(
+                "level_distances_m: expected {} rising distances greater than 0, found {:?}",
+                LEVELS - 1,
+                self.level_distances_m
+            ));
+        }
+        Ok(())
+    }
+
+    /// The most chunks that can be resident at once: those whose centres lie within the unload
+    /// radius of some point, at most a square of chunks around it.
+    pub fn max_resident(&self) -> usize {
+        let across = 2 * (self.unload_radius_m / self.chunk_m).ceil() as usize + 1;
+        across * across
+    }
+
+    /// The centre of chunk `key`, in metres.
+    pub fn centre(&self, key: ChunkKey) -> Vec2 {
+        (Vec2::new(key.x as f32, key.z as f32) + 0.5) * self.chunk_m
+    }
+
+    /// The level of detail of a chunk whose centre is `distance` metres away.
+    pub fn level(&self, distance: f32) -> u8 {
+        self.level_distances_m.iter().take_while(|&&d| distance >= d).count() as u8
+    }
+}
+
+/// What to do this frame.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Plan {
+    /// Chunks to make, with their level, in the order to make them.
+    pub requests: Vec<(ChunkKey, u8)>,
+    /// Resident chunks to let go.
+    pub unload: Vec<ChunkKey>,
+}
+
+/// The plan for a camera at `camera` (metres, horizontally) looking along `forward` (need not
+/// be a unit vector), given the chunks `resident` (with their levels) and those already
+/// being made (`pending`, with the level asked for).
+pub fn plan(
+    settings: &StreamSettings,
+    camera: Vec2,
+    forward: Vec2,
+    resident: &HashMap<ChunkKey, u8>,
+    pending: &HashMap<ChunkKey, u8>,
+) -> Plan {
+    let distance = |key: ChunkKey| settings.centre(key).distance(camera);
+    let reach = (settings.load_radius_m / settings.chunk_m).ceil() as i32 + 1;
+    let around = ((camera / settings.chunk_m).floor()).as_ivec2();
+    // Every chunk wanted whose level is neither resident nor asked for yet.
+    let mut requests: Vec<(ChunkKey, u8, bool, f32)> = (-reach..=reach)
+        .flat_map(|dz| (-reach..=reach).map(move |dx| ChunkKey { x: around.x + dx, z: around.y + dz }))
+        .filter_map(|key| {
+            let d = distance(key);
+            (d < settings.load_radius_m).then(|| (key, settings.level(d), d))
+        })
+        .filter(|&(key, level, _)| resident.get(&key) != Some(&level) && pending.get(&key) != Some(&level))
+        .map(|(key, level, d)| {
+            let behind = (settings.centre(key) - camera).dot(forward) < 0.0 && d > settings.chunk_m;
+            (key, level, behind, d)
+        })
+        .collect();
+    requests.sort_by(|a, b| a.2.cmp(&b.2).then(a.3.total_cmp(&b.3)).then(a.0.cmp(&b.0)));
+    let mut unload: Vec<ChunkKey> =
+        resident.keys().copied().filter(|&key| distance(key) > settings.unload_radius_m).collect();
+    unload.sort();
+    Plan { requests: requests.into_iter().map(|(key, level, ..)| (key, level)).collect(), unload }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings() -> StreamSettings {
+        StreamSettings {
+            chunk_m: 16.0,
+            load_radius_m: 100.0,
+            unload_radius_m: 130.0,
+            level_distances_m: [30.0, 60.0, 90.0],
+        }
+    }
+
+    #[test]
+    fn the_nearest_chunks_ahead_come_first_each_at_its_level() {
+        let settings = settings();
+        let (camera, forward) = (Vec2::new(8.0, 8.0), Vec2::X);
+        let plan = plan(&settings, camera, forward, &HashMap::new(), &HashMap::new());
+        assert_eq!(plan.requests[0], (ChunkKey { x: 0, z: 0 }, 0), "the chunk under the camera first");
+        let distance = |key: ChunkKey| settings.centre(key).distance(camera);
+        let ahead = |key: ChunkKey| (settings.centre(key) - camera).dot(forward) >= 0.0 || distance(key) <= 16.0;
+        let first_behind = plan.requests.iter().position(|&(key, _)| !ahead(key)).unwrap();
+        assert!(plan.requests[first_behind..].iter().all(|&(key, _)| !ahead(key)), "ahead before behind");
+        for pair in plan.requests[..first_behind].windows(2) {
+            assert!(distance(pair[0].0) <= distance(pair[1].0), "nearest first: {pair:?}");
+        }
+        for &(key, level) in &plan.requests {
+            assert!(distance(key) < 100.0);
+            assert_eq!(level, settings.level(distance(key)));
+        }
+        let levels: Vec<u8> = (0..LEVELS).collect();
+        assert!(levels.iter().all(|l| plan.requests.iter().any(|r| r.1 == *l)), "every level used");
+        assert!(plan.requests.len() <= settings.max_resident());
+    }
+
+    #[test]
+    fn chunks_between_the_radii_neither_load_nor_unload() {
+        let settings = settings();
+        let at_115 = ChunkKey { x: 7, z: 0 };
+        let distance = settings.centre(at_115).distance(Vec2::new(8.0, 8.0));
+        assert!(distance > 100.0 && distance < 130.0, "{distance}");
+        let resident = HashMap::from([(at_115, 3), (ChunkKey { x: 9, z: 0 }, 3)]);
+        let plan = plan(&settings, Vec2::new(8.0, 8.0), Vec2::X, &resident, &HashMap::new());
+        assert!(plan.requests.iter().all(|r| r.0 != at_115), "not wanted again");
+        assert_eq!(plan.unload, vec![ChunkKey { x: 9, z: 0 }], "only beyond the unload radius");
+        // Resident or pending at the right level: not asked for again; at another level: asked.
+        let here = ChunkKey { x: 0, z: 0 };
+        let done = HashMap::from([(here, 0)]);
+        assert!(plan_for(&settings, &done, &HashMap::new()).iter().all(|r| r.0 != here));
+        assert!(plan_for(&settings, &HashMap::new(), &done).iter().all(|r| r.0 != here));
+        assert!(plan_for(&settings, &HashMap::from([(here, 2)]), &HashMap::new()).contains(&(here, 0)));
+    }
+
+    fn plan_for(
+        settings: &StreamSettings,
+        resident: &HashMap<ChunkKey, u8>,
+        pending: &HashMap<ChunkKey, u8>,
+    ) -> Vec<(ChunkKey, u8)> {
+        plan(settings, Vec2::new(8.0, 8.0), Vec2::X, resident, pending).requests
+    }
+
+    #[test]
+    fn a_wandering_camera_keeps_resident_chunks_within_the_bound() {
+        let settings = settings();
+        let mut resident: HashMap<ChunkKey, u8> = HashMap::new();
+        let mut camera = Vec2::ZERO;
+        for step in 0..400 {
+            // A path that turns and doubles back across chunk borders.
+            let angle = step as f32 * 0.05;
+            let forward = Vec2::new(angle.cos(), (angle * 0.7).sin());
+            camera += forward * 6.0;
+            let plan = plan(&settings, camera, forward, &resident, &HashMap::new());
+            for key in &plan.unload {
+                resident.remove(key);
+            }
+            resident.extend(plan.requests);
+            assert!(resident.len() <= settings.max_resident(), "step {step}: {}", resident.len());
+            assert!(resident.keys().all(|&k| settings.centre(k).distance(camera) <= 130.0));
+        }
+    }
+
+    #[test]
+    fn settings_that_make_no_sense_are_refused() {
+        let good = settings();
+        assert!(good.check().is_ok());
+        for bad in [
+            StreamSettings { load_radius_m: 0.0, ..good },
+            StreamSettings { unload_radius_m: 90.0, ..good },
+            StreamSettings { unload_radius_m: f32::NAN, ..good },
+            StreamSettings { chunk_m: -1.0, ..good },
+            StreamSettings { unload_radius_m: 5000.0, ..good },
+            StreamSettings { level_distances_m: [60.0, 30.0, 90.0], ..good },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
+    }
+}
