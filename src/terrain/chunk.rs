@@ -4,12 +4,16 @@
 //!
 //! Level `l` keeps every `2^l`-th sample: a chunk has `cells / 2^l + 1` vertices a side, and
 //! one ring of samples beyond its edges (at its own spacing) from which the normals at its
-//! edges are made as in the middle of the map.
+//! edges are made as in the middle of the map. Where chunks of different levels meet, the
+//! coarser edge runs straight past the finer one's extra vertices; a skirt, a strip hanging
+//! down from every edge of a chunk, fills the cracks that would open there.
 
 use super::bands::BandRule;
 use super::generate::Recipe;
 use super::heightmap::Heightmap;
 use super::section::{Geometry, Section, SectionMesh, mesh_section};
+use bevy::math::Vec3;
+use canopy_raster::MeshData;
 
 /// Levels of detail: level 0 has every sample, each next level every second of the one
 /// before.
@@ -62,18 +66,69 @@ impl ChunkHeights {
         self.map.width() - 2
     }
 
+    /// Metres between the chunk's vertices, for `cell_m` metres between level-0 samples.
+    pub fn spacing_m(&self, cell_m: f32) -> f32 {
+        cell_m * (1u32 << self.level) as f32
+    }
+
     /// The chunk's meshes, banded by `rule`, with `geometry`'s spacing between level-0
-    /// samples (the chunk's own vertices are `2^level` times as far apart).
-    pub fn mesh(&self, geometry: Geometry, rule: &BandRule) -> SectionMesh {
-        let geometry = Geometry { cell_m: geometry.cell_m * (1u32 << self.level) as f32, ..geometry };
+    /// samples (the chunk's own vertices are `2^level` times as far apart), and skirts
+    /// `skirt_m` metres deep along its four edges (none for 0).
+    pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32) -> SectionMesh {
+        let geometry = Geometry { cell_m: self.spacing_m(geometry.cell_m), ..geometry };
         let n = self.vertices();
-        mesh_section(&self.map, Section { origin: [1, 1], size: [n, n] }, geometry, rule)
+        let mut mesh = mesh_section(&self.map, Section { origin: [1, 1], size: [n, n] }, geometry, rule);
+        if skirt_m > 0.0 {
+            let last = (n - 1) as f32 * geometry.cell_m;
+            for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
+                add_skirts(part, mesh.barycentre, last, skirt_m);
+            }
+        }
+        mesh
     }
 
     /// A checksum of the chunk's heights (vertices and ring), equal on every machine for
     /// equal heights.
     pub fn checksum(&self) -> u64 {
         self.map.checksum()
+    }
+}
+
+/// Hangs a strip `depth` metres deep below every edge of `mesh` on the border of its chunk,
+/// whose vertices lie from 0 to `last` metres along x and z (positions relative to
+/// `barycentre`), facing out of the chunk.
+fn add_skirts(mesh: &mut MeshData, barycentre: Vec3, last: f32, depth: f32) {
+    // Which border line a vertex lies on, as a bit each: -x, +x, -z, +z.
+    let tolerance = last * 1e-5;
+    let sides = |p: Vec3| {
+        let p = p + barycentre;
+        let on = |v: f32, at: f32| u8::from((v - at).abs() <= tolerance);
+        on(p.x, 0.0) | on(p.x, last) << 1 | on(p.z, 0.0) << 2 | on(p.z, last) << 3
+    };
+    let mut skirts = Vec::new();
+    for triangle in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (triangle[k], triangle[(k + 1) % 3]);
+            if sides(mesh.positions[a as usize]) & sides(mesh.positions[b as usize]) != 0 {
+                skirts.push((a, b));
+            }
+        }
+    }
+    for (a, b) in skirts {
+        // Taken in its triangle's winding, the edge gives the strip's triangles the winding
+        // that faces out of the chunk (front faces are counter-clockwise from outside).
+        let [a_low, b_low] = [a, b].map(|v| {
+            let v = v as usize;
+            mesh.positions.push(mesh.positions[v] - Vec3::Y * depth);
+            mesh.normals.push(mesh.normals[v]);
+            mesh.uvs.push(mesh.uvs[v]);
+            if !mesh.blend.is_empty() {
+                mesh.blend.push(mesh.blend[v]);
+            }
+            (mesh.positions.len() - 1) as u32
+        });
+        mesh.triangles.push([a, a_low, b]);
+        mesh.triangles.push([b, a_low, b_low]);
     }
 }
 
@@ -112,7 +167,7 @@ mod tests {
             let geometry = Geometry { cell_m: 0.3, height_m: 30.0, texture_cells: 8.0 };
             let rule = BandRule::default();
             let normals = |chunk: &ChunkHeights, column: usize| {
-                let mesh = chunk.mesh(geometry, &rule);
+                let mesh = chunk.mesh(geometry, &rule, 0.0);
                 let spacing = geometry.cell_m * (1u32 << level) as f32;
                 let mut edge: Vec<(i64, [u32; 3])> = mesh
                     .bands
@@ -128,6 +183,69 @@ mod tests {
             };
             assert_eq!(normals(&here, n - 1), normals(&east, 0), "level {level}: normals across the east edge");
         }
+    }
+
+    /// Two chunks side by side, the first at level 0 and the second at level 2, seen from
+    /// above the first looking across their border, against a background the terrain cannot
+    /// show: how many pixels whose ray must meet the ground (it ends below the lowest height
+    /// inside the two chunks) show the background.
+    fn background_through_the_border(skirt_m: f32) -> usize {
+        use crate::raster::{Camera, Frame, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
+        use bevy::math::Mat4;
+        use bevy::tasks::TaskPool;
+        use std::sync::Arc;
+        let (recipe, cells, cell_m) = (world(), 32, 1.0);
+        let geometry = Geometry { cell_m, height_m: 60.0, texture_cells: 8.0 };
+        let chunks = [(ChunkKey { x: 0, z: 0 }, 0), (ChunkKey { x: 1, z: 0 }, 2)];
+        let mut instances = Vec::new();
+        let (mut lowest, mut highest) = (f32::MAX, f32::MIN);
+        for (key, level) in chunks {
+            let chunk = ChunkHeights::generate(&recipe, 3, key, level, cells);
+            let stats = chunk.map.stats();
+            (lowest, highest) = (lowest.min(stats.min * geometry.height_m), highest.max(stats.max * geometry.height_m));
+            let mesh = chunk.mesh(geometry, &BandRule::default(), skirt_m);
+            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * cells as f32 * cell_m + mesh.barycentre;
+            for part in mesh.bands {
+                let model = Mat4::from_translation(origin);
+                instances.push(Instance { mesh: Arc::new(part), model, material: Material::colored(Vec3::ONE) });
+            }
+        }
+        let eye = Vec3::new(10.0, 75.0, 16.0);
+        assert!(eye.y > highest, "the eye above the ground");
+        let camera = Camera { eye, target: Vec3::new(60.0, 20.0, 16.0), fov_y: 1.2, near: 0.1, far: 500.0 };
+        let (width, height) = (400u32, 300u32);
+        let background = [255, 0, 255, 255];
+        let mut image = Framebuffer::new(width, height);
+        let light = Light { direction: Vec3::NEG_Y, diffuse: 0.5, fill: 0.0, ambient: 0.3 };
+        let frame = Frame { camera, light, background, instances: &instances, settings: RenderSettings::default() };
+        Renderer::default().render(&mut image, &TaskPool::new(), &frame);
+        let world_from_ndc = camera.view_projection(width as f32 / height as f32).inverse();
+        let floor = lowest - 1.0;
+        let (x_end, z_end) = (2.0 * cells as f32 * cell_m, cells as f32 * cell_m);
+        let mut holes = 0;
+        for py in 0..height {
+            for px in 0..width {
+                let ndc = Vec3::new(
+                    (px as f32 + 0.5) / width as f32 * 2.0 - 1.0,
+                    1.0 - (py as f32 + 0.5) / height as f32 * 2.0,
+                    0.0,
+                );
+                let (near, far) = (world_from_ndc.project_point3(ndc), world_from_ndc.project_point3(ndc.with_z(1.0)));
+                if far.y >= near.y {
+                    continue;
+                }
+                let end = near + (far - near) * ((near.y - floor) / (near.y - far.y));
+                let inside = (0.5..x_end - 0.5).contains(&end.x) && (0.5..z_end - 0.5).contains(&end.z);
+                holes += usize::from(inside && image.pixel(px, py) == background);
+            }
+        }
+        holes
+    }
+
+    #[test]
+    fn skirts_close_the_cracks_between_levels() {
+        assert!(background_through_the_border(0.0) > 0, "without skirts the border shows cracks");
+        assert_eq!(background_through_the_border(4.0), 0);
     }
 
     #[test]
