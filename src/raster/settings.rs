@@ -2,14 +2,16 @@
 //! run time.
 //!
 //! Parameters: `render.shading` (`flat`, `gouraud` or `phong`), `render.shadows` and
-//! `render.pcf` (true or false). Keys: V cycles the shading mode, H switches shadows.
+//! `render.pcf` (true or false). Keys: V cycles the shading mode, H switches shadows. The
+//! scene's distance fog is a setting of the file alone.
 
-use super::{RenderSettings, RenderView, Shading};
+use super::{Fog, RenderSettings, RenderView, Shading};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, RenderSystems};
-use crate::scene::schema::RenderDef;
+use crate::scene::schema::{FogDef, RenderDef};
+use bevy::color::ColorToPacked;
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 
@@ -28,11 +30,14 @@ pub struct RenderParams {
     pub shadows: bool,
     /// Whether shadow edges are filtered (bilinear percentage-closer filtering).
     pub pcf: bool,
+    /// The scene's distance fog, if any (a scene setting, not a parameter).
+    #[reflect(ignore)]
+    pub fog: Option<FogDef>,
 }
 
 impl From<&RenderDef> for RenderParams {
     fn from(def: &RenderDef) -> Self {
-        Self { shading: def.shading, shadows: def.shadows, pcf: def.pcf }
+        Self { shading: def.shading, shadows: def.shadows, pcf: def.pcf, fog: def.fog }
     }
 }
 
@@ -41,6 +46,8 @@ impl DumpState for RenderParams {
         out.insert("shading".into(), json!(self.shading.key()));
         out.insert("shadows".into(), json!(self.shadows));
         out.insert("pcf".into(), json!(self.pcf));
+        let fog = self.fog.map(|fog| json!({ "start_m": fog.start_m.0, "depth_m": fog.depth_m.0 }));
+        out.insert("fog".into(), fog.unwrap_or(Value::Null));
     }
 }
 
@@ -83,8 +90,14 @@ fn switch_render_settings(keys: Res<ButtonInput<KeyCode>>, mut params: Query<&mu
 
 fn write_render_settings(params: Query<&RenderParams>, mut view: ResMut<RenderView>) {
     if let Some(params) = params.iter().next() {
+        let [r, g, b, _] = view.background;
+        let fog = params.fog.map(|fog| Fog {
+            color: fog.color.map_or([r, g, b], |c| c.0.to_u8_array_no_alpha()),
+            start_m: fog.start_m.0,
+            end_m: fog.start_m.0 + fog.depth_m.0,
+        });
         view.settings =
-            RenderSettings { shading: params.shading, shadows: params.shadows, pcf: params.pcf, ..view.settings };
+            RenderSettings { shading: params.shading, shadows: params.shadows, pcf: params.pcf, fog, ..view.settings };
     }
 }
 
@@ -107,8 +120,25 @@ mod tests {
     #[test]
     fn the_section_defaults_to_gouraud_with_shadows() {
         let def: RenderDef = serde_yaml::from_str("pcf: false").unwrap();
-        assert_eq!(def, RenderDef { shading: Shading::Gouraud, shadows: true, pcf: false });
+        assert_eq!(def, RenderDef { shading: Shading::Gouraud, shadows: true, pcf: false, fog: None });
         let error = serde_yaml::from_str::<RenderDef>("shading: toon").unwrap_err().to_string();
         assert!(error.contains("unknown variant `toon`"), "{error}");
+    }
+
+    #[test]
+    fn fog_takes_the_background_unless_given_a_colour() {
+        let mut app = App::new();
+        app.init_resource::<RenderView>().add_systems(Update, write_render_settings);
+        let def: RenderDef = serde_yaml::from_str("fog: { start_m: 20, depth_m: 60 }").unwrap();
+        app.world_mut().spawn(RenderParams::from(&def));
+        app.world_mut().resource_mut::<RenderView>().background = [10, 20, 30, 255];
+        app.update();
+        let fog = app.world().resource::<RenderView>().settings.fog;
+        assert_eq!(fog, Some(Fog { color: [10, 20, 30], start_m: 20.0, end_m: 80.0 }));
+        let coloured: RenderDef = serde_yaml::from_str("fog: { start_m: 5, depth_m: 5, color: '#ff0000' }").unwrap();
+        assert_eq!(coloured.fog.and_then(|f| f.color).map(|c| c.0.to_u8_array_no_alpha()), Some([255, 0, 0]));
+        for bad in ["fog: { start_m: 0, depth_m: 5 }", "fog: { start_m: 5 }", "fog: { start_m: 5, depth_m: -1 }"] {
+            assert!(serde_yaml::from_str::<RenderDef>(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -101,12 +101,30 @@ pub struct RenderDef {
     pub shadows: bool,
     /// Whether shadow edges are filtered (on by default).
     pub pcf: bool,
+    /// Distance fog; none by default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fog: Option<FogDef>,
 }
 
 impl Default for RenderDef {
     fn default() -> Self {
-        Self { shading: Shading::Gouraud, shadows: true, pcf: true }
+        Self { shading: Shading::Gouraud, shadows: true, pcf: true, fog: None }
     }
+}
+
+/// Distance fog in a scene's `render` section: surfaces fade into `color` (the background by
+/// default) from `start_m` in front of the camera over `depth_m` more.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FogDef {
+    /// Where the fog begins, metres in front of the camera.
+    pub start_m: PositiveMetres,
+    /// Over how many metres beyond `start_m` it thickens until it hides everything.
+    pub depth_m: PositiveMetres,
+    /// The colour far surfaces take; the background's by default, so that the end of the
+    /// world fades into the sky.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<Color>,
 }
 
 /// The colour of pixels showing no surface, from the scene's `background`.

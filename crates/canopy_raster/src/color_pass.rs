@@ -12,10 +12,10 @@
 //! triangles are drawn, its visible pixels look the shadow map up, once each, and those the
 //! light does not reach are darkened.
 
-use crate::camera::Light;
+use crate::camera::{Camera, Light};
 use crate::clip::outside;
 use crate::coverage::{RowMasks, RunVisitor, Walk, covered};
-use crate::frame::{Frame, Span, View, flat_diffuse};
+use crate::frame::{Fog, Frame, Span, View, flat_diffuse};
 use crate::framebuffer::{Band, FAR_DEPTH};
 use crate::lanes::{BYTE_TO_UNIT, LANE_OFFSETS, LANES, bytes_of, lanes_of};
 use crate::screen::{PixelBounds, ScreenVertex, TILE_HEIGHT, TILE_WIDTH, tile_rect};
@@ -124,6 +124,9 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &m
             true => light_band::<true>(&mut target, &scratch.tiles, shadow),
             false => light_band::<false>(&mut target, &scratch.tiles, shadow),
         }
+    }
+    if let Some(fog) = context.frame.settings.fog {
+        fog_band(&mut target, fog, &context.frame.camera);
     }
     for tile in &scratch.tiles {
         counts.fragments += tile.fragments;
@@ -539,6 +542,44 @@ fn words_of(colors: [[u8; 4]; LANES]) -> u32x4 {
 #[inline(always)]
 fn colors_of(words: u32x4) -> [[u8; 4]; LANES] {
     bytemuck::cast(words.to_array().map(u32::to_le))
+}
+
+/// Fades the drawn pixels of a band into the fog's colour by their distance in front of
+/// `camera`, four pixels at a time; pixels no triangle covers keep the background.
+///
+/// A pixel's normalised depth `d` (0 at the near plane, 1 at the far) is a distance `D` along
+/// the view direction of `D = near far / (far - d (far - near))`.
+fn fog_band(band: &mut Band, fog: Fog, camera: &Camera) {
+    let (near, far) = (camera.near, camera.far);
+    let span = (fog.end_m - fog.start_m).max(1e-6);
+    let colour = fog.color.map(|c| Vec4::splat(f32::from(c)));
+    for (depths, colors) in band.depth.chunks_exact(LANES).zip(band.color.chunks_exact_mut(LANES)) {
+        let depth = Vec4::from_slice(depths);
+        let drawn = depth.cmplt(Vec4::splat(FAR_DEPTH));
+        if !drawn.any() {
+            continue;
+        }
+        let distance = Vec4::splat(near * far) / (Vec4::splat(far) - depth * (far - near));
+        let amount = ((distance - fog.start_m) / span).clamp(Vec4::ZERO, Vec4::ONE);
+        let amount = Vec4::select(drawn, amount, Vec4::ZERO);
+        let run: &mut [[u8; 4]; LANES] = colors.try_into().expect("a run of four pixels");
+        let words = words_of(*run);
+        let faded: [u32x4; 3] = std::array::from_fn(|c| {
+            let channel = bytes_of(words, 8 * c as u32);
+            rounded_bytes(channel + (colour[c] - channel) * amount) << (8 * c as u32)
+        });
+        *run = colors_of(faded[0] | faded[1] | faded[2] | (words & u32x4::splat(0xff00_0000)));
+    }
+    let rest = band.depth.len() / LANES * LANES;
+    for (depth, color) in band.depth[rest..].iter().zip(&mut band.color[rest..]) {
+        if *depth < FAR_DEPTH {
+            let distance = near * far / (far - depth * (far - near));
+            let amount = ((distance - fog.start_m) / span).clamp(0.0, 1.0);
+            for (channel, target) in color.iter_mut().zip(fog.color) {
+                *channel = (f32::from(*channel) + (f32::from(target) - f32::from(*channel)) * amount).round() as u8;
+            }
+        }
+    }
 }
 
 /// Darkens the pixels of a band drawn with shadows where the light does not reach them: each

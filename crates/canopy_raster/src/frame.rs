@@ -23,7 +23,7 @@ pub struct Instance {
 }
 
 /// Switches that change how a frame is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
     /// The lighting computation.
     pub shading: Shading,
@@ -33,12 +33,27 @@ pub struct RenderSettings {
     pub pcf: bool,
     /// Shadow map side in texels: a multiple of [`TILE_HEIGHT`], at most [`MAX_TARGET_SIZE`].
     pub shadow_map_size: u32,
+    /// Distance fog: drawn pixels fade into a colour with their distance; `None` for none.
+    pub fog: Option<Fog>,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self { shading: Shading::Gouraud, shadows: false, pcf: true, shadow_map_size: 1024 }
+        Self { shading: Shading::Gouraud, shadows: false, pcf: true, shadow_map_size: 1024, fog: None }
     }
+}
+
+/// Distance fog: a drawn pixel's colour fades linearly into `color` from `start_m` to `end_m`
+/// along the view direction (its depth in front of the camera), all of it beyond.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fog {
+    /// RGB8: the colour far pixels take, usually the background's, so that the end of the
+    /// world fades into the sky instead of ending in a line.
+    pub color: [u8; 3],
+    /// Where the fog begins, metres in front of the camera.
+    pub start_m: f32,
+    /// Where it hides everything, metres (beyond `start_m`).
+    pub end_m: f32,
 }
 
 /// Everything one frame is drawn from.

@@ -51,7 +51,7 @@ mod vertex;
 mod work_queue;
 
 pub use camera::{Camera, Light};
-pub use frame::{Frame, Instance, RenderSettings, RenderStats};
+pub use frame::{Fog, Frame, Instance, RenderSettings, RenderStats};
 pub use framebuffer::Framebuffer;
 pub use mesh::MeshData;
 pub use pipeline::Renderer;

@@ -9,7 +9,7 @@ use bevy_math::{Mat4, Vec2, Vec3};
 use bevy_tasks::TaskPool;
 use canopy_raster::benchmark_scene as standard;
 use canopy_raster::{
-    Address, Camera, Filter, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
+    Address, Camera, Filter, Fog, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
     Renderer, Sampler, Shading, Texture,
 };
 use std::f32::consts::FRAC_PI_2;
@@ -378,4 +378,45 @@ fn blend_weights_fade_one_texture_into_another() {
         assert!(pair[1][0] <= pair[0][0] && pair[1][2] >= pair[0][2], "{pair:?}");
     }
     assert!(row.iter().all(|p| (i32::from(p[0]) + i32::from(p[2]) - 255).abs() <= 2 && p[1] == 0), "{row:?}");
+}
+
+#[test]
+fn fog_fades_distant_pixels_into_its_colour() {
+    // The receding checkerboard's plane, untextured, lit in full: white near and far.
+    let ground = colored(MeshData::plane(1), Mat4::from_scale(Vec3::new(200.0, 1.0, 200.0)), Vec3::ONE);
+    let camera =
+        Camera { eye: Vec3::new(0.0, 1.5, 90.0), target: Vec3::new(0.0, 0.0, 84.0), fov_y: 1.0, near: 0.1, far: 300.0 };
+    let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
+    let fog = Fog { color: [40, 60, 90], start_m: 10.0, end_m: 60.0 };
+    let foggy = RenderSettings { fog: Some(fog), ..RenderSettings::default() };
+    let (clear, _) = render(camera, full, std::slice::from_ref(&ground), RenderSettings::default());
+    let (image, _) = render(camera, full, std::slice::from_ref(&ground), foggy);
+    // Depth along the view direction of the ground under each row's middle pixel.
+    let clip_from_world = camera.view_projection(160.0 / 120.0);
+    let world_from_ndc = clip_from_world.inverse();
+    let forward = (camera.target - camera.eye).normalize();
+    let mut checked = 0;
+    for py in 0..120 {
+        let ndc_y = 1.0 - (py as f32 + 0.5) / 120.0 * 2.0;
+        let (a, b) = (
+            world_from_ndc.project_point3(Vec3::new(0.0, ndc_y, 0.0)),
+            world_from_ndc.project_point3(Vec3::new(0.0, ndc_y, 1.0)),
+        );
+        if b.y >= a.y {
+            assert_eq!(image.pixel(80, py), SKY, "the sky stays the background");
+            continue;
+        }
+        let hit = a + (b - a) * (a.y / (a.y - b.y));
+        let depth = (hit - camera.eye).dot(forward);
+        let amount = ((depth - 10.0) / 50.0).clamp(0.0, 1.0);
+        let expected: Vec<f32> = fog.color.iter().map(|&f| 255.0 + (f32::from(f) - 255.0) * amount).collect();
+        let drawn = image.pixel(80, py);
+        assert_eq!(clear.pixel(80, py)[..3], [255, 255, 255], "row {py} lit white without fog");
+        for (channel, want) in drawn.iter().zip(&expected) {
+            // Within what a pixel's depth varies over its height, near the horizon most.
+            assert!((f32::from(*channel) - want).abs() <= 6.0, "row {py} at {depth:.1} m: {drawn:?} vs {expected:?}");
+        }
+        checked += 1;
+    }
+    assert!(checked > 30, "{checked} rows of ground");
 }
