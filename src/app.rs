@@ -14,6 +14,7 @@ use crate::tree::TreeKind;
 use crate::ui::pacing::FramePacing;
 use crate::ui::{UiPlugin, WindowCapture};
 use crate::view::ViewPlugin;
+use crate::world::WorldKind;
 use bevy::app::PluginGroupBuilder;
 use bevy::asset::AssetMetaCheck;
 use bevy::prelude::*;
@@ -31,6 +32,7 @@ pub fn entity_kinds() -> KindRegistry {
         .with::<TreeKind>()
         .with::<SlothKind>()
         .with::<TerrainKind>()
+        .with::<WorldKind>()
         .build()
 }
 

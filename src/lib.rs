@@ -68,6 +68,7 @@ pub mod terrain;
 pub mod tree;
 pub mod ui;
 pub mod view;
+pub mod world;
 
 pub use app::CanopyPlugins;
 

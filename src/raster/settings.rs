@@ -90,9 +90,8 @@ fn switch_render_settings(keys: Res<ButtonInput<KeyCode>>, mut params: Query<&mu
 
 fn write_render_settings(params: Query<&RenderParams>, mut view: ResMut<RenderView>) {
     if let Some(params) = params.iter().next() {
-        let [r, g, b, _] = view.background;
         let fog = params.fog.map(|fog| Fog {
-            color: fog.color.map_or([r, g, b], |c| c.0.to_u8_array_no_alpha()),
+            color: fog.color.map(|c| c.0.to_u8_array_no_alpha()),
             start_m: fog.start_m.0,
             end_m: fog.start_m.0 + fog.depth_m.0,
         });
@@ -126,15 +125,14 @@ mod tests {
     }
 
     #[test]
-    fn fog_takes_the_background_unless_given_a_colour() {
+    fn fog_has_the_background_colour_unless_given_one() {
         let mut app = App::new();
         app.init_resource::<RenderView>().add_systems(Update, write_render_settings);
         let def: RenderDef = serde_yaml::from_str("fog: { start_m: 20, depth_m: 60 }").unwrap();
         app.world_mut().spawn(RenderParams::from(&def));
-        app.world_mut().resource_mut::<RenderView>().background = [10, 20, 30, 255];
         app.update();
         let fog = app.world().resource::<RenderView>().settings.fog;
-        assert_eq!(fog, Some(Fog { color: [10, 20, 30], start_m: 20.0, end_m: 80.0 }));
+        assert_eq!(fog, Some(Fog { color: None, start_m: 20.0, end_m: 80.0 }), "the frame's background");
         let coloured: RenderDef = serde_yaml::from_str("fog: { start_m: 5, depth_m: 5, color: '#ff0000' }").unwrap();
         assert_eq!(coloured.fog.and_then(|f| f.color).map(|c| c.0.to_u8_array_no_alpha()), Some([255, 0, 0]));
         for bad in ["fog: { start_m: 0, depth_m: 5 }", "fog: { start_m: 5 }", "fog: { start_m: 5, depth_m: -1 }"] {

@@ -12,7 +12,7 @@ use super::bands::BandRule;
 use super::generate::Recipe;
 use super::heightmap::Heightmap;
 use super::section::{Geometry, Section, SectionMesh, mesh_section};
-use bevy::math::Vec3;
+use bevy::math::{Vec2, Vec3};
 use canopy_raster::MeshData;
 
 /// Levels of detail: level 0 has every sample, each next level every second of the one
@@ -78,6 +78,17 @@ impl ChunkHeights {
         let geometry = Geometry { cell_m: self.spacing_m(geometry.cell_m), ..geometry };
         let n = self.vertices();
         let mut mesh = mesh_section(&self.map, Section { origin: [1, 1], size: [n, n] }, geometry, rule);
+        // Texture coordinates fixed to the world's samples (the section's are the small map's),
+        // so that textures run on across chunks of every level.
+        let step = (1u32 << self.level) as f32;
+        let first = [self.key.x, self.key.z].map(|k| k as f32 * (n - 1) as f32 * step);
+        for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
+            for (uv, p) in part.uvs.iter_mut().zip(&part.positions) {
+                let local = *p + mesh.barycentre;
+                let [i, j] = [local.x, local.z].map(|v| (v / geometry.cell_m).round());
+                *uv = Vec2::new(first[0] + i * step, first[1] + j * step) / geometry.texture_cells;
+            }
+        }
         if skirt_m > 0.0 {
             let last = (n - 1) as f32 * geometry.cell_m;
             for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
@@ -246,6 +257,38 @@ mod tests {
     fn skirts_close_the_cracks_between_levels() {
         assert!(background_through_the_border(0.0) > 0, "without skirts the border shows cracks");
         assert_eq!(background_through_the_border(4.0), 0);
+    }
+
+    #[test]
+    fn texture_coordinates_run_on_across_chunks_and_levels() {
+        let recipe = world();
+        let geometry = Geometry { cell_m: 0.5, height_m: 30.0, texture_cells: 8.0 };
+        // The texture coordinates along one edge of a chunk, by the edge vertex's place along
+        // z in level-0 samples.
+        let edge = |key: ChunkKey, level: u8, east: bool| {
+            let chunk = ChunkHeights::generate(&recipe, 3, key, level, 32);
+            let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0);
+            let spacing = chunk.spacing_m(geometry.cell_m);
+            let column = if east { 32.0 } else { 0.0 };
+            let mut uvs: Vec<(i64, [u32; 2])> = mesh
+                .bands
+                .iter()
+                .flat_map(|m| m.uvs.iter().zip(&m.positions))
+                .map(|(uv, p)| (uv, *p + mesh.barycentre))
+                .filter(|(_, p)| ((p.x / spacing).round() * (1 << level) as f32 - column).abs() < 0.5)
+                .map(|(uv, p)| (((p.z / spacing).round() as i64) << level, uv.to_array().map(f32::to_bits)))
+                .collect();
+            uvs.sort();
+            uvs.dedup();
+            uvs
+        };
+        let (fine, coarse) = (edge(ChunkKey { x: 0, z: 0 }, 0, true), edge(ChunkKey { x: 1, z: 0 }, 2, false));
+        assert_eq!(coarse.len(), 9);
+        for (z, uv) in &coarse {
+            assert_eq!(fine.iter().find(|(f, _)| f == z).map(|f| f.1), Some(*uv), "sample {z}");
+        }
+        // One texture repetition every `texture_cells` samples of the world.
+        assert_eq!(fine[8].1.map(f32::from_bits), [32.0 / 8.0, 1.0]);
     }
 
     #[test]

@@ -130,6 +130,21 @@ impl Default for BandsDef {
 }
 
 impl BandsDef {
+    /// The texture files the bands read, for a kind's references.
+    pub fn references(&self) -> Vec<String> {
+        self.textures.all().into_iter().flat_map(|t| TextureDef::reference(t.as_ref())).collect()
+    }
+
+    /// Decodes `file` into every band texture that reads it; errors name the band's field.
+    pub fn resolve(&mut self, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        for (band, texture) in Band::ALL.iter().zip(self.textures.all_mut()) {
+            if let Some(texture) = texture {
+                texture.resolve(file, cx, &format!("bands.textures.{}.file", band.key()))?;
+            }
+        }
+        Ok(())
+    }
+
     /// The banding rule.
     pub fn rule(&self) -> BandRule {
         BandRule { thresholds: self.thresholds, rock_slope_deg: self.rock_slope_deg, blend: self.blend }
@@ -270,8 +285,7 @@ impl EntityKind for TerrainKind {
 
     fn references(def: &TerrainDef) -> Vec<String> {
         let image = def.height.image.iter().map(|file| file.path.clone());
-        let textures = def.bands.textures.all().into_iter().flat_map(|t| TextureDef::reference(t.as_ref()));
-        image.chain(textures).collect()
+        image.chain(def.bands.references()).collect()
     }
 
     fn resolve(def: &mut TerrainDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
@@ -281,12 +295,7 @@ impl EntityKind for TerrainKind {
             )?;
             def.height.decoded = Some(map);
         }
-        for (band, texture) in Band::ALL.iter().zip(def.bands.textures.all_mut()) {
-            if let Some(texture) = texture {
-                texture.resolve(file, cx, &format!("bands.textures.{}.file", band.key()))?;
-            }
-        }
-        Ok(())
+        def.bands.resolve(file, cx)
     }
 
     fn build(def: &TerrainDef, cx: &BuildContext) -> Result<TerrainBuilt, FileError> {

@@ -3,12 +3,12 @@
 //! and its panel section.
 
 use super::bands::{Band, BandRule, band_texture};
-use super::def::{TerrainBuilt, TerrainDef};
+use super::def::{BandsDef, TerrainBuilt, TerrainDef};
 use super::generate::{PerlinLayer, Recipe};
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
 use super::panel;
-use super::section::{BORDERS, Geometry, Section, SectionMesh, mesh_section};
+use super::section::{BORDERS, Geometry, Section, mesh_section};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::panel::RegisterPanel;
@@ -162,6 +162,16 @@ pub enum TerrainSurface {
     Border(usize),
 }
 
+impl TerrainSurface {
+    /// The surface's place in [`SectionMesh::into_surfaces`](super::section::SectionMesh::into_surfaces).
+    pub fn index(self) -> usize {
+        match self {
+            TerrainSurface::Band(band) => band.index(),
+            TerrainSurface::Border(index) => 5 + index,
+        }
+    }
+}
+
 /// The project's band textures, made once.
 fn project_textures() -> &'static [Arc<Texture>; 5] {
     static TEXTURES: OnceLock<[Arc<Texture>; 5]> = OnceLock::new();
@@ -169,11 +179,22 @@ fn project_textures() -> &'static [Arc<Texture>; 5] {
 }
 
 /// The material of `band`: the scene's texture for it, or the project's.
-fn band_material(def: &TerrainDef, band: Band) -> Material {
-    match def.bands.textures.all()[band.index()] {
+fn band_material(bands: &BandsDef, band: Band) -> Material {
+    match bands.textures.all()[band.index()] {
         Some(texture) => material(Vec3::ONE, Some(texture)),
         None => Material { texture: Some(project_textures()[band.index()].clone()), ..Material::colored(Vec3::ONE) },
     }
+}
+
+/// Each surface a terrain of `bands` is drawn in, with its material: the five bands, and with
+/// blending the borders, each band's texture fading into the next one's.
+pub(crate) fn surface_materials(bands: &BandsDef) -> Vec<(TerrainSurface, Material)> {
+    let plain = Band::ALL.map(|band| (TerrainSurface::Band(band), band_material(bands, band)));
+    let borders = BORDERS.into_iter().enumerate().filter(|_| bands.blend.is_some()).map(|(index, (lower, upper))| {
+        let material = Material { blend: band_material(bands, upper).texture, ..band_material(bands, lower) };
+        (TerrainSurface::Border(index), material)
+    });
+    plain.into_iter().chain(borders).collect()
 }
 
 /// The first Perlin layer of a recipe, whose parameters the panel and timelines edit.
@@ -223,15 +244,8 @@ pub(super) fn spawn_terrain(entity: &mut EntityWorldMut, def: &TerrainDef, built
         message: None,
     };
     entity.insert((params.transform(Vec3::ZERO), params, body)).with_children(|children| {
-        for band in Band::ALL {
-            let material = band_material(def, band);
-            children.spawn((TerrainSurface::Band(band), RasterMesh { mesh: Arc::default(), material }));
-        }
-        if def.bands.blend.is_some() {
-            for (index, (lower, upper)) in BORDERS.into_iter().enumerate() {
-                let material = Material { blend: band_material(def, upper).texture, ..band_material(def, lower) };
-                children.spawn((TerrainSurface::Border(index), RasterMesh { mesh: Arc::default(), material }));
-            }
+        for (surface, material) in surface_materials(&def.bands) {
+            children.spawn((surface, RasterMesh { mesh: Arc::default(), material }));
         }
     });
 }
@@ -470,15 +484,12 @@ fn write_back_terrain(
         if body.shown != Some((section, height_m)) {
             let started = Instant::now();
             let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
-            let SectionMesh { bands, borders, counts, barycentre } =
-                mesh_section(&body.map, section, geometry, &body.rule);
-            let (mut bands, mut borders) = (bands.map(Some), borders.map(Some));
+            let mesh = mesh_section(&body.map, section, geometry, &body.rule);
+            let (counts, barycentre) = (mesh.counts, mesh.barycentre);
+            let mut meshes = mesh.into_surfaces();
             for child in children.iter() {
                 if let Ok((surface, mut raster)) = surfaces.get_mut(child) {
-                    let mesh = match *surface {
-                        TerrainSurface::Band(band) => bands[band.index()].take(),
-                        TerrainSurface::Border(index) => borders.get_mut(index).and_then(Option::take),
-                    };
+                    let mesh = meshes.get_mut(surface.index()).map(std::mem::take);
                     raster.mesh = Arc::new(mesh.unwrap_or_default());
                 }
             }

@@ -105,6 +105,14 @@ pub struct SectionMesh {
     pub barycentre: Vec3,
 }
 
+impl SectionMesh {
+    /// The meshes of every surface: the five bands in [`Band::ALL`] order, then the borders
+    /// in [`BORDERS`] order.
+    pub fn into_surfaces(self) -> Vec<MeshData> {
+        self.bands.into_iter().chain(self.borders).collect()
+    }
+}
+
 /// The two triangles of cell `(x, z)` as corner offsets, counter-clockwise seen from above:
 /// `a c d` and `a d b` with `a = (x, z)`, `b = (x + 1, z)`, `c = (x, z + 1)`, `d = (x + 1, z + 1)`.
 const CELL_TRIANGLES: [[(u32, u32); 3]; 2] = [[(0, 0), (0, 1), (1, 1)], [(0, 0), (1, 1), (1, 0)]];

@@ -11,3 +11,4 @@ mod sloth;
 mod terrain;
 mod tree;
 mod view;
+mod world;

@@ -105,6 +105,9 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("terrain_bad_thresholds.yaml", Some(7), &["entities[0].terrain.bands", "four rising heights"]),
     ("terrain_image_clamp.yaml", Some(5), &["entities[0].terrain.height.apply", "clamp", "found [1, 0]"]),
     ("terrain_bad_blend.yaml", Some(8), &["entities[0].terrain.bands", "blend.height", "found 0"]),
+    ("world_hills.yaml", Some(6), &["entities[0].world.layers[1]", "the hill algorithm needs a whole map"]),
+    ("world_radii.yaml", Some(6), &["entities[0].world.unload_radius_m", "greater than the load radius (200)"]),
+    ("world_cells.yaml", Some(5), &["entities[0].world.chunk_cells", "one of [16, 32, 64, 128]", "found 20"]),
 ];
 
 #[test]

@@ -126,7 +126,8 @@ pub(crate) fn draw_band(context: &TileContext, row: u32, band: Band, scratch: &m
         }
     }
     if let Some(fog) = context.frame.settings.fog {
-        fog_band(&mut target, fog, &context.frame.camera);
+        let [r, g, b, _] = context.frame.background;
+        fog_band(&mut target, fog, fog.color.unwrap_or([r, g, b]), &context.frame.camera);
     }
     for tile in &scratch.tiles {
         counts.fragments += tile.fragments;
@@ -544,15 +545,15 @@ fn colors_of(words: u32x4) -> [[u8; 4]; LANES] {
     bytemuck::cast(words.to_array().map(u32::to_le))
 }
 
-/// Fades the drawn pixels of a band into the fog's colour by their distance in front of
-/// `camera`, four pixels at a time; pixels no triangle covers keep the background.
+/// Fades the drawn pixels of a band into `color` by their distance in front of `camera` as
+/// `fog` says, four pixels at a time; pixels no triangle covers keep the background.
 ///
 /// A pixel's normalised depth `d` (0 at the near plane, 1 at the far) is a distance `D` along
 /// the view direction of `D = near far / (far - d (far - near))`.
-fn fog_band(band: &mut Band, fog: Fog, camera: &Camera) {
+fn fog_band(band: &mut Band, fog: Fog, color: [u8; 3], camera: &Camera) {
     let (near, far) = (camera.near, camera.far);
     let span = (fog.end_m - fog.start_m).max(1e-6);
-    let colour = fog.color.map(|c| Vec4::splat(f32::from(c)));
+    let colour = color.map(|c| Vec4::splat(f32::from(c)));
     for (depths, colors) in band.depth.chunks_exact(LANES).zip(band.color.chunks_exact_mut(LANES)) {
         let depth = Vec4::from_slice(depths);
         let drawn = depth.cmplt(Vec4::splat(FAR_DEPTH));
@@ -571,11 +572,11 @@ fn fog_band(band: &mut Band, fog: Fog, camera: &Camera) {
         *run = colors_of(faded[0] | faded[1] | faded[2] | (words & u32x4::splat(0xff00_0000)));
     }
     let rest = band.depth.len() / LANES * LANES;
-    for (depth, color) in band.depth[rest..].iter().zip(&mut band.color[rest..]) {
+    for (depth, pixel) in band.depth[rest..].iter().zip(&mut band.color[rest..]) {
         if *depth < FAR_DEPTH {
             let distance = near * far / (far - depth * (far - near));
             let amount = ((distance - fog.start_m) / span).clamp(0.0, 1.0);
-            for (channel, target) in color.iter_mut().zip(fog.color) {
+            for (channel, target) in pixel.iter_mut().zip(color) {
                 *channel = (f32::from(*channel) + (f32::from(target) - f32::from(*channel)) * amount).round() as u8;
             }
         }

@@ -47,9 +47,9 @@ impl Default for RenderSettings {
 /// along the view direction (its depth in front of the camera), all of it beyond.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fog {
-    /// RGB8: the colour far pixels take, usually the background's, so that the end of the
-    /// world fades into the sky instead of ending in a line.
-    pub color: [u8; 3],
+    /// RGB8: the colour far pixels take; `None` for the frame's background, so that the end
+    /// of the world fades into the sky instead of ending in a line.
+    pub color: Option<[u8; 3]>,
     /// Where the fog begins, metres in front of the camera.
     pub start_m: f32,
     /// Where it hides everything, metres (beyond `start_m`).

@@ -387,7 +387,8 @@ fn fog_fades_distant_pixels_into_its_colour() {
     let camera =
         Camera { eye: Vec3::new(0.0, 1.5, 90.0), target: Vec3::new(0.0, 0.0, 84.0), fov_y: 1.0, near: 0.1, far: 300.0 };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
-    let fog = Fog { color: [40, 60, 90], start_m: 10.0, end_m: 60.0 };
+    // The background's colour, as a fog without one of its own takes.
+    let fog = Fog { color: None, start_m: 10.0, end_m: 60.0 };
     let foggy = RenderSettings { fog: Some(fog), ..RenderSettings::default() };
     let (clear, _) = render(camera, full, std::slice::from_ref(&ground), RenderSettings::default());
     let (image, _) = render(camera, full, std::slice::from_ref(&ground), foggy);
@@ -409,7 +410,7 @@ fn fog_fades_distant_pixels_into_its_colour() {
         let hit = a + (b - a) * (a.y / (a.y - b.y));
         let depth = (hit - camera.eye).dot(forward);
         let amount = ((depth - 10.0) / 50.0).clamp(0.0, 1.0);
-        let expected: Vec<f32> = fog.color.iter().map(|&f| 255.0 + (f32::from(f) - 255.0) * amount).collect();
+        let expected: Vec<f32> = SKY[..3].iter().map(|&f| 255.0 + (f32::from(f) - 255.0) * amount).collect();
         let drawn = image.pixel(80, py);
         assert_eq!(clear.pixel(80, py)[..3], [255, 255, 255], "row {py} lit white without fog");
         for (channel, want) in drawn.iter().zip(&expected) {

@@ -1,0 +1,168 @@
+//! The `world:` entry of a scene file: the heights' recipe, the chunks, the streaming radii and
+//! levels, and the bands.
+
+use super::plugin::spawn_world;
+use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use crate::foundation::values::PositiveMetres;
+use crate::foundation::yaml::FileError;
+use crate::terrain::chunk::{CHUNK_CELLS, LEVELS};
+use crate::terrain::def::{BandsDef, draw_seed};
+use crate::terrain::generate::{Function, Layer, Recipe};
+use crate::terrain::stream::StreamSettings;
+use bevy::ecs::world::EntityWorldMut;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// A `world` entity in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldDef {
+    /// The seed; -1 (the default) draws one, which is printed and dumped.
+    #[serde(default = "random_seed")]
+    pub seed: i64,
+    /// The height layers: Perlin noise, combined by map algebra (heights of their position
+    /// alone: no diamond-square, hills or `normalize`).
+    pub layers: Vec<Layer>,
+    /// Functions applied to the combined heights, in order.
+    #[serde(default, with = "serde_yaml::with::singleton_map_recursive", skip_serializing_if = "Vec::is_empty")]
+    pub apply: Vec<Function>,
+    /// Cells a side of a chunk: 16, 32 (the default), 64 or 128.
+    #[serde(default = "default_cells")]
+    pub chunk_cells: u32,
+    /// Metres between neighbouring samples; 1 by default.
+    #[serde(default = "one_metre")]
+    pub cell_m: PositiveMetres,
+    /// Metres of height for a height of 1; 40 by default.
+    #[serde(default = "default_height")]
+    pub height_m: PositiveMetres,
+    /// Chunks whose centre is nearer the camera than this are made; 160 m by default.
+    #[serde(default = "default_load")]
+    pub load_radius_m: PositiveMetres,
+    /// Chunks farther than this are let go; more than the load radius, 200 m by default.
+    #[serde(default = "default_unload")]
+    pub unload_radius_m: PositiveMetres,
+    /// From these distances on (rising) chunks take levels of detail 1, 2 and 3.
+    #[serde(default = "default_levels")]
+    pub level_distances_m: [f32; LEVELS as usize - 1],
+    /// Finished chunks spawned a frame at most; 4 by default.
+    #[serde(default = "default_budget")]
+    pub spawn_budget: u32,
+    /// How deep the skirts along the chunks' edges hang, metres; 2 by default.
+    #[serde(default = "default_skirt")]
+    pub skirt_m: PositiveMetres,
+    /// Height bands and their textures, as for `terrain`.
+    #[serde(default)]
+    pub bands: BandsDef,
+}
+
+fn random_seed() -> i64 {
+    -1
+}
+fn default_cells() -> u32 {
+    32
+}
+fn one_metre() -> PositiveMetres {
+    PositiveMetres(1.0)
+}
+fn default_height() -> PositiveMetres {
+    PositiveMetres(40.0)
+}
+fn default_load() -> PositiveMetres {
+    PositiveMetres(160.0)
+}
+fn default_unload() -> PositiveMetres {
+    PositiveMetres(200.0)
+}
+fn default_levels() -> [f32; LEVELS as usize - 1] {
+    [48.0, 96.0, 144.0]
+}
+fn default_budget() -> u32 {
+    4
+}
+fn default_skirt() -> PositiveMetres {
+    PositiveMetres(2.0)
+}
+
+impl WorldDef {
+    /// The heights' recipe (its size unused: a world has none).
+    pub fn recipe(&self) -> Recipe {
+        Recipe { size: [1, 1], seed: self.seed, layers: self.layers.clone(), apply: self.apply.clone() }
+    }
+
+    /// The streaming settings.
+    pub fn stream(&self) -> StreamSettings {
+        StreamSettings {
+            chunk_m: self.chunk_cells as f32 * self.cell_m.0,
+            load_radius_m: self.load_radius_m.0,
+            unload_radius_m: self.unload_radius_m.0,
+            level_distances_m: self.level_distances_m,
+        }
+    }
+}
+
+/// What a world's build made: its checked recipe, the seed used and the streaming settings.
+#[derive(Debug, Clone)]
+pub struct WorldBuilt {
+    /// The heights' recipe.
+    pub recipe: Arc<Recipe>,
+    /// The seed (drawn when the file says -1).
+    pub seed: u64,
+    /// Where chunks are wanted.
+    pub stream: StreamSettings,
+}
+
+/// The `world` kind.
+#[derive(Debug, Default)]
+pub struct WorldKind;
+
+fn error_at(cx: &EntityContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
+    cx.locate_within(key, nth, format!("{}: {message}", cx.field(field)))
+}
+
+impl EntityKind for WorldKind {
+    const KEY: &'static str = "world";
+    type Def = WorldDef;
+    type Built = WorldBuilt;
+    type Plugin = super::plugin::WorldPlugin;
+
+    fn references(def: &WorldDef) -> Vec<String> {
+        def.bands.references()
+    }
+
+    fn resolve(def: &mut WorldDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        def.bands.resolve(file, cx)
+    }
+
+    fn build(def: &WorldDef, cx: &BuildContext) -> Result<WorldBuilt, FileError> {
+        let recipe = def.recipe();
+        let located = |error: crate::terrain::generate::RecipeError| {
+            error_at(&cx.entity, error.key, error.nth, &error.field, &error.message)
+        };
+        recipe.check().map_err(located)?;
+        recipe.check_unbounded().map_err(located)?;
+        if !CHUNK_CELLS.contains(&def.chunk_cells) {
+            let message = format!("expected one of {CHUNK_CELLS:?} cells, found {}", def.chunk_cells);
+            return Err(error_at(&cx.entity, "chunk_cells", 0, "chunk_cells", message));
+        }
+        let stream = def.stream();
+        stream.check().map_err(|message| {
+            let key = message.split(':').next().unwrap_or("load_radius_m");
+            let key = if key == "chunk" { "chunk_cells" } else { key };
+            error_at(&cx.entity, key, 0, key, message.split_once(": ").map_or(message.as_str(), |m| m.1))
+        })?;
+        if !(1..=64).contains(&def.spawn_budget) {
+            let message = format!("expected 1 to 64 chunks a frame, found {}", def.spawn_budget);
+            return Err(error_at(&cx.entity, "spawn_budget", 0, "spawn_budget", message));
+        }
+        def.bands.rule().check().map_err(|message| error_at(&cx.entity, "bands", 0, "bands", message))?;
+        let seed = recipe.seed_used(draw_seed);
+        if recipe.seed == -1 {
+            println!("{}: seed -1 drew seed {seed}", cx.entity.field("seed"));
+        }
+        Ok(WorldBuilt { recipe: Arc::new(recipe), seed, stream })
+    }
+
+    fn spawn(def: &WorldDef, built: &WorldBuilt, entity: &mut EntityWorldMut) {
+        spawn_world(entity, def, built);
+    }
+}

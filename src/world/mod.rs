@@ -1,0 +1,15 @@
+//! The `world` entity kind: an unbounded terrain streamed in chunks around the camera.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`def`] | the `world:` entry of a scene file and [`WorldKind`] |
+//! | [`plugin`] | [`WorldPlugin`] and its set [`WorldSystems`]: the streaming plan, chunks made off the main thread and spawned within a budget, the dump |
+//!
+//! The heights, chunks, levels of detail and the plan are the terrain kind's pure cores
+//! ([`crate::terrain::chunk`], [`crate::terrain::stream`]).
+
+pub mod def;
+pub mod plugin;
+
+pub use def::{WorldDef, WorldKind};
+pub use plugin::{WorldBody, WorldChunk, WorldPlugin, WorldSystems};

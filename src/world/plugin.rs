@@ -1,0 +1,209 @@
+//! [`WorldPlugin`]: each frame the streaming plan around the camera, chunks made on the async
+//! compute pool, finished chunks spawned within the per-frame budget, far chunks despawned,
+//! and the dump of the resident chunks.
+//!
+//! A chunk asked for is taken [`CHUNK_FRAMES`] frames later (waiting for it then if it is
+//! late), so that headless runs with the same camera path have the same chunks at the same
+//! frames.
+
+use super::def::{WorldBuilt, WorldDef};
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::schedule::ControlSystems;
+use crate::raster::{Material, MeshData, RasterMesh};
+use crate::terrain::bands::BandRule;
+use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS};
+use crate::terrain::generate::Recipe;
+use crate::terrain::plugin::{TerrainSurface, surface_materials};
+use crate::terrain::section::Geometry;
+use crate::terrain::stream::{StreamSettings, plan};
+use crate::view::CameraParams;
+use bevy::ecs::world::EntityWorldMut;
+use bevy::prelude::*;
+use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
+use serde_json::{Map, Value, json};
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Frames between asking for a chunk and spawning it.
+pub const CHUNK_FRAMES: u32 = 2;
+
+/// Chunks being made at once at most, per world: a few frames' budget.
+const IN_FLIGHT_FRAMES: usize = 4;
+
+/// The systems of the world kind.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct WorldSystems;
+
+/// Streams `world` entities.
+#[derive(Default)]
+pub struct WorldPlugin;
+
+impl Plugin for WorldPlugin {
+    fn build(&self, app: &mut App) {
+        app.register_dump::<WorldBody>().add_systems(
+            Update,
+            (stream_chunks, spawn_finished).chain().after(ControlSystems::Input).in_set(WorldSystems),
+        );
+    }
+}
+
+/// A resident chunk: a child of its world, itself the parent of one mesh per surface.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WorldChunk {
+    /// Which chunk.
+    pub key: ChunkKey,
+    /// Its level of detail.
+    pub level: u8,
+    /// The checksum of its heights.
+    pub checksum: u64,
+}
+
+/// A chunk being made.
+#[derive(Debug)]
+struct PendingChunk {
+    key: ChunkKey,
+    level: u8,
+    task: Task<(ChunkHeights, Vec<MeshData>, Vec3, Duration)>,
+    frames_left: u32,
+}
+
+/// The live world: what it is made of and which chunks it has.
+#[derive(Component, Debug)]
+pub struct WorldBody {
+    recipe: Arc<Recipe>,
+    /// The seed the heights are made with.
+    pub seed: u64,
+    stream: StreamSettings,
+    geometry: Geometry,
+    rule: BandRule,
+    skirt_m: f32,
+    cells: u32,
+    budget: usize,
+    /// The surfaces a chunk is drawn in, with their materials.
+    surfaces: Vec<(TerrainSurface, Material)>,
+    /// Resident chunks: their level, entity and checksum.
+    resident: HashMap<ChunkKey, (u8, Entity, u64)>,
+    /// Chunks being made, in the order they were asked for.
+    pending: Vec<PendingChunk>,
+    /// Chunks made since the world was spawned.
+    pub made: u64,
+    /// Time spent making them (on the pool's threads).
+    pub making_time: Duration,
+}
+
+/// Spawns a world entity of `def`.
+pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &WorldBuilt) {
+    entity.insert((
+        Transform::default(),
+        WorldBody {
+            recipe: built.recipe.clone(),
+            seed: built.seed,
+            stream: built.stream,
+            geometry: Geometry {
+                cell_m: def.cell_m.0,
+                height_m: def.height_m.0,
+                texture_cells: def.bands.texture_cells.0,
+            },
+            rule: def.bands.rule(),
+            skirt_m: def.skirt_m.0,
+            cells: def.chunk_cells,
+            budget: def.spawn_budget as usize,
+            surfaces: surface_materials(&def.bands),
+            resident: HashMap::new(),
+            pending: Vec::new(),
+            made: 0,
+            making_time: Duration::ZERO,
+        },
+    ));
+}
+
+/// Lets go of the chunks beyond the unload radius and asks for those the plan wants, around
+/// the scene's camera as its parameters place it this frame.
+fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody>, mut commands: Commands) {
+    let Some(camera) = cameras.iter().next() else { return };
+    let (eye, target) = (camera.eye(), camera.target);
+    let (camera, forward) = (eye.xz(), (target - eye).xz());
+    for mut body in &mut worlds {
+        let body = &mut *body;
+        let resident: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, &(level, ..))| (key, level)).collect();
+        let pending: HashMap<ChunkKey, u8> = body.pending.iter().map(|p| (p.key, p.level)).collect();
+        let plan = plan(&body.stream, camera, forward, &resident, &pending);
+        for key in plan.unload {
+            if let Some((_, entity, _)) = body.resident.remove(&key) {
+                commands.entity(entity).despawn();
+            }
+        }
+        let stream = body.stream;
+        body.pending.retain(|p| stream.centre(p.key).distance(camera) <= stream.unload_radius_m);
+        let room = (body.budget * IN_FLIGHT_FRAMES).saturating_sub(body.pending.len());
+        for (key, level) in plan.requests.into_iter().take(room) {
+            // A chunk asked for at another level is asked for again at this one.
+            body.pending.retain(|p| p.key != key);
+            let (recipe, seed, cells) = (body.recipe.clone(), body.seed, body.cells);
+            let (geometry, rule, skirt_m) = (body.geometry, body.rule, body.skirt_m);
+            let task = AsyncComputeTaskPool::get().spawn(async move {
+                let started = Instant::now();
+                let heights = ChunkHeights::generate(&recipe, seed, key, level, cells);
+                let mesh = heights.mesh(geometry, &rule, skirt_m);
+                let barycentre = mesh.barycentre;
+                (heights, mesh.into_surfaces(), barycentre, started.elapsed())
+            });
+            body.pending.push(PendingChunk { key, level, task, frames_left: CHUNK_FRAMES });
+        }
+    }
+}
+
+/// Spawns the chunks whose time has come, in the order they were asked for, at most the
+/// budget a frame; a chunk replacing one of another level despawns it.
+fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Commands) {
+    for (world, mut body) in &mut worlds {
+        let body = &mut *body;
+        body.pending.iter_mut().for_each(|p| p.frames_left = p.frames_left.saturating_sub(1));
+        let mut spawned = 0;
+        while spawned < body.budget {
+            let Some(index) = body.pending.iter().position(|p| p.frames_left == 0) else { break };
+            let PendingChunk { key, level, task, .. } = body.pending.remove(index);
+            let (heights, mut meshes, barycentre, time) = block_on(task);
+            body.made += 1;
+            body.making_time += time;
+            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * body.cells as f32 * body.geometry.cell_m;
+            let chunk = WorldChunk { key, level, checksum: heights.checksum() };
+            let entity = commands
+                .spawn((chunk, Transform::from_translation(origin + barycentre), ChildOf(world)))
+                .with_children(|parts| {
+                    for (surface, material) in &body.surfaces {
+                        let mesh = meshes.get_mut(surface.index()).map(std::mem::take).unwrap_or_default();
+                        if !mesh.triangles.is_empty() {
+                            parts.spawn((*surface, RasterMesh { mesh: Arc::new(mesh), material: material.clone() }));
+                        }
+                    }
+                })
+                .id();
+            if let Some((_, old, _)) = body.resident.insert(key, (level, entity, chunk.checksum)) {
+                commands.entity(old).despawn();
+            }
+            spawned += 1;
+        }
+    }
+}
+
+impl DumpState for WorldBody {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("seed".into(), json!(self.seed));
+        let mut per_level = [0usize; LEVELS as usize];
+        let mut chunks: Vec<(ChunkKey, u8, u64)> =
+            self.resident.iter().map(|(&key, &(level, _, checksum))| (key, level, checksum)).collect();
+        chunks.sort();
+        chunks.iter().for_each(|&(_, level, _)| per_level[level as usize] += 1);
+        out.insert("resident".into(), json!(chunks.len()));
+        out.insert("resident_per_level".into(), json!(per_level));
+        out.insert("pending".into(), json!(self.pending.len()));
+        out.insert("made".into(), json!(self.made));
+        let keys: Vec<Value> = chunks
+            .iter()
+            .map(|(key, level, checksum)| json!([key.x, key.z, level, format!("{checksum:016x}")]))
+            .collect();
+        out.insert("chunks".into(), Value::Array(keys));
+    }
+}

@@ -1,0 +1,80 @@
+//! The streamed world: chunks around the camera at their levels, the same chunks for the same
+//! camera path, new chunks ahead of a moving camera and far ones let go, and the per-frame
+//! spawn budget.
+
+use super::common::*;
+use canopy::world::{WorldBody, WorldChunk};
+use serde_json::Value;
+
+/// The world scene's chunks as dumped: `(x, z, level, checksum)`.
+fn chunks(land: &Value) -> Vec<(i64, i64, u64, String)> {
+    let chunks = land["chunks"].as_array().unwrap();
+    chunks
+        .iter()
+        .map(|c| {
+            (c[0].as_i64().unwrap(), c[1].as_i64().unwrap(), c[2].as_u64().unwrap(), c[3].as_str().unwrap().into())
+        })
+        .collect()
+}
+
+/// Horizontal distance from the camera of the centre of chunk `(x, z)`, 32 m chunks.
+fn distance(camera: bevy::math::Vec3, x: i64, z: i64) -> f32 {
+    let centre = (bevy::math::Vec2::new(x as f32, z as f32) + 0.5) * 32.0;
+    centre.distance(bevy::math::Vec2::new(camera.x, camera.z))
+}
+
+#[test]
+fn chunks_come_in_around_the_camera_at_their_levels_and_the_same_every_run() {
+    let (first, second) = (run("scenes/world.yaml", 90, None, SMALL), run("scenes/world.yaml", 90, None, SMALL));
+    let land = entity(&first.dump, "land");
+    assert_eq!(land["kind"], "world");
+    let resident = chunks(land);
+    assert!(resident.len() > 50, "{} chunks", resident.len());
+    assert_eq!(chunks(entity(&second.dump, "land")), resident, "the same chunks and heights every run");
+    let camera = vec3(&entity(&first.dump, "camera")["position"]);
+    // Within the load radius (180 m), each at the level its distance asks for
+    // (levels from 50, 100 and 150 m).
+    for &(x, z, level, _) in &resident {
+        let d = distance(camera, x, z);
+        assert!(d < 180.0, "({x}, {z}) at {d} m");
+        let expected = [50.0, 100.0, 150.0].iter().filter(|&&from| d >= from).count() as u64;
+        assert_eq!(level, expected, "({x}, {z}) at {d} m");
+    }
+    let per_level: Vec<u64> =
+        land["resident_per_level"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    assert!(per_level.iter().all(|&n| n > 0), "every level in use: {per_level:?}");
+    // The world is drawn: the ground fills the bottom of the frame.
+    let background = [0xa9, 0xc8, 0xe8, 255];
+    assert_ne!(first.framebuffer.pixel(80, 115), background);
+}
+
+#[test]
+fn a_moving_camera_brings_chunks_ahead_and_lets_far_ones_go() {
+    let timeline = "- { at: 0.5, set: { camera.target.x: 600 } }";
+    let output = run("scenes/world.yaml", 240, Some(timeline), SMALL);
+    let land = entity(&output.dump, "land");
+    let camera = vec3(&entity(&output.dump, "camera")["position"]);
+    let resident = chunks(land);
+    assert!(resident.iter().all(|&(x, z, ..)| distance(camera, x, z) <= 220.0), "nothing beyond the unload radius");
+    assert!(resident.iter().all(|&(x, ..)| x > 5), "the chunks around the start are gone");
+    assert!(resident.iter().any(|&(x, z, level, _)| level == 0 && distance(camera, x, z) < 50.0), "near chunks made");
+    assert!(land["made"].as_u64().unwrap() > resident.len() as u64);
+}
+
+#[test]
+fn no_frame_spawns_more_chunks_than_the_budget() {
+    let mut app = small_app(&path("scenes/world.yaml"));
+    let made =
+        |app: &mut bevy::app::App| app.world_mut().query::<&WorldBody>().iter(app.world()).map(|b| b.made).sum::<u64>();
+    let mut before = made(&mut app);
+    let mut most = 0;
+    for _ in 0..60 {
+        app.update();
+        let after = made(&mut app);
+        most = most.max(after - before);
+        before = after;
+    }
+    assert_eq!(most, 4, "the budget of scenes/world.yaml, reached and never passed");
+    let chunks = app.world_mut().query::<&WorldChunk>().iter(app.world()).count();
+    assert!(chunks > 50, "{chunks}");
+}
