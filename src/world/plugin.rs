@@ -7,6 +7,8 @@
 //! frames.
 
 use super::def::{WorldBuilt, WorldDef};
+use super::panel;
+use crate::foundation::panel::RegisterPanel;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::ControlSystems;
 use crate::raster::{Material, MeshData, RasterMesh};
@@ -21,7 +23,7 @@ use bevy::ecs::world::EntityWorldMut;
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
 use serde_json::{Map, Value, json};
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -41,7 +43,8 @@ pub struct WorldPlugin;
 
 impl Plugin for WorldPlugin {
     fn build(&self, app: &mut App) {
-        app.register_dump::<WorldBody>().add_systems(
+        app.register_dump::<WorldBody>()
+            .register_panel_section("world", panel::world_section).add_systems(
             Update,
             (stream_chunks, spawn_finished).chain().after(ControlSystems::Input).in_set(WorldSystems),
         );
@@ -90,6 +93,32 @@ pub struct WorldBody {
     pub made: u64,
     /// Time spent making them (on the pool's threads).
     pub making_time: Duration,
+    /// When the chunks of the last second were spawned (wall clock, for the panel's rate).
+    recent: VecDeque<Instant>,
+}
+
+impl WorldBody {
+    /// Resident chunks at each level of detail.
+    pub fn per_level(&self) -> [usize; LEVELS as usize] {
+        let mut counts = [0; LEVELS as usize];
+        self.resident.values().for_each(|&(level, ..)| counts[level as usize] += 1);
+        counts
+    }
+
+    /// Chunks being made.
+    pub fn pending(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// Chunks spawned in the last second of wall-clock time.
+    pub fn per_second(&self) -> usize {
+        self.recent.len()
+    }
+
+    /// The mean time making a chunk took on the pool's threads.
+    pub fn mean_making_time(&self) -> Duration {
+        self.making_time.checked_div(self.made.max(1) as u32).unwrap_or_default()
+    }
 }
 
 /// Spawns a world entity of `def`.
@@ -114,6 +143,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
             pending: Vec::new(),
             made: 0,
             making_time: Duration::ZERO,
+            recent: VecDeque::new(),
         },
     ));
 }
@@ -160,6 +190,10 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
     for (world, mut body) in &mut worlds {
         let body = &mut *body;
         body.pending.iter_mut().for_each(|p| p.frames_left = p.frames_left.saturating_sub(1));
+        let now = Instant::now();
+        while body.recent.front().is_some_and(|&at| now.duration_since(at) > Duration::from_secs(1)) {
+            body.recent.pop_front();
+        }
         let mut spawned = 0;
         while spawned < body.budget {
             let Some(index) = body.pending.iter().position(|p| p.frames_left == 0) else { break };
@@ -167,6 +201,7 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
             let (heights, mut meshes, barycentre, time) = block_on(task);
             body.made += 1;
             body.making_time += time;
+            body.recent.push_back(now);
             let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * body.cells as f32 * body.geometry.cell_m;
             let chunk = WorldChunk { key, level, checksum: heights.checksum() };
             let entity = commands
@@ -191,13 +226,11 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
 impl DumpState for WorldBody {
     fn dump(&self, out: &mut Map<String, Value>) {
         out.insert("seed".into(), json!(self.seed));
-        let mut per_level = [0usize; LEVELS as usize];
         let mut chunks: Vec<(ChunkKey, u8, u64)> =
             self.resident.iter().map(|(&key, &(level, _, checksum))| (key, level, checksum)).collect();
         chunks.sort();
-        chunks.iter().for_each(|&(_, level, _)| per_level[level as usize] += 1);
         out.insert("resident".into(), json!(chunks.len()));
-        out.insert("resident_per_level".into(), json!(per_level));
+        out.insert("resident_per_level".into(), json!(self.per_level()));
         out.insert("pending".into(), json!(self.pending.len()));
         out.insert("made".into(), json!(self.made));
         let keys: Vec<Value> = chunks
