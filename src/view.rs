@@ -5,7 +5,10 @@
 //! nearer or farther. The light is set by azimuth (degrees about +y, 0 = from +z, 90 = from +x)
 //! and elevation (degrees above the horizon); I/K and J/L turn it.
 //!
-//! Parameters: `camera.{target.x|y|z, yaw_deg, pitch_deg, distance, fov_deg}` and
+//! With Shift, the arrows fly the camera instead (eye and target together) at
+//! `camera.fly_speed_m_s`.
+//!
+//! Parameters: `camera.{target.x|y|z, yaw_deg, pitch_deg, distance, fov_deg, fly_speed_m_s}` and
 //! `light.{azimuth_deg, elevation_deg, diffuse, ambient}`.
 
 use crate::foundation::dump::{DumpState, RegisterDump};
@@ -30,10 +33,10 @@ const MAX_PITCH_DEG: f32 = 89.0;
 
 /// Camera keys: (key, action, yaw sign, pitch sign, zoom sign).
 const CAMERA_KEYS: [(KeyCode, &str, f32, f32, f32); 6] = [
-    (KeyCode::ArrowLeft, "orbit the camera left", -1.0, 0.0, 0.0),
-    (KeyCode::ArrowRight, "orbit the camera right", 1.0, 0.0, 0.0),
-    (KeyCode::ArrowUp, "orbit the camera up", 0.0, 1.0, 0.0),
-    (KeyCode::ArrowDown, "orbit the camera down", 0.0, -1.0, 0.0),
+    (KeyCode::ArrowLeft, "orbit the camera left (Shift: fly left)", -1.0, 0.0, 0.0),
+    (KeyCode::ArrowRight, "orbit the camera right (Shift: fly right)", 1.0, 0.0, 0.0),
+    (KeyCode::ArrowUp, "orbit the camera up (Shift: fly forward)", 0.0, 1.0, 0.0),
+    (KeyCode::ArrowDown, "orbit the camera down (Shift: fly back)", 0.0, -1.0, 0.0),
     (KeyCode::PageUp, "move the camera nearer", 0.0, 0.0, -1.0),
     (KeyCode::PageDown, "move the camera farther", 0.0, 0.0, 1.0),
 ];
@@ -64,6 +67,9 @@ pub struct CameraParams {
     pub near: f32,
     /// Far clipping distance, metres.
     pub far: f32,
+    /// How fast Shift and the arrows fly the camera (eye and target together, level with the
+    /// ground), metres per second.
+    pub fly_speed_m_s: f32,
 }
 
 impl From<&CameraDef> for CameraParams {
@@ -78,6 +84,7 @@ impl From<&CameraDef> for CameraParams {
             fov_deg: def.fov_deg.0,
             near: def.near.0,
             far: def.far.0,
+            fly_speed_m_s: def.fly_speed_m_s.0,
         }
     }
 }
@@ -201,8 +208,12 @@ fn params_of_light_section(add: On<Add, LightDef>, sections: Query<&LightDef>, m
     }
 }
 
+/// Orbits the camera with the arrows and PageUp/PageDown; with Shift, the arrows fly it
+/// instead: eye and target move together, forward and back along the horizontal direction of
+/// view and sideways across it.
 fn orbit_camera(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut cameras: Query<&mut CameraParams>) {
     let dt = time.delta_secs();
+    let flying = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
     let (mut yaw, mut pitch, mut zoom) = (0.0, 0.0, 0.0);
     for (key, _, dy, dp, dz) in CAMERA_KEYS {
         if keys.pressed(key) {
@@ -213,6 +224,15 @@ fn orbit_camera(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut cameras: Q
         return;
     }
     for mut camera in &mut cameras {
+        if flying {
+            // Towards the target from the eye, level, and to its right.
+            let towards = -unit_from_angles(camera.yaw_deg, 0.0);
+            let right = towards.cross(Vec3::Y);
+            let step = camera.fly_speed_m_s * dt;
+            camera.target += (towards * pitch + right * yaw) * step;
+            camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
+            continue;
+        }
         camera.yaw_deg = wrap_degrees(camera.yaw_deg + yaw * ORBIT_DEG_PER_S * dt);
         camera.pitch_deg = (camera.pitch_deg + pitch * ORBIT_DEG_PER_S * dt).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
         camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
@@ -264,6 +284,7 @@ mod tests {
             fov_deg: FieldOfView(50.0),
             near: PositiveMetres(0.1),
             far: PositiveMetres(100.0),
+            fly_speed_m_s: PositiveMetres(10.0),
         };
         let camera = CameraParams::from(&def).camera();
         assert!((camera.eye - def.position.0).length() < 1e-5, "{}", camera.eye);

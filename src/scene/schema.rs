@@ -54,6 +54,8 @@ pub struct CameraDef {
     pub near: PositiveMetres,
     /// Far clipping distance in metres, beyond `near`.
     pub far: PositiveMetres,
+    /// How fast Shift and the arrows fly the camera, metres per second.
+    pub fly_speed_m_s: PositiveMetres,
 }
 
 impl Default for CameraDef {
@@ -64,6 +66,7 @@ impl Default for CameraDef {
             fov_deg: FieldOfView(60.0),
             near: PositiveMetres(0.1),
             far: PositiveMetres(1000.0),
+            fly_speed_m_s: PositiveMetres(10.0),
         }
     }
 }

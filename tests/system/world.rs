@@ -78,3 +78,22 @@ fn no_frame_spawns_more_chunks_than_the_budget() {
     let chunks = app.world_mut().query::<&WorldChunk>().iter(app.world()).count();
     assert!(chunks > 50, "{chunks}");
 }
+
+#[test]
+fn shift_and_the_arrows_fly_the_camera_level_at_its_speed() {
+    let timeline = "
+- { at: 0.0, press: [ShiftLeft, ArrowUp] }
+- { at: 1.0, release: [ArrowUp] }
+- { at: 1.0, press: [ArrowRight] }
+- { at: 1.5, release: [ShiftLeft, ArrowRight] }
+";
+    let start = run("scenes/world.yaml", 1, None, SMALL);
+    let flown = run("scenes/world.yaml", 120, Some(timeline), SMALL);
+    let (camera, before) = (entity(&flown.dump, "camera"), entity(&start.dump, "camera"));
+    let moved = vec3(&camera["target"]) - vec3(&before["target"]);
+    // Looking towards -z from +z: 30 m forward (-z) in one second, then 15 m to the right (+x).
+    assert!((moved.z + 30.0).abs() < 1.0 && (moved.x - 15.0).abs() < 1.0 && moved.y == 0.0, "{moved}");
+    // The eye went along: the view itself did not turn.
+    let eye_moved = vec3(&camera["position"]) - vec3(&before["position"]);
+    assert!((eye_moved - moved).length() < 1e-3, "{eye_moved} vs {moved}");
+}
