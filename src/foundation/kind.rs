@@ -180,6 +180,12 @@ impl EntityContext<'_> {
         locate_key_after(self.path, self.text, (self.key, self.kind_index), key, nth, message)
     }
 
+    /// An error about `field` (a path below the entity's kind key) found at the `nth`
+    /// occurrence of `key` within this entity's entry: `<field path>: <message>` at its line.
+    pub fn field_error(&self, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
+        self.locate_within(key, nth, format!("{}: {message}", self.field(field)))
+    }
+
     /// An error about the scene file as a whole.
     pub fn whole_file(&self, message: String) -> FileError {
         FileError::whole_file(self.path, message)

@@ -255,11 +255,6 @@ pub fn draw_seed() -> u64 {
 /// The `terrain` kind.
 pub struct TerrainKind;
 
-/// An error at `key`, the `nth` occurrence of it inside the entity's entry, about `field`.
-fn error_at(cx: &EntityContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
-    cx.locate_within(key, nth, format!("{}: {message}", cx.field(field)))
-}
-
 impl EntityKind for TerrainKind {
     const KEY: &'static str = "terrain";
     type Def = TerrainDef;
@@ -269,11 +264,13 @@ impl EntityKind for TerrainKind {
     fn validate(def: &TerrainDef, cx: &EntityContext) -> Result<(), FileError> {
         let height = &def.height;
         match (&height.image, height.size.is_some() || !height.layers.is_empty()) {
-            (Some(_), true) => {
-                Err(error_at(cx, "image", 0, "height", "heights come from an image or from size and layers, not both"))
-            }
-            (None, false) => Err(error_at(
-                cx,
+            (Some(_), true) => Err(cx.field_error(
+                "image",
+                0,
+                "height",
+                "heights come from an image or from size and layers, not both",
+            )),
+            (None, false) => Err(cx.field_error(
                 "height",
                 0,
                 "height",
@@ -291,7 +288,7 @@ impl EntityKind for TerrainKind {
     fn resolve(def: &mut TerrainDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
         if def.height.image.as_ref().is_some_and(|image| image.path == file.file) {
             let map = file.decoded(|_, bytes| image_io::decode(bytes).map_err(|error| error.to_string())).map_err(
-                |error| error_at(cx, "image", 0, "height.image", format!("{}: {error}", file.path.display())),
+                |error| cx.field_error("image", 0, "height.image", format!("{}: {error}", file.path.display())),
             )?;
             def.height.decoded = Some(map);
         }
@@ -303,11 +300,11 @@ impl EntityKind for TerrainKind {
         let (map, seed) = match &height.image {
             Some(_) => {
                 let Some(map) = &height.decoded else {
-                    return Err(error_at(&cx.entity, "image", 0, "height.image", "the image was not read"));
+                    return Err(cx.entity.field_error("image", 0, "height.image", "the image was not read"));
                 };
                 let mut map = (**map).clone();
                 for function in &height.apply {
-                    function.check().map_err(|message| error_at(&cx.entity, "apply", 0, "height.apply", message))?;
+                    function.check().map_err(|message| cx.entity.field_error("apply", 0, "height.apply", message))?;
                     function.apply(&mut map);
                 }
                 (map, None)
@@ -316,19 +313,18 @@ impl EntityKind for TerrainKind {
                 let recipe = height.recipe();
                 recipe.check().map_err(|error| {
                     let key = if error.key == "size" && height.size.is_none() { "height" } else { error.key };
-                    error_at(&cx.entity, key, error.nth, &format!("height.{}", error.field), &error.message)
+                    cx.entity.field_error(key, error.nth, &format!("height.{}", error.field), &error.message)
                 })?;
                 let seed = recipe.seed_used(draw_seed);
                 if recipe.seed == -1 {
                     println!("{}: seed -1 drew seed {seed}", cx.entity.field("height.seed"));
                 }
-                let map = recipe.generate(seed).map_err(|error| error_at(&cx.entity, "height", 0, "height", error))?;
+                let map = recipe.generate(seed).map_err(|error| cx.entity.field_error("height", 0, "height", error))?;
                 (map, Some(seed))
             }
         };
         if map.values().iter().any(|h| !h.is_finite()) {
-            return Err(error_at(
-                &cx.entity,
+            return Err(cx.entity.field_error(
                 "height",
                 0,
                 "height",
@@ -338,7 +334,7 @@ impl EntityKind for TerrainKind {
         let section = Section { origin: def.section.origin, size: def.section.size };
         // The default size fits small maps; a size the file asks for must fit.
         let section = if def.section.size == default_section_size() { section.clamped(&map) } else { section };
-        section.check(&map).map_err(|error| error_at(&cx.entity, "section", 0, "section.size", error))?;
+        section.check(&map).map_err(|error| cx.entity.field_error("section", 0, "section.size", error))?;
         let [x, z] = section.origin;
         if x + section.size[0] > map.width() || z + section.size[1] > map.height() {
             let message = format!(
@@ -348,9 +344,9 @@ impl EntityKind for TerrainKind {
                 map.width(),
                 map.height()
             );
-            return Err(error_at(&cx.entity, "section", 0, "section.origin", message));
+            return Err(cx.entity.field_error("section", 0, "section.origin", message));
         }
-        def.bands.rule().check().map_err(|message| error_at(&cx.entity, "bands", 0, "bands", message))?;
+        def.bands.rule().check().map_err(|message| cx.entity.field_error("bands", 0, "bands", message))?;
         Ok(TerrainBuilt { map: Arc::new(map), seed })
     }
 

@@ -115,10 +115,6 @@ pub struct WorldBuilt {
 #[derive(Debug, Default)]
 pub struct WorldKind;
 
-fn error_at(cx: &EntityContext, key: &str, nth: usize, field: &str, message: impl std::fmt::Display) -> FileError {
-    cx.locate_within(key, nth, format!("{}: {message}", cx.field(field)))
-}
-
 impl EntityKind for WorldKind {
     const KEY: &'static str = "world";
     type Def = WorldDef;
@@ -136,25 +132,25 @@ impl EntityKind for WorldKind {
     fn build(def: &WorldDef, cx: &BuildContext) -> Result<WorldBuilt, FileError> {
         let recipe = def.recipe();
         let located = |error: crate::terrain::generate::RecipeError| {
-            error_at(&cx.entity, error.key, error.nth, &error.field, &error.message)
+            cx.entity.field_error(error.key, error.nth, &error.field, &error.message)
         };
         recipe.check().map_err(located)?;
         recipe.check_unbounded().map_err(located)?;
         if !CHUNK_CELLS.contains(&def.chunk_cells) {
             let message = format!("expected one of {CHUNK_CELLS:?} cells, found {}", def.chunk_cells);
-            return Err(error_at(&cx.entity, "chunk_cells", 0, "chunk_cells", message));
+            return Err(cx.entity.field_error("chunk_cells", 0, "chunk_cells", message));
         }
         let stream = def.stream();
         stream.check().map_err(|message| {
             let key = message.split(':').next().unwrap_or("load_radius_m");
             let key = if key == "chunk" { "chunk_cells" } else { key };
-            error_at(&cx.entity, key, 0, key, message.split_once(": ").map_or(message.as_str(), |m| m.1))
+            cx.entity.field_error(key, 0, key, message.split_once(": ").map_or(message.as_str(), |m| m.1))
         })?;
         if !(1..=64).contains(&def.spawn_budget) {
             let message = format!("expected 1 to 64 chunks a frame, found {}", def.spawn_budget);
-            return Err(error_at(&cx.entity, "spawn_budget", 0, "spawn_budget", message));
+            return Err(cx.entity.field_error("spawn_budget", 0, "spawn_budget", message));
         }
-        def.bands.rule().check().map_err(|message| error_at(&cx.entity, "bands", 0, "bands", message))?;
+        def.bands.rule().check().map_err(|message| cx.entity.field_error("bands", 0, "bands", message))?;
         let seed = recipe.seed_used(draw_seed);
         if recipe.seed == -1 {
             println!("{}: seed -1 drew seed {seed}", cx.entity.field("seed"));
