@@ -3,7 +3,7 @@
 //!
 //! Parameters: `render.shading` (`flat`, `gouraud` or `phong`), `render.shadows` and
 //! `render.pcf` (true or false). Keys: V cycles the shading mode, H switches shadows. The
-//! scene's distance fog is a setting of the file alone.
+//! scene's distance fog and shadow distance are settings of the file alone.
 
 use super::{Fog, RenderSettings, RenderView, Shading};
 use crate::foundation::dump::{DumpState, RegisterDump};
@@ -33,11 +33,20 @@ pub struct RenderParams {
     /// The scene's distance fog, if any (a scene setting, not a parameter).
     #[reflect(ignore)]
     pub fog: Option<FogDef>,
+    /// The scene's shadow distance in metres, if any (a scene setting).
+    #[reflect(ignore)]
+    pub shadow_distance_m: Option<f32>,
 }
 
 impl From<&RenderDef> for RenderParams {
     fn from(def: &RenderDef) -> Self {
-        Self { shading: def.shading, shadows: def.shadows, pcf: def.pcf, fog: def.fog }
+        Self {
+            shading: def.shading,
+            shadows: def.shadows,
+            pcf: def.pcf,
+            fog: def.fog,
+            shadow_distance_m: def.shadow_distance_m.map(|d| d.0),
+        }
     }
 }
 
@@ -48,6 +57,7 @@ impl DumpState for RenderParams {
         out.insert("pcf".into(), json!(self.pcf));
         let fog = self.fog.map(|fog| json!({ "start_m": fog.start_m.0, "depth_m": fog.depth_m.0 }));
         out.insert("fog".into(), fog.unwrap_or(Value::Null));
+        out.insert("shadow_distance_m".into(), json!(self.shadow_distance_m));
     }
 }
 
@@ -95,8 +105,14 @@ fn write_render_settings(params: Query<&RenderParams>, mut view: ResMut<RenderVi
             start_m: fog.start_m.0,
             end_m: fog.start_m.0 + fog.depth_m.0,
         });
-        view.settings =
-            RenderSettings { shading: params.shading, shadows: params.shadows, pcf: params.pcf, fog, ..view.settings };
+        view.settings = RenderSettings {
+            shading: params.shading,
+            shadows: params.shadows,
+            pcf: params.pcf,
+            fog,
+            shadow_distance_m: params.shadow_distance_m,
+            ..view.settings
+        };
     }
 }
 
@@ -119,7 +135,7 @@ mod tests {
     #[test]
     fn the_section_defaults_to_gouraud_with_shadows() {
         let def: RenderDef = serde_yaml::from_str("pcf: false").unwrap();
-        assert_eq!(def, RenderDef { shading: Shading::Gouraud, shadows: true, pcf: false, fog: None });
+        assert_eq!(def, RenderDef { shading: Shading::Gouraud, shadows: true, pcf: false, ..RenderDef::default() });
         let error = serde_yaml::from_str::<RenderDef>("shading: toon").unwrap_err().to_string();
         assert!(error.contains("unknown variant `toon`"), "{error}");
     }

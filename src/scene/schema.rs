@@ -107,11 +107,15 @@ pub struct RenderDef {
     /// Distance fog; none by default.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fog: Option<FogDef>,
+    /// Shadows are cast within this many metres of the camera only, with the shadow map's
+    /// detail spent there; by default the map covers all the camera sees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shadow_distance_m: Option<PositiveMetres>,
 }
 
 impl Default for RenderDef {
     fn default() -> Self {
-        Self { shading: Shading::Gouraud, shadows: true, pcf: true, fog: None }
+        Self { shading: Shading::Gouraud, shadows: true, pcf: true, fog: None, shadow_distance_m: None }
     }
 }
 

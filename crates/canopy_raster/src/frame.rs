@@ -35,11 +35,21 @@ pub struct RenderSettings {
     pub shadow_map_size: u32,
     /// Distance fog: drawn pixels fade into a colour with their distance; `None` for none.
     pub fog: Option<Fog>,
+    /// Shadows are cast within this many metres of the camera, the shadow map fitted to that
+    /// part of the view; `None` fits it to all of the scene the camera sees.
+    pub shadow_distance_m: Option<f32>,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self { shading: Shading::Gouraud, shadows: false, pcf: true, shadow_map_size: 1024, fog: None }
+        Self {
+            shading: Shading::Gouraud,
+            shadows: false,
+            pcf: true,
+            shadow_map_size: 1024,
+            fog: None,
+            shadow_distance_m: None,
+        }
     }
 }
 

@@ -65,7 +65,8 @@ impl Renderer {
         };
         let aspect = width.max(1) as f32 / height.max(1) as f32;
         let light_clip = if settings.shadows && width > 0 && height > 0 {
-            scene_bounds(frame.instances).and_then(|bounds| fit_light(&frame.camera, aspect, &frame.light, bounds))
+            scene_bounds(frame.instances)
+                .and_then(|bounds| fit_light(&frame.camera, aspect, &frame.light, bounds, settings.shadow_distance_m))
         } else {
             None
         };

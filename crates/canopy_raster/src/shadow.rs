@@ -373,8 +373,16 @@ impl PixelsInMap {
 /// direction whose x/y window is the part of the scene's bounds the camera can see, and whose
 /// depth range holds the whole scene so that casters outside the view still cast.
 ///
-/// `bounds` are the scene's world bounds; `None` when nothing visible can be shadowed.
-pub fn fit_light(camera: &Camera, aspect: f32, light: &Light, bounds: (Vec3, Vec3)) -> Option<Mat4> {
+/// `bounds` are the scene's world bounds; `None` when nothing visible can be shadowed. With a
+/// `shadow_distance`, only the part of the view nearer than that many metres is fitted (the map
+/// keeps its detail for a large world; what lies beyond the map is lit).
+pub fn fit_light(
+    camera: &Camera,
+    aspect: f32,
+    light: &Light,
+    bounds: (Vec3, Vec3),
+    shadow_distance: Option<f32>,
+) -> Option<Mat4> {
     let direction = light.direction.try_normalize()?;
     // The map's rows run along the image's rows as far as the light allows: the pixels of an
     // image row then read texels of a few map rows, next to each other in memory.
@@ -394,7 +402,7 @@ pub fn fit_light(camera: &Camera, aspect: f32, light: &Light, bounds: (Vec3, Vec
     // The camera's frustum, cut at the farthest scene corner so that an unused far plane does
     // not spread the map thin.
     let farthest = scene_corners.iter().map(|c| c.distance(camera.eye)).fold(0.0, f32::max);
-    let far = farthest.clamp(camera.near * 1.001, camera.far);
+    let far = farthest.min(shadow_distance.unwrap_or(f32::INFINITY)).clamp(camera.near * 1.001, camera.far);
     let frustum_camera = Camera { far, ..*camera };
     let ndc_to_world = frustum_camera.view_projection(aspect).inverse();
     let frustum_corners =
@@ -446,7 +454,7 @@ mod tests {
     fn the_fitted_projection_holds_the_visible_scene() {
         let (camera, light) = overhead();
         let bounds = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.5, 1.0));
-        let clip = fit_light(&camera, 1.5, &light, bounds).unwrap();
+        let clip = fit_light(&camera, 1.5, &light, bounds, None).unwrap();
         for corner in corners(bounds.0, bounds.1) {
             let p = clip.project_point3(corner);
             assert!(p.x.abs() <= 1.0001 && p.y.abs() <= 1.0001, "{corner} -> {p}");
@@ -463,7 +471,7 @@ mod tests {
         let (camera, light) = overhead();
         // A huge floor: the map covers the visible part, not all of it.
         let bounds = (Vec3::new(-500.0, 0.0, -500.0), Vec3::new(500.0, 0.0, 500.0));
-        let clip = fit_light(&camera, 1.5, &light, bounds).unwrap();
+        let clip = fit_light(&camera, 1.5, &light, bounds, None).unwrap();
         let far_corner = clip.project_point3(Vec3::new(-500.0, 0.0, 500.0));
         assert!(far_corner.x.abs() > 1.0 || far_corner.y.abs() > 1.0);
         let origin = clip.project_point3(Vec3::ZERO);
@@ -471,10 +479,38 @@ mod tests {
     }
 
     #[test]
+    fn a_shadow_distance_fits_the_map_to_the_near_part_of_the_view() {
+        // Looking level over a floor 1 km across.
+        let camera = Camera {
+            eye: Vec3::new(0.0, 2.0, 0.0),
+            target: Vec3::new(0.0, 0.0, -20.0),
+            fov_y: 1.0,
+            near: 0.1,
+            far: 1000.0,
+        };
+        let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 1.0, fill: 0.0, ambient: 0.2 };
+        let bounds = (Vec3::new(-500.0, 0.0, -500.0), Vec3::new(500.0, 0.0, 500.0));
+        let whole = fit_light(&camera, 1.5, &light, bounds, None).unwrap();
+        let near = fit_light(&camera, 1.5, &light, bounds, Some(50.0)).unwrap();
+        let inside = |clip: Mat4, p: Vec3| {
+            let q = clip.project_point3(p);
+            q.x.abs() <= 1.0 && q.y.abs() <= 1.0
+        };
+        let (close, far) = (Vec3::new(0.0, 0.0, -30.0), Vec3::new(0.0, 0.0, -300.0));
+        assert!(inside(whole, close) && inside(whole, far));
+        assert!(inside(near, close) && !inside(near, far), "the map ends near the distance");
+        // The same map, a smaller window: more texels per metre near the camera.
+        let span = |clip: Mat4| {
+            clip.project_point3(Vec3::new(1.0, 0.0, -30.0)).x - clip.project_point3(Vec3::new(0.0, 0.0, -30.0)).x
+        };
+        assert!(span(near).abs() > 4.0 * span(whole).abs(), "{} vs {}", span(near), span(whole));
+    }
+
+    #[test]
     fn nothing_in_view_gives_no_map() {
         let (camera, light) = overhead();
         let behind = (Vec3::new(-1.0, 0.0, 50.0), Vec3::new(1.0, 1.0, 52.0));
-        assert!(fit_light(&camera, 1.5, &light, behind).is_none());
+        assert!(fit_light(&camera, 1.5, &light, behind, None).is_none());
     }
 
     #[test]
@@ -484,7 +520,7 @@ mod tests {
         let aspect = width as f32 / height as f32;
         let bounds = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.5, 1.0));
         let mut map = ShadowMap::default();
-        map.reset(512, fit_light(&camera, aspect, &light, bounds), true);
+        map.reset(512, fit_light(&camera, aspect, &light, bounds, None), true);
         let clip_from_world = camera.view_projection(aspect);
         let pixels = PixelsInMap::new(&map, clip_from_world, width, height);
         // Points near and far: each seen at some pixel position and depth, which must lead
