@@ -97,3 +97,28 @@ fn shift_and_the_arrows_fly_the_camera_level_at_its_speed() {
     let eye_moved = vec3(&camera["position"]) - vec3(&before["position"]);
     assert!((eye_moved - moved).length() < 1e-3, "{eye_moved} vs {moved}");
 }
+
+#[test]
+fn a_camera_jump_across_many_chunks_keeps_to_the_budget_and_settles() {
+    let mut app = small_app(&path("scenes/world.yaml"));
+    for _ in 0..30 {
+        app.update();
+    }
+    let made =
+        |app: &mut bevy::app::App| app.world_mut().query::<&WorldBody>().iter(app.world()).map(|b| b.made).sum::<u64>();
+    // Two kilometres east in one step: every chunk wanted is new.
+    for mut camera in app.world_mut().query::<&mut canopy::view::CameraParams>().iter_mut(app.world_mut()) {
+        camera.target.x += 2000.0;
+    }
+    let mut before = made(&mut app);
+    for frame in 0..90 {
+        app.update();
+        let after = made(&mut app);
+        assert!(after - before <= 4, "frame {frame}: {} chunks spawned", after - before);
+        before = after;
+    }
+    // The old neighbourhood is gone and the new one is there, nearest first at level 0.
+    let chunks: Vec<WorldChunk> = app.world_mut().query::<&WorldChunk>().iter(app.world()).copied().collect();
+    assert!(chunks.iter().all(|c| c.key.x * 32 > 1500), "only chunks around the new place");
+    assert!(chunks.iter().any(|c| c.level == 0) && chunks.len() > 50, "{} chunks", chunks.len());
+}
