@@ -50,8 +50,10 @@ fn chunks_come_in_around_the_camera_at_their_levels_and_the_same_every_run() {
 
 #[test]
 fn a_moving_camera_brings_chunks_ahead_and_lets_far_ones_go() {
-    let timeline = "- { at: 0.5, set: { camera.target.x: 600 } }";
-    let output = run("scenes/world.yaml", 240, Some(timeline), SMALL);
+    let timeline = std::fs::read_to_string(path("timelines/world_flight.yaml")).unwrap();
+    let output = run("scenes/world.yaml", 240, Some(&timeline), SMALL);
+    let again = run("scenes/world.yaml", 240, Some(&timeline), SMALL);
+    assert_eq!(output.dump, again.dump, "the same camera path, the same chunks and heights");
     let land = entity(&output.dump, "land");
     let camera = vec3(&entity(&output.dump, "camera")["position"]);
     let resident = chunks(land);
