@@ -11,8 +11,8 @@
 use super::bands::BandRule;
 use super::generate::Recipe;
 use super::heightmap::Heightmap;
-use super::section::{Geometry, Section, SectionMesh, mesh_section};
-use bevy::math::{Vec2, Vec3};
+use super::section::{Geometry, SampleFrame, Section, SectionMesh, mesh_section_in};
+use bevy::math::Vec3;
 use canopy_raster::MeshData;
 
 /// Levels of detail: level 0 has every sample, each next level every second of the one
@@ -77,18 +77,12 @@ impl ChunkHeights {
     pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32) -> SectionMesh {
         let geometry = Geometry { cell_m: self.spacing_m(geometry.cell_m), ..geometry };
         let n = self.vertices();
-        let mut mesh = mesh_section(&self.map, Section { origin: [1, 1], size: [n, n] }, geometry, rule);
-        // Texture coordinates fixed to the world's samples (the section's are the small map's),
-        // so that textures run on across chunks of every level.
-        let step = (1u32 << self.level) as f32;
-        let first = [self.key.x, self.key.z].map(|k| k as f32 * (n - 1) as f32 * step);
-        for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
-            for (uv, p) in part.uvs.iter_mut().zip(&part.positions) {
-                let local = *p + mesh.barycentre;
-                let [i, j] = [local.x, local.z].map(|v| (v / geometry.cell_m).round());
-                *uv = Vec2::new(first[0] + i * step, first[1] + j * step) / geometry.texture_cells;
-            }
-        }
+        // Texture coordinates fixed to the world's samples, so that textures run on across
+        // chunks of every level.
+        let step = 1u32 << self.level;
+        let origin = [self.key.x, self.key.z].map(|k| i64::from(k) * i64::from((n - 1) * step));
+        let section = Section { origin: [1, 1], size: [n, n] };
+        let mut mesh = mesh_section_in(&self.map, section, geometry, rule, SampleFrame { origin, step });
         if skirt_m > 0.0 {
             let last = (n - 1) as f32 * geometry.cell_m;
             for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {

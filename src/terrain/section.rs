@@ -117,12 +117,38 @@ impl SectionMesh {
 /// `a c d` and `a d b` with `a = (x, z)`, `b = (x + 1, z)`, `c = (x, z + 1)`, `d = (x + 1, z + 1)`.
 const CELL_TRIANGLES: [[(u32, u32); 3]; 2] = [[(0, 0), (0, 1), (1, 1)], [(0, 0), (1, 1), (1, 0)]];
 
-/// The mesh of `section` (which must fit `map`), banded by `rule`.
+/// Which samples a mesh's vertices stand for, for their texture coordinates: the sample (of
+/// the map, or of the world for a chunk) at the first vertex, and the samples from one vertex
+/// to the next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleFrame {
+    /// The sample at the first vertex, `(x, z)`.
+    pub origin: [i64; 2],
+    /// Samples between neighbouring vertices.
+    pub step: u32,
+}
+
+/// The mesh of `section` (which must fit `map`), banded by `rule`, its texture coordinates
+/// fixed to the map's samples.
+pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
+    let frame = SampleFrame { origin: section.origin.map(i64::from), step: 1 };
+    mesh_section_in(map, section, geometry, rule, frame)
+}
+
+/// [`mesh_section`] with the texture coordinates of the samples of `frame`: vertex `(i, j)`
+/// reads the texture at sample `origin + step (i, j)`, one repetition every
+/// `geometry.texture_cells` samples.
 ///
 /// Two passes: the first decides each triangle's surface (a band, or with blending a border)
 /// and numbers the vertices each surface uses; the second fills every mesh at its final size,
 /// so that nothing is moved as the meshes grow.
-pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
+pub fn mesh_section_in(
+    map: &Heightmap,
+    section: Section,
+    geometry: Geometry,
+    rule: &BandRule,
+    frame: SampleFrame,
+) -> SectionMesh {
     let [x0, z0] = section.origin;
     let [w, h] = section.size.map(|n| n as usize);
     let count = w * h;
@@ -198,7 +224,10 @@ pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule:
             normals: vertices.iter().map(|&v| normals[index(v)]).collect(),
             uvs: vertices
                 .iter()
-                .map(|&[i, j]| Vec2::new((x0 + i) as f32, (z0 + j) as f32) / geometry.texture_cells)
+                .map(|&[i, j]| {
+                    let [x, z] = [(0, i), (1, j)].map(|(axis, k)| frame.origin[axis] + i64::from(k * frame.step));
+                    Vec2::new(x as f32, z as f32) / geometry.texture_cells
+                })
                 .collect(),
             colors: Vec::new(),
             blend: blend.next().unwrap_or_default(),

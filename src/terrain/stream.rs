@@ -25,38 +25,41 @@ pub struct StreamSettings {
 }
 
 impl StreamSettings {
-    /// Why the settings make no sense, if they do not.
-    pub fn check(&self) -> Result<(), String> {
+    /// Why the settings make no sense, if they do not: the field at fault and what is wrong.
+    pub fn check(&self) -> Result<(), StreamError> {
+        let refuse = |field: &'static str, message: String| Err(StreamError { field, message });
         let positive = |v: f32| v.is_finite() && v > 0.0;
         if !positive(self.chunk_m) {
-            return Err(format!("chunk: expected a side in metres greater than 0, found {}", self.chunk_m));
+            return refuse("chunk_m", format!("expected a side in metres greater than 0, found {}", self.chunk_m));
         }
         if !(positive(self.load_radius_m) && self.load_radius_m <= 1e5) {
-            return Err(format!(
-                "load_radius_m: expected a distance greater than 0 and at most 1e5, found {}",
-                self.load_radius_m
-            ));
+            return refuse(
+                "load_radius_m",
+                format!("expected a distance greater than 0 and at most 1e5, found {}", self.load_radius_m),
+            );
         }
         if !(self.unload_radius_m.is_finite() && self.unload_radius_m > self.load_radius_m) {
-            return Err(format!(
-                "unload_radius_m: expected a distance greater than the load radius ({}), found {}",
-                self.load_radius_m, self.unload_radius_m
-            ));
+            return refuse(
+                "unload_radius_m",
+                format!(
+                    "expected a distance greater than the load radius ({}), found {}",
+                    self.load_radius_m, self.unload_radius_m
+                ),
+            );
         }
         // Beyond this many chunks across the unload radius, a world would hold too many.
         if self.unload_radius_m / self.chunk_m > 64.0 {
-            return Err(format!(
-                "unload_radius_m: at most 64 chunks of {} m, found {} m",
-                self.chunk_m, self.unload_radius_m
-            ));
+            return refuse(
+                "unload_radius_m",
+                format!("at most 64 chunks of {} m, found {} m", self.chunk_m, self.unload_radius_m),
+            );
         }
         let rising = self.level_distances_m.windows(2).all(|w| w[0] <= w[1]);
         if !(self.level_distances_m.iter().all(|&d| positive(d)) && rising) {
-            return Err(format!(
-                "level_distances_m: expected {} rising distances greater than 0, found {:?}",
-                LEVELS - 1,
-                self.level_distances_m
-            ));
+            return refuse(
+                "level_distances_m",
+                format!("expected {} rising distances greater than 0, found {:?}", LEVELS - 1, self.level_distances_m),
+            );
         }
         Ok(())
     }
@@ -77,6 +80,16 @@ impl StreamSettings {
     pub fn level(&self, distance: f32) -> u8 {
         self.level_distances_m.iter().take_while(|&&d| distance >= d).count() as u8
     }
+}
+
+/// Why streaming settings make no sense: the field at fault and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct StreamError {
+    /// The setting's name.
+    pub field: &'static str,
+    /// What is wrong.
+    pub message: String,
 }
 
 /// What to do this frame.

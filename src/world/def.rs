@@ -141,10 +141,10 @@ impl EntityKind for WorldKind {
             return Err(cx.entity.field_error("chunk_cells", 0, "chunk_cells", message));
         }
         let stream = def.stream();
-        stream.check().map_err(|message| {
-            let key = message.split(':').next().unwrap_or("load_radius_m");
-            let key = if key == "chunk" { "chunk_cells" } else { key };
-            cx.entity.field_error(key, 0, key, message.split_once(": ").map_or(message.as_str(), |m| m.1))
+        stream.check().map_err(|error| {
+            // The chunk's side follows from `chunk_cells` and `cell_m`, both checked already.
+            let key = if error.field == "chunk_m" { "chunk_cells" } else { error.field };
+            cx.entity.field_error(key, 0, key, &error.message)
         })?;
         if !(1..=64).contains(&def.spawn_budget) {
             let message = format!("expected 1 to 64 chunks a frame, found {}", def.spawn_budget);

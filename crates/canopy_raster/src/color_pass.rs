@@ -25,7 +25,7 @@ use crate::shade::{
 };
 use crate::shadow::{PixelsInMap, ShadowMap, Taps};
 use crate::sort::{Corners, Sorted};
-use crate::texture::{Filter, Texture};
+use crate::texture::{Filter, Texture, UvDerivatives};
 use bevy_math::{Vec3, Vec4};
 use std::iter::Peekable;
 use std::marker::PhantomData;
@@ -444,18 +444,13 @@ fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS
     }
     if textured && let Some(texture) = material.texture.as_deref() {
         let (u, v) = (value(slot::UV), value(slot::UV + 1));
-        let lod = match material.sampler.filter {
-            Filter::Trilinear => texture_lod(shading, texture, u, v, w),
-            Filter::Nearest | Filter::Bilinear => Vec4::ZERO,
-        };
-        let mut texels = texture.sample_lanes(u, v, lod, material.sampler);
+        // The coordinates' screen derivatives, once for both images; each image turns them
+        // into the level its own size gives.
+        let derivatives = (material.sampler.filter == Filter::Trilinear).then(|| uv_derivatives(shading, u, v, w));
+        let lod = |image: &Texture| derivatives.map_or(Vec4::ZERO, |d| image.lod_lanes(d));
+        let mut texels = texture.sample_lanes(u, v, lod(texture), material.sampler);
         if let Some(blend) = material.blend.as_deref() {
-            // Both images are read at the level their own sizes give.
-            let lod = match material.sampler.filter {
-                Filter::Trilinear => texture_lod(shading, blend, u, v, w),
-                Filter::Nearest | Filter::Bilinear => Vec4::ZERO,
-            };
-            let others = blend.sample_lanes(u, v, lod, material.sampler);
+            let others = blend.sample_lanes(u, v, lod(blend), material.sampler);
             let weight = value(slot::BLEND).clamp(Vec4::ZERO, Vec4::ONE);
             for (texel, other) in texels.iter_mut().zip(others) {
                 *texel += (other - *texel) * weight;
@@ -470,12 +465,12 @@ fn lane_colors<C: CompiledPass>(shading: &TriangleShading, at_run: &[Vec4; PACKS
     r | g << 8 | b << 16 | alpha << 24
 }
 
-/// The level of detail of the texture at a run's pixels, whose texture coordinates are `u` and
-/// `v` and whose `w` is `w`: from the coordinates' derivatives across the screen, which a
-/// perspective-correct interpolation of `t = (t / w) / (1 / w)` gives as
-/// `dt/dx = w (d(t / w)/dx - t d(1 / w)/dx)` (and along y alike).
+/// The screen derivatives `[du/dx, dv/dx, du/dy, dv/dy]` of the texture coordinates at a run's
+/// pixels, whose coordinates are `u` and `v` and whose `w` is `w`: a perspective-correct
+/// interpolation of `t = (t / w) / (1 / w)` gives `dt/dx = w (d(t / w)/dx - t d(1 / w)/dx)`
+/// (and along y alike).
 #[inline(always)]
-fn texture_lod(shading: &TriangleShading, texture: &Texture, u: Vec4, v: Vec4, w: Vec4) -> Vec4 {
+fn uv_derivatives(shading: &TriangleShading, u: Vec4, v: Vec4, w: Vec4) -> UvDerivatives {
     let planes = shading.planes;
     let steps = |k: usize| (planes[k / LANES].dx[k % LANES], planes[k / LANES].dy[k % LANES]);
     let (inv_w_dx, inv_w_dy) = steps(INV_W);
@@ -488,7 +483,7 @@ fn texture_lod(shading: &TriangleShading, texture: &Texture, u: Vec4, v: Vec4, w
         }
     };
     let ((du_dx, du_dy), (dv_dx, dv_dy)) = (derivatives(slot::UV, u), derivatives(slot::UV + 1, v));
-    texture.lod_lanes(du_dx, dv_dx, du_dy, dv_dy)
+    [du_dx, dv_dx, du_dy, dv_dy]
 }
 
 /// Whether `pass` stores each pixel's interpolated colour pack (red, green, blue and the

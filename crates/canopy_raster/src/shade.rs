@@ -97,7 +97,7 @@ pub(crate) fn affine_tolerances(pass: Pass, texture: Option<&Texture>) -> Varyin
     let texels = texture.map_or(1, |t| t.width().max(t.height())) as f32;
     std::array::from_fn(|index| match index {
         _ if !pass.uses(index) => f32::INFINITY,
-        slot::UV | 8 => 1.0 / (16.0 * texels),
+        slot::UV..slot::BLEND => 1.0 / (16.0 * texels),
         _ => 1.0 / (16.0 * 255.0),
     })
 }

@@ -105,6 +105,10 @@ impl Level {
     }
 }
 
+/// The screen derivatives of texture coordinates at four pixels: `[du/dx, dv/dx, du/dy,
+/// dv/dy]`, per pixel along x and along y.
+pub(crate) type UvDerivatives = [Vec4; 4];
+
 /// Texel coordinates beyond this many texels from the origin are clamped to it: up to here an
 /// `f32` holds every whole number, so wrapping stays exact.
 const COORDINATE_LIMIT: f32 = 8_388_608.0;
@@ -203,14 +207,14 @@ impl Texture {
     }
 
     /// The level of detail of four pixels from the derivatives of their texture coordinates
-    /// across the screen (per pixel along x and along y): the base-2 logarithm of the longer
-    /// side of the pixel's footprint in texels of the image, as graphics hardware takes it.
+    /// across the screen: the base-2 logarithm of the longer side of the pixel's footprint in
+    /// texels of the image, as graphics hardware takes it.
     ///
     /// The logarithm is the piecewise-linear one read from the float's bits (exact at powers
     /// of two, at most 0.09 low between them): it moves the blend between two levels by less
     /// than a tenth, and takes no time beside the texel reads.
     #[inline(always)]
-    pub(crate) fn lod_lanes(&self, du_dx: Vec4, dv_dx: Vec4, du_dy: Vec4, dv_dy: Vec4) -> Vec4 {
+    pub(crate) fn lod_lanes(&self, [du_dx, dv_dx, du_dy, dv_dy]: UvDerivatives) -> Vec4 {
         let (width, height) = (self.width() as f32, self.height() as f32);
         let squared = |du: Vec4, dv: Vec4| (du * width) * (du * width) + (dv * height) * (dv * height);
         let footprint = squared(du_dx, dv_dx).max(squared(du_dy, dv_dy));
@@ -429,7 +433,7 @@ mod tests {
     fn the_level_of_detail_is_the_logarithm_of_the_footprint() {
         let texture = Texture::from_fn(256, 64, |_, _| Vec3::ONE);
         let lod = |du_dx: f32, dv_dx: f32, du_dy: f32, dv_dy: f32| {
-            texture.lod_lanes(Vec4::splat(du_dx), Vec4::splat(dv_dx), Vec4::splat(du_dy), Vec4::splat(dv_dy)).x
+            texture.lod_lanes([du_dx, dv_dx, du_dy, dv_dy].map(Vec4::splat)).x
         };
         // One texel a pixel, four, and a footprint of 16 texels along v.
         assert!(lod(1.0 / 256.0, 0.0, 0.0, 1.0 / 64.0).abs() < 1e-4);
