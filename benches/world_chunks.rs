@@ -14,7 +14,7 @@ use std::time::Instant;
 
 /// Chunks made per level and measurement.
 const CHUNKS: i32 = 64;
-const CELLS: u32 = 32;
+const CELLS: u32 = 16;
 
 fn main() {
     // The recipe, geometry and bands of scenes/world.yaml.
@@ -29,6 +29,13 @@ fn main() {
         rock_slope_deg: Some(40.0),
         blend: Some(BandBlend { height: 0.02, slope_deg: 5.0 }),
     };
+    // The streaming settings of scenes/world.yaml, for the morph bands.
+    let world = StreamSettings {
+        chunk_m: CELLS as f32 * geometry.cell_m,
+        load_radius_m: 180.0,
+        unload_radius_m: 220.0,
+        level_distances_m: [50.0, 100.0, 150.0],
+    };
     println!("chunks of {CELLS} x {CELLS} cells, one core, {CHUNKS} chunks a level");
     println!("| level | vertices a side | chunks / s | ms / chunk | mesh bytes / chunk |");
     println!("|---|---|---|---|---|");
@@ -39,11 +46,14 @@ fn main() {
         for k in 0..CHUNKS {
             let key = ChunkKey { x: k % 8, z: k / 8 + 100 * i32::from(level) };
             let heights = ChunkHeights::generate(&recipe, 11, key, level, CELLS);
-            let mesh = black_box(heights.mesh(geometry, &rule, 3.0));
+            let mesh = black_box(heights.mesh(geometry, &rule, 3.0, world.morph_band(level)));
             bytes += mesh
                 .into_surfaces()
                 .iter()
-                .map(|m| m.positions.len() * 24 + m.uvs.len() * 8 + m.blend.len() * 4 + m.triangles.len() * 12)
+                .map(|m| {
+                    let morph = m.morph.as_ref().map_or(0, |morph| morph.positions.len() * 24);
+                    m.positions.len() * 24 + morph + m.uvs.len() * 8 + m.blend.len() * 4 + m.triangles.len() * 12
+                })
                 .sum::<usize>();
         }
         let seconds = started.elapsed().as_secs_f64();
@@ -60,22 +70,16 @@ fn main() {
     println!("| load radius | unload radius | resident bound | chunks within the unload radius | their meshes |");
     println!("|---|---|---|---|---|");
     for load in [90.0f32, 180.0, 360.0] {
-        let settings = StreamSettings {
-            chunk_m: CELLS as f32 * geometry.cell_m,
-            load_radius_m: load,
-            unload_radius_m: load * 1.25,
-            level_distances_m: [50.0, 100.0, 150.0],
-        };
+        let settings = StreamSettings { load_radius_m: load, unload_radius_m: load * 1.25, ..world };
         // A camera over the middle of a chunk: the chunks whose centres lie within the
-        // unload radius, each with the meshes of the level its distance gives.
+        // unload radius, each with the meshes of its level.
         let camera = settings.centre(ChunkKey { x: 0, z: 0 });
         let reach = (settings.unload_radius_m / settings.chunk_m).ceil() as i32;
-        let within: Vec<f32> = (-reach..=reach)
+        let within: Vec<ChunkKey> = (-reach..=reach)
             .flat_map(|z| (-reach..=reach).map(move |x| ChunkKey { x, z }))
-            .map(|key| settings.centre(key).distance(camera))
-            .filter(|&d| d <= settings.unload_radius_m)
+            .filter(|&key| settings.centre(key).distance(camera) <= settings.unload_radius_m)
             .collect();
-        let bytes: usize = within.iter().map(|&d| bytes_per_level[settings.level(d) as usize]).sum();
+        let bytes: usize = within.iter().map(|&key| bytes_per_level[settings.chunk_level(key, camera) as usize]).sum();
         println!(
             "| {load} m | {} m | {} chunks | {} chunks | {:.1} MB |",
             settings.unload_radius_m,

@@ -3,15 +3,21 @@
 //! that neighbouring chunks share their edge heights, and their edge normals, bit for bit.
 //!
 //! Level `l` keeps every `2^l`-th sample: a chunk has `cells / 2^l + 1` vertices a side, and
-//! one ring of samples beyond its edges (at its own spacing) from which the normals at its
-//! edges are made as in the middle of the map. Where chunks of different levels meet, the
-//! coarser edge runs straight past the finer one's extra vertices; a skirt, a strip hanging
-//! down from every edge of a chunk, fills the cracks that would open there.
+//! two rings of samples beyond its edges (at its own spacing) from which the normals at its
+//! edges are made as in the middle of the map, at its level and at the next coarser one.
+//!
+//! A chunk's mesh can morph into the next level's shape: every vertex has a target on the
+//! coarser mesh (its own height where the coarser level keeps the sample, else the middle of
+//! the coarser edge or diagonal it lies on) with the coarser level's normal there, so that a
+//! fully morphed chunk has the coarser chunk's surface, and a change of level shows nothing.
+//! Where chunks of different levels meet, the finer one has morphed onto the coarser edge
+//! (see [`stream`](super::stream)); a skirt, a strip hanging down from every edge of a chunk,
+//! fills the pixels that the meeting of their different triangles could still leave open.
 
 use super::bands::BandRule;
 use super::generate::Recipe;
 use super::heightmap::Heightmap;
-use super::section::{Geometry, SampleFrame, Section, SectionMesh, mesh_section_in};
+use super::section::{Geometry, MorphTargets, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals};
 use bevy::math::Vec3;
 use canopy_raster::MeshData;
 
@@ -21,6 +27,20 @@ pub const LEVELS: u8 = 4;
 
 /// The chunk sizes allowed, in cells a side: powers of two with a vertex at every level.
 pub const CHUNK_CELLS: [u32; 4] = [16, 32, 64, 128];
+
+/// Samples beyond a chunk's edges on each side, at its own spacing: the normals along its
+/// edges need one, and those of its coarser level (every second sample) one more.
+const RING: u32 = 2;
+
+/// The distances from the camera (horizontally, metres) over which a chunk's vertices move
+/// into the shape of the next coarser level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MorphBand {
+    /// Where the vertices start to move.
+    pub start_m: f32,
+    /// Where they have the coarser level's shape.
+    pub end_m: f32,
+}
 
 /// Which chunk: its place on the grid of chunks (chunk `(x, z)` starts at world sample
 /// `(x * cells, z * cells)`).
@@ -39,8 +59,8 @@ pub struct ChunkHeights {
     pub key: ChunkKey,
     /// Its level of detail.
     pub level: u8,
-    /// Its vertices and the ring beyond them: `cells / 2^level + 3` samples a side, the first
-    /// vertex at `(1, 1)`.
+    /// Its vertices and the rings beyond them: `cells / 2^level + 5` samples a side, the
+    /// first vertex at `(2, 2)`.
     pub map: Heightmap,
 }
 
@@ -53,17 +73,23 @@ impl ChunkHeights {
         // Other sizes are brought to the nearest allowed bound: a chunk stays small.
         let cells = cells.clamp(CHUNK_CELLS[0], CHUNK_CELLS[CHUNK_CELLS.len() - 1]);
         let step = 1i32 << level;
-        let side = (cells >> level) as usize + 3;
-        let origin = [key.x * cells as i32 - step, key.z * cells as i32 - step];
-        let heights = recipe.sample_grid(seed, origin, step, [side, side]);
-        let map = Heightmap::from_values(side as u32, side as u32, heights)
-            .expect("a grid of side x side heights, at most 131 a side");
+        let side = (cells >> level) + 1 + 2 * RING;
+        let ring = RING as i32 * step;
+        let origin = [key.x * cells as i32 - ring, key.z * cells as i32 - ring];
+        let heights = recipe.sample_grid(seed, origin, step, [side as usize; 2]);
+        let map =
+            Heightmap::from_values(side, side, heights).expect("a grid of side x side heights, at most 133 a side");
         Self { key, level, map }
     }
 
     /// Vertices a side.
     pub fn vertices(&self) -> u32 {
-        self.map.width() - 2
+        self.map.width() - 2 * RING
+    }
+
+    /// The height of vertex `(i, j)` (map units).
+    fn height(&self, i: u32, j: u32) -> f32 {
+        self.map.at(i + RING, j + RING)
     }
 
     /// Metres between the chunk's vertices, for `cell_m` metres between level-0 samples.
@@ -72,17 +98,20 @@ impl ChunkHeights {
     }
 
     /// The chunk's meshes, banded by `rule`, with `geometry`'s spacing between level-0
-    /// samples (the chunk's own vertices are `2^level` times as far apart), and skirts
-    /// `skirt_m` metres deep along its four edges (none for 0).
-    pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32) -> SectionMesh {
+    /// samples (the chunk's own vertices are `2^level` times as far apart), skirts `skirt_m`
+    /// metres deep along its four edges (none for 0), and with `morph` (below the coarsest
+    /// level) morphing into the next level's shape over its distances.
+    pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32, morph: Option<MorphBand>) -> SectionMesh {
         let geometry = Geometry { cell_m: self.spacing_m(geometry.cell_m), ..geometry };
         let n = self.vertices();
         // Texture coordinates fixed to the world's samples, so that textures run on across
         // chunks of every level.
         let step = 1u32 << self.level;
         let origin = [self.key.x, self.key.z].map(|k| i64::from(k) * i64::from((n - 1) * step));
-        let section = Section { origin: [1, 1], size: [n, n] };
-        let mut mesh = mesh_section_in(&self.map, section, geometry, rule, SampleFrame { origin, step });
+        let section = Section { origin: [RING, RING], size: [n, n] };
+        let targets = morph.filter(|_| self.level + 1 < LEVELS).map(|band| self.morph_targets(geometry, band));
+        let frame = SampleFrame { origin, step };
+        let mut mesh = mesh_section_in(&self.map, section, geometry, rule, frame, targets.as_ref());
         if skirt_m > 0.0 {
             let last = (n - 1) as f32 * geometry.cell_m;
             for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
@@ -90,6 +119,43 @@ impl ChunkHeights {
             }
         }
         mesh
+    }
+
+    /// Where each vertex lies on the next coarser level's mesh, and that mesh's normal there,
+    /// for vertices `geometry.cell_m` apart.
+    fn morph_targets(&self, geometry: Geometry, band: MorphBand) -> MorphTargets {
+        let n = self.vertices();
+        // The coarser level's samples are every second of this chunk's, the first ring
+        // dropped and the second kept as theirs.
+        let side = self.map.width() / 2 + 1;
+        let coarse = Heightmap::from_fn(side, side, |x, z| self.map.at(2 * x, 2 * z))
+            .expect("half the chunk's samples, at most 67 a side");
+        let coarse_geometry = Geometry { cell_m: geometry.cell_m * 2.0, ..geometry };
+        let coarse_side = n.div_ceil(2);
+        let coarse_section = Section { origin: [1, 1], size: [coarse_side; 2] };
+        let coarse_normals = vertex_normals(&coarse, coarse_section, coarse_geometry);
+        let (mut positions, mut normals) = (Vec::with_capacity((n * n) as usize), Vec::with_capacity((n * n) as usize));
+        for j in 0..n {
+            for i in 0..n {
+                // The ends of the coarser edge or diagonal (of the cells' `a d` diagonal) the
+                // vertex lies in the middle of; both itself where the coarser level keeps it.
+                let [a, b] = match (i % 2, j % 2) {
+                    (0, 0) => [[i, j]; 2],
+                    (1, 0) => [[i - 1, j], [i + 1, j]],
+                    (0, _) => [[i, j - 1], [i, j + 1]],
+                    _ => [[i - 1, j - 1], [i + 1, j + 1]],
+                };
+                let metres = |[i, j]: [u32; 2]| self.height(i, j) * geometry.height_m;
+                let normal = |[i, j]: [u32; 2]| coarse_normals[(j / 2 * coarse_side + i / 2) as usize];
+                let (height, normal) = match a == b {
+                    true => (metres(a), normal(a)),
+                    false => ((metres(a) + metres(b)) * 0.5, (normal(a) + normal(b)).normalize_or(Vec3::Y)),
+                };
+                positions.push(Vec3::new(i as f32 * geometry.cell_m, height, j as f32 * geometry.cell_m));
+                normals.push(normal);
+            }
+        }
+        MorphTargets { positions, normals, start_m: band.start_m, end_m: band.end_m }
     }
 
     /// A checksum of the chunk's heights (vertices and ring), equal on every machine for
@@ -126,6 +192,10 @@ fn add_skirts(mesh: &mut MeshData, barycentre: Vec3, last: f32, depth: f32) {
             let v = v as usize;
             mesh.positions.push(mesh.positions[v] - Vec3::Y * depth);
             mesh.normals.push(mesh.normals[v]);
+            if let Some(morph) = &mut mesh.morph {
+                morph.positions.push(morph.positions[v] - Vec3::Y * depth);
+                morph.normals.push(morph.normals[v]);
+            }
             mesh.uvs.push(mesh.uvs[v]);
             if !mesh.blend.is_empty() {
                 mesh.blend.push(mesh.blend[v]);
@@ -140,6 +210,7 @@ fn add_skirts(mesh: &mut MeshData, barycentre: Vec3, last: f32, depth: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::HashMap;
 
     fn world() -> Recipe {
         serde_yaml::from_str(
@@ -152,7 +223,7 @@ mod tests {
     /// The heights of a chunk's vertices (without the ring), row by row.
     fn vertex_rows(chunk: &ChunkHeights) -> Vec<Vec<u32>> {
         let n = chunk.vertices() as usize;
-        (1..=n).map(|z| chunk.map.row(z as u32)[1..=n].iter().map(|h| h.to_bits()).collect()).collect()
+        (0..n).map(|j| (0..n).map(|i| chunk.height(i as u32, j as u32).to_bits()).collect()).collect()
     }
 
     #[test]
@@ -172,7 +243,7 @@ mod tests {
             let geometry = Geometry { cell_m: 0.3, height_m: 30.0, texture_cells: 8.0 };
             let rule = BandRule::default();
             let normals = |chunk: &ChunkHeights, column: usize| {
-                let mesh = chunk.mesh(geometry, &rule, 0.0);
+                let mesh = chunk.mesh(geometry, &rule, 0.0, None);
                 let spacing = geometry.cell_m * (1u32 << level) as f32;
                 let mut edge: Vec<(i64, [u32; 3])> = mesh
                     .bands
@@ -190,43 +261,58 @@ mod tests {
         }
     }
 
-    /// Two chunks side by side, the first at level 0 and the second at level 2, seen from
-    /// above the first looking across their border, against a background the terrain cannot
-    /// show: how many pixels whose ray must meet the ground (it ends below the lowest height
-    /// inside the two chunks) show the background.
-    fn background_through_the_border(skirt_m: f32) -> usize {
+    /// The eye and target the drawings look with: from above chunk `(0, 0)` across the border
+    /// with chunk `(1, 0)` (chunks of 32 m).
+    const EYE: Vec3 = Vec3::new(10.0, 75.0, 16.0);
+
+    /// Chunks of 32 cells of a metre, each at its level and with `morph`, seen from [`EYE`]
+    /// against a background the terrain cannot show, in white; with the lowest and highest
+    /// heights inside them (metres).
+    fn draw_chunks(
+        chunks: &[(ChunkKey, u8)],
+        skirt_m: f32,
+        morph: Option<MorphBand>,
+    ) -> (crate::raster::Framebuffer, crate::raster::Camera, [f32; 2]) {
         use crate::raster::{Camera, Frame, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
         use bevy::math::Mat4;
         use bevy::tasks::TaskPool;
         use std::sync::Arc;
-        let (recipe, cells, cell_m) = (world(), 32, 1.0);
-        let geometry = Geometry { cell_m, height_m: 60.0, texture_cells: 8.0 };
-        let chunks = [(ChunkKey { x: 0, z: 0 }, 0), (ChunkKey { x: 1, z: 0 }, 2)];
+        let geometry = Geometry { cell_m: 1.0, height_m: 60.0, texture_cells: 8.0 };
         let mut instances = Vec::new();
         let (mut lowest, mut highest) = (f32::MAX, f32::MIN);
-        for (key, level) in chunks {
-            let chunk = ChunkHeights::generate(&recipe, 3, key, level, cells);
+        for &(key, level) in chunks {
+            let chunk = ChunkHeights::generate(&world(), 3, key, level, 32);
             let stats = chunk.map.stats();
             (lowest, highest) = (lowest.min(stats.min * geometry.height_m), highest.max(stats.max * geometry.height_m));
-            let mesh = chunk.mesh(geometry, &BandRule::default(), skirt_m);
-            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * cells as f32 * cell_m + mesh.barycentre;
+            let mesh = chunk.mesh(geometry, &BandRule::default(), skirt_m, morph);
+            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * 32.0 + mesh.barycentre;
             for part in mesh.bands {
                 let model = Mat4::from_translation(origin);
                 instances.push(Instance { mesh: Arc::new(part), model, material: Material::colored(Vec3::ONE) });
             }
         }
-        let eye = Vec3::new(10.0, 75.0, 16.0);
-        assert!(eye.y > highest, "the eye above the ground");
-        let camera = Camera { eye, target: Vec3::new(60.0, 20.0, 16.0), fov_y: 1.2, near: 0.1, far: 500.0 };
-        let (width, height) = (400u32, 300u32);
-        let background = [255, 0, 255, 255];
-        let mut image = Framebuffer::new(width, height);
-        let light = Light { direction: Vec3::NEG_Y, diffuse: 0.5, fill: 0.0, ambient: 0.3 };
-        let frame = Frame { camera, light, background, instances: &instances, settings: RenderSettings::default() };
+        assert!(EYE.y > highest, "the eye above the ground");
+        let camera = Camera { eye: EYE, target: Vec3::new(60.0, 20.0, 16.0), fov_y: 1.2, near: 0.1, far: 500.0 };
+        let mut image = Framebuffer::new(400, 300);
+        let light = Light { direction: Vec3::new(-0.5, -1.0, 0.3).normalize(), diffuse: 0.7, fill: 0.0, ambient: 0.3 };
+        let settings = RenderSettings::default();
+        let frame = Frame { camera, light, background: BACKGROUND, instances: &instances, settings };
         Renderer::default().render(&mut image, &TaskPool::new(), &frame);
+        (image, camera, [lowest, highest])
+    }
+
+    const BACKGROUND: [u8; 4] = [255, 0, 255, 255];
+
+    /// Two chunks side by side, the first at level 0 and the second at level 2, seen from
+    /// above the first looking across their border: how many pixels whose ray must meet the
+    /// ground (it ends below the lowest height inside the two chunks) show the background.
+    fn background_through_the_border(skirt_m: f32) -> usize {
+        let chunks = [(ChunkKey { x: 0, z: 0 }, 0), (ChunkKey { x: 1, z: 0 }, 2)];
+        let (image, camera, [lowest, _]) = draw_chunks(&chunks, skirt_m, None);
+        let (width, height) = (image.width(), image.height());
         let world_from_ndc = camera.view_projection(width as f32 / height as f32).inverse();
         let floor = lowest - 1.0;
-        let (x_end, z_end) = (2.0 * cells as f32 * cell_m, cells as f32 * cell_m);
+        let (x_end, z_end) = (64.0, 32.0);
         let mut holes = 0;
         for py in 0..height {
             for px in 0..width {
@@ -241,7 +327,7 @@ mod tests {
                 }
                 let end = near + (far - near) * ((near.y - floor) / (near.y - far.y));
                 let inside = (0.5..x_end - 0.5).contains(&end.x) && (0.5..z_end - 0.5).contains(&end.z);
-                holes += usize::from(inside && image.pixel(px, py) == background);
+                holes += usize::from(inside && image.pixel(px, py) == BACKGROUND);
             }
         }
         holes
@@ -261,7 +347,7 @@ mod tests {
         // z in level-0 samples.
         let edge = |key: ChunkKey, level: u8, east: bool| {
             let chunk = ChunkHeights::generate(&recipe, 3, key, level, 32);
-            let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0);
+            let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0, None);
             let spacing = chunk.spacing_m(geometry.cell_m);
             let column = if east { 32.0 } else { 0.0 };
             let mut uvs: Vec<(i64, [u32; 2])> = mesh
@@ -299,5 +385,85 @@ mod tests {
         }
         assert_eq!(fine.checksum(), ChunkHeights::generate(&recipe, 3, key, 0, 64).checksum());
         assert_ne!(fine.checksum(), ChunkHeights::generate(&recipe, 4, key, 0, 64).checksum());
+    }
+
+    #[test]
+    fn a_fully_morphed_chunk_has_the_next_levels_surface_and_normals() {
+        let recipe = world();
+        let geometry = Geometry { cell_m: 0.5, height_m: 30.0, texture_cells: 8.0 };
+        let band = MorphBand { start_m: 10.0, end_m: 20.0 };
+        let key = ChunkKey { x: -2, z: 5 };
+        for level in 0..LEVELS - 1 {
+            let fine = ChunkHeights::generate(&recipe, 3, key, level, 32).mesh(
+                geometry,
+                &BandRule::default(),
+                0.0,
+                Some(band),
+            );
+            let coarse_heights = ChunkHeights::generate(&recipe, 3, key, level + 1, 32);
+            let coarse = coarse_heights.mesh(geometry, &BandRule::default(), 0.0, None);
+            let spacing = coarse_heights.spacing_m(geometry.cell_m);
+            let at = |i: u32, j: u32| coarse_heights.height(i, j) * geometry.height_m;
+            // The coarse mesh's normals by vertex.
+            let grid = |p: Vec3| ((p.x / spacing).round() as u32, (p.z / spacing).round() as u32);
+            let coarse_normals: HashMap<(u32, u32), Vec3> = coarse
+                .bands
+                .iter()
+                .flat_map(|m| m.positions.iter().zip(&m.normals).map(|(p, n)| (grid(*p + coarse.barycentre), *n)))
+                .collect();
+            let mut on_vertices = 0;
+            for part in &fine.bands {
+                let morph = part.morph.as_ref().expect("a morph below the coarsest level");
+                assert_eq!((morph.start_m, morph.end_m), (10.0, 20.0));
+                assert_eq!(morph.positions.len(), part.positions.len());
+                for (target, normal) in morph.positions.iter().zip(&morph.normals) {
+                    let p = *target + fine.barycentre;
+                    // The height of the coarse triangle under the target (cells split along
+                    // their a d diagonal).
+                    let (u, v) = (p.x / spacing, p.z / spacing);
+                    let (ci, cj) = (
+                        (u.floor() as u32).min(coarse_heights.vertices() - 2),
+                        (v.floor() as u32).min(coarse_heights.vertices() - 2),
+                    );
+                    let (fu, fv) = (u - ci as f32, v - cj as f32);
+                    let (a, b, c, d) = (at(ci, cj), at(ci + 1, cj), at(ci, cj + 1), at(ci + 1, cj + 1));
+                    let surface =
+                        if fv >= fu { a + fv * (c - a) + fu * (d - c) } else { a + fu * (b - a) + fv * (d - b) };
+                    assert!((p.y - surface).abs() < 1e-3, "level {level}: {p} off the coarser surface {surface}");
+                    if (fu.abs() < 1e-4 || fu > 1.0 - 1e-4) && (fv.abs() < 1e-4 || fv > 1.0 - 1e-4) {
+                        assert_eq!(
+                            Some(normal),
+                            coarse_normals.get(&grid(p)),
+                            "level {level}: the coarser normal at {p}"
+                        );
+                        on_vertices += 1;
+                    }
+                }
+            }
+            assert!(on_vertices >= coarse_normals.len(), "level {level}: {on_vertices} targets on coarser vertices");
+        }
+    }
+
+    /// The mean difference of two images of the same size, per colour channel.
+    fn mean_difference(a: &crate::raster::Framebuffer, b: &crate::raster::Framebuffer) -> f64 {
+        let sum: u64 = a.color().iter().zip(b.color()).map(|(x, y)| u64::from(x.abs_diff(*y))).sum();
+        sum as f64 / a.color().len() as f64
+    }
+
+    #[test]
+    fn a_change_of_level_after_the_morph_shows_almost_nothing() {
+        let pair = |level| [(ChunkKey { x: 0, z: 0 }, level), (ChunkKey { x: 1, z: 0 }, level)];
+        // Every vertex beyond the band: fully morphed.
+        let through = Some(MorphBand { start_m: -2.0, end_m: -1.0 });
+        for level in 0..LEVELS - 1 {
+            let (coarse, ..) = draw_chunks(&pair(level + 1), 0.0, None);
+            let (fine, ..) = draw_chunks(&pair(level), 0.0, None);
+            let (morphed, ..) = draw_chunks(&pair(level), 0.0, through);
+            let (pop, left) = (mean_difference(&fine, &coarse), mean_difference(&morphed, &coarse));
+            assert!(pop > 0.5, "level {level}: the levels differ ({pop})");
+            // What is left is Gouraud shading: lighting interpolated between the coarser vertices
+            // against lit at the finer ones.
+            assert!(left < pop * 0.25, "level {level}: {left} left of a change of {pop}");
+        }
     }
 }

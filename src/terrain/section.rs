@@ -9,7 +9,7 @@
 use super::bands::{Band, BandRule};
 use super::heightmap::Heightmap;
 use bevy::math::{Vec2, Vec3};
-use canopy_raster::MeshData;
+use canopy_raster::{MeshData, Morph};
 
 /// Which part of the map is shown.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -128,16 +128,31 @@ pub struct SampleFrame {
     pub step: u32,
 }
 
+/// Where a section's vertices move as it morphs into a coarser mesh (see
+/// [`canopy_raster::Morph`]): per vertex, row by row, its target position (metres, the
+/// section's first vertex at the origin) and unit normal, and the distances of the morph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MorphTargets {
+    /// Target positions, `w x h`.
+    pub positions: Vec<Vec3>,
+    /// Target normals, `w x h`.
+    pub normals: Vec<Vec3>,
+    /// Metres from the camera at which the vertices start to move.
+    pub start_m: f32,
+    /// Metres at which they reach their targets.
+    pub end_m: f32,
+}
+
 /// The mesh of `section` (which must fit `map`), banded by `rule`, its texture coordinates
 /// fixed to the map's samples.
 pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
     let frame = SampleFrame { origin: section.origin.map(i64::from), step: 1 };
-    mesh_section_in(map, section, geometry, rule, frame)
+    mesh_section_in(map, section, geometry, rule, frame, None)
 }
 
 /// [`mesh_section`] with the texture coordinates of the samples of `frame`: vertex `(i, j)`
 /// reads the texture at sample `origin + step (i, j)`, one repetition every
-/// `geometry.texture_cells` samples.
+/// `geometry.texture_cells` samples; and with `morph`, the meshes morph into its targets.
 ///
 /// Two passes: the first decides each triangle's surface (a band, or with blending a border)
 /// and numbers the vertices each surface uses; the second fills every mesh at its final size,
@@ -148,6 +163,7 @@ pub fn mesh_section_in(
     geometry: Geometry,
     rule: &BandRule,
     frame: SampleFrame,
+    morph: Option<&MorphTargets>,
 ) -> SectionMesh {
     let [x0, z0] = section.origin;
     let [w, h] = section.size.map(|n| n as usize);
@@ -232,6 +248,12 @@ pub fn mesh_section_in(
             colors: Vec::new(),
             blend: blend.next().unwrap_or_default(),
             triangles: Vec::with_capacity(triangles[surface]),
+            morph: morph.map(|targets| Morph {
+                positions: vertices.iter().map(|&v| targets.positions[index(v)] - barycentre).collect(),
+                normals: vertices.iter().map(|&v| targets.normals[index(v)]).collect(),
+                start_m: targets.start_m,
+                end_m: targets.end_m,
+            }),
         }
     });
     let mut next = chosen.iter();
@@ -292,7 +314,7 @@ fn blended_surface(weights: [&[f32; 5]; 3]) -> (usize, Option<Border>) {
 
 /// Unit normals of the section's vertices, row by row: the sum of the (area-weighted) normals
 /// of the up to six map triangles around each vertex.
-fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
+pub(super) fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
     let [x0, z0] = section.origin.map(i64::from);
     let [w, h] = section.size.map(|n| n as usize);
     // The face normals (area-weighted) of the cells around the section's vertices, from one

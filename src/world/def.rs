@@ -26,7 +26,7 @@ pub struct WorldDef {
     /// Functions applied to the combined heights, in order.
     #[serde(default, with = "serde_yaml::with::singleton_map_recursive", skip_serializing_if = "Vec::is_empty")]
     pub apply: Vec<Function>,
-    /// Cells a side of a chunk: 16, 32 (the default), 64 or 128.
+    /// Cells a side of a chunk: 16 (the default), 32, 64 or 128.
     #[serde(default = "default_cells")]
     pub chunk_cells: u32,
     /// Metres between neighbouring samples; 1 by default.
@@ -59,7 +59,7 @@ fn random_seed() -> i64 {
     -1
 }
 fn default_cells() -> u32 {
-    32
+    16
 }
 fn one_metre() -> PositiveMetres {
     PositiveMetres(1.0)

@@ -170,11 +170,11 @@ fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody
             // A chunk asked for at another level is asked for again at this one.
             body.pending.retain(|p| p.key != key);
             let (recipe, seed, cells) = (body.recipe.clone(), body.seed, body.cells);
-            let (geometry, rule, skirt_m) = (body.geometry, body.rule, body.skirt_m);
+            let (geometry, rule, skirt_m, morph) = (body.geometry, body.rule, body.skirt_m, stream.morph_band(level));
             let task = AsyncComputeTaskPool::get().spawn(async move {
                 let started = Instant::now();
                 let heights = ChunkHeights::generate(&recipe, seed, key, level, cells);
-                let mesh = heights.mesh(geometry, &rule, skirt_m);
+                let mesh = heights.mesh(geometry, &rule, skirt_m, morph);
                 let barycentre = mesh.barycentre;
                 (heights, mesh.into_surfaces(), barycentre, started.elapsed())
             });

@@ -7,7 +7,7 @@ use std::f32::consts::{PI, TAU};
 ///
 /// Front faces wind counter-clockwise seen from outside (the right-handed convention of
 /// `glam`); `normals` has one unit normal per position. `uvs`, `colors` and `blend` are either
-/// empty or hold one entry per position.
+/// empty or hold one entry per position, and so do `morph`'s targets when it is set.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {
     /// Vertex positions in model units.
@@ -23,6 +23,36 @@ pub struct MeshData {
     pub blend: Vec<f32>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Where the vertices move as the mesh is seen from farther away, or `None` for a mesh
+    /// that stays as it is.
+    pub morph: Option<Morph>,
+}
+
+/// A geomorph: each vertex slides towards its target, and its normal towards the target's,
+/// by its horizontal distance from the camera, so that a mesh turns into a coarser one
+/// continuously instead of at once (level-of-detail terrain).
+///
+/// The distance is measured in the world's `x`-`z` plane from the camera's eye to the
+/// vertex's unmorphed world position: the vertex is where `positions` has it up to
+/// `start_m`, at its target from `end_m` on, and moves linearly in between.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Morph {
+    /// Each vertex's target position, in model units.
+    pub positions: Vec<Vec3>,
+    /// Each vertex's target normal (unit length).
+    pub normals: Vec<Vec3>,
+    /// Metres at which the vertices start to move.
+    pub start_m: f32,
+    /// Metres at which they reach their targets; more than `start_m`.
+    pub end_m: f32,
+}
+
+impl Morph {
+    /// How far a vertex `distance_m` metres from the eye has moved towards its target, from
+    /// 0 to 1.
+    pub fn weight(&self, distance_m: f32) -> f32 {
+        ((distance_m - self.start_m) / (self.end_m - self.start_m).max(f32::MIN_POSITIVE)).clamp(0.0, 1.0)
+    }
 }
 
 impl MeshData {
@@ -31,11 +61,12 @@ impl MeshData {
         self.triangles.len()
     }
 
-    /// The smallest axis-aligned box holding every position, as `(min, max)`; `None` for a
-    /// mesh without positions.
+    /// The smallest axis-aligned box holding every position (and every morph target), as
+    /// `(min, max)`; `None` for a mesh without positions.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(min, max), &p| (min.min(p), max.max(p))))
+        let targets = self.morph.iter().flat_map(|morph| &morph.positions);
+        Some(self.positions.iter().chain(targets).fold((first, first), |(min, max), &p| (min.min(p), max.max(p))))
     }
 
     /// Appends a vertex and returns its index.

@@ -188,7 +188,7 @@ impl Renderer {
 mod tests {
     use super::*;
     use crate::clip::outside;
-    use crate::{Camera, Instance, Light, Material, MeshData, RenderSettings};
+    use crate::{Camera, Instance, Light, Material, MeshData, Morph, RenderSettings};
     use std::f32::consts::FRAC_PI_2;
     use std::sync::Arc;
 
@@ -451,5 +451,45 @@ mod tests {
         assert_eq!(strips(&image, image_strips), strips(&image_alone, image_strips));
         assert_eq!(strips(&light, light_strips), strips(&light_alone, light_strips));
         assert!(strips(&light, light_strips).iter().all(|strip| !strip.is_empty()), "the light sees the whole grid");
+    }
+
+    #[test]
+    fn a_morph_draws_the_mesh_near_its_targets_far_and_moves_in_between() {
+        // A plane of 20 m with a ridge, whose morph flattens it; seen from above its middle,
+        // lit from the side with shadows, so that both the image and the shadow map see the
+        // vertices wherever the morph puts them.
+        let mut ridged = MeshData::plane(16);
+        let flat = ridged.clone();
+        for (p, n) in ridged.positions.iter_mut().zip(&mut ridged.normals) {
+            p.y = (p.x * 9.0).cos() * 0.08;
+            *n = Vec3::new((p.x * 9.0).sin() * 0.7, 1.0, 0.0).normalize();
+        }
+        let morph = |start_m, end_m| {
+            let mut mesh = ridged.clone();
+            mesh.morph =
+                Some(Morph { positions: flat.positions.clone(), normals: flat.normals.clone(), start_m, end_m });
+            mesh
+        };
+        let draw = |mesh: MeshData| {
+            let model = Mat4::from_scale(Vec3::splat(20.0));
+            let mut target = Framebuffer::new(96, 64);
+            let frame = Frame {
+                camera: camera_at(Vec3::new(0.0, 9.0, 4.0), Vec3::ZERO),
+                light: high_light(),
+                background: SKY,
+                instances: &[instance(mesh, model, Vec3::ONE)],
+                settings: RenderSettings { shadows: true, ..RenderSettings::default() },
+            };
+            Renderer::default().render(&mut target, &TaskPool::new(), &frame);
+            target
+        };
+        let (near, far) = (draw(ridged.clone()), draw(flat.clone()));
+        assert_ne!(near.color(), far.color());
+        assert_eq!(draw(morph(100.0, 200.0)).color(), near.color(), "nearer than the start: unmoved");
+        assert_eq!(draw(morph(0.0, 1e-3)).color(), far.color(), "beyond the end: at the targets");
+        // Vertices 0 to 14 m from the eye (horizontally): the morph band across the middle.
+        let between = draw(morph(2.0, 8.0));
+        assert!(between.color() != near.color() && between.color() != far.color());
+        assert_eq!(morph(2.0, 8.0).morph.unwrap().weight(5.0), 0.5);
     }
 }

@@ -4,6 +4,7 @@
 use crate::camera::Light;
 use crate::clip::ClipLanes;
 use crate::frame::{Frame, Instance, Span};
+use crate::mesh::Morph;
 use crate::screen::ScreenVertex;
 use crate::shade::{VARYINGS, Varyings, slot};
 use bevy_math::{Mat4, Vec2, Vec3, Vec4};
@@ -68,11 +69,16 @@ impl VertexStage<'_> {
             let lanes = group..(group + VERTEX_LANES).min(count);
             let position = gather(&positions[lanes.clone()]);
             let world = ClipLanes::transform(span.model, position);
+            let mut world = [world.x, world.y, world.z];
+            let mut normal = gather(&normals[lanes.clone()]);
+            if let Some(morph) = &mesh.morph {
+                let targets = local + lanes.start..local + lanes.end;
+                (world, normal) = self.morphed(span.model, morph, targets, world, normal);
+            }
             // Projected from the world positions, exactly as clipping projects them again.
-            let world = [world.x, world.y, world.z];
             let screen =
                 ScreenVertex::lanes(&ClipLanes::transform(self.view_projection, world), self.width, self.height);
-            let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, gather(&normals[lanes.clone()])));
+            let normal = normalize_or_zero(ClipLanes::transform(normal_matrix, normal));
             let diffuse = self.frame.light.diffuse_lanes(normal);
             let light = self
                 .light
@@ -88,6 +94,32 @@ impl VertexStage<'_> {
                 }
             }
         }
+    }
+}
+
+impl VertexStage<'_> {
+    /// Lanes of world positions and model normals moved towards their `morph` targets (those
+    /// of the mesh's vertices `targets`) by their horizontal distance from the eye: four lanes
+    /// of [`Morph::weight`].
+    #[inline(always)]
+    fn morphed(
+        &self,
+        model: Mat4,
+        morph: &Morph,
+        targets: std::ops::Range<usize>,
+        world: [Vec4; 3],
+        normal: [Vec4; 3],
+    ) -> ([Vec4; 3], [Vec4; 3]) {
+        let eye = self.frame.camera.eye;
+        let (dx, dz) = (world[0] - Vec4::splat(eye.x), world[2] - Vec4::splat(eye.z));
+        let distance = (dx * dx + dz * dz).sqrt();
+        let span = Vec4::splat((morph.end_m - morph.start_m).max(f32::MIN_POSITIVE));
+        let t = ((distance - Vec4::splat(morph.start_m)) / span).clamp(Vec4::ZERO, Vec4::ONE);
+        let target = ClipLanes::transform(model, gather(&morph.positions[targets.clone()]));
+        let target_normal = gather(&morph.normals[targets]);
+        // Weighted this way, both ends are exact: the vertex at 0, its target at 1.
+        let lerp = |from: [Vec4; 3], to: [Vec4; 3]| std::array::from_fn(|k| from[k] * (Vec4::ONE - t) + to[k] * t);
+        (lerp(world, [target.x, target.y, target.z]), lerp(normal, target_normal))
     }
 }
 

@@ -107,6 +107,7 @@ fn steep_plane() -> (Camera, Instance) {
         colors: vec![],
         blend: vec![],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        morph: None,
     };
     let camera =
         Camera { eye: Vec3::new(0.0, 1.0, 1.5), target: Vec3::new(0.0, 0.0, -3.0), fov_y: 1.0, near: 0.1, far: 100.0 };
@@ -296,6 +297,7 @@ fn a_triangle_crossing_the_near_plane_is_cut() {
         colors: vec![Vec3::X, Vec3::Y, Vec3::Z],
         blend: vec![],
         triangles: vec![[0, 1, 2]],
+        morph: None,
     };
     let camera =
         Camera { eye: Vec3::new(0.0, 0.3, 0.0), target: Vec3::new(0.0, 0.0, -3.0), fov_y: 1.2, near: 0.1, far: 20.0 };
@@ -364,6 +366,7 @@ fn blend_weights_fade_one_texture_into_another() {
         colors: vec![],
         blend: vec![0.0, 1.0, 1.0, 0.0],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        morph: None,
     };
     let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, fov_y: 0.9, near: 0.1, far: 10.0 };
     let full = Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
