@@ -6,7 +6,9 @@
 //! and elevation (degrees above the horizon); I/K and J/L turn it.
 //!
 //! With Shift, the arrows fly the camera instead (eye and target together) at
-//! `camera.fly_speed_m_s`.
+//! `camera.fly_speed_m_s`. In the window, a drag on the view orbits the camera and the wheel
+//! moves it nearer or farther; with Shift (or the right button) a drag looks around from the
+//! eye ([`CameraParams::looked_around`]) and the wheel changes the fly speed.
 //!
 //! Parameters: `camera.{target.x|y|z, yaw_deg, pitch_deg, distance, fov_deg, fly_speed_m_s}` and
 //! `light.{azimuth_deg, elevation_deg, diffuse, ambient}`.
@@ -96,6 +98,16 @@ impl CameraParams {
             + self.distance * unit_from_angles(self.yaw_deg, self.pitch_deg.clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG))
     }
 
+    /// The camera turned by `yaw_deg` and `pitch_deg` about its eye instead of its target:
+    /// the eye stays, and the view turns as a head does (looking around while flying).
+    pub fn looked_around(&self, yaw_deg: f32, pitch_deg: f32) -> Self {
+        let eye = self.eye();
+        let yaw_deg = wrap_degrees(self.yaw_deg + yaw_deg);
+        let pitch_deg = (self.pitch_deg + pitch_deg).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        let target = eye - self.distance * unit_from_angles(yaw_deg, pitch_deg);
+        Self { target, yaw_deg, pitch_deg, ..self.clone() }
+    }
+
     /// The rasterizer's camera, with edited values brought back into their valid ranges.
     pub fn camera(&self) -> Camera {
         let near = self.near.max(1e-4);
@@ -159,6 +171,7 @@ impl DumpState for CameraParams {
         out.insert("position".into(), json!(self.eye().to_array()));
         out.insert("target".into(), json!(self.target.to_array()));
         out.insert("fov_deg".into(), json!(self.fov_deg));
+        out.insert("fly_speed_m_s".into(), json!(self.fly_speed_m_s));
     }
 }
 
@@ -289,6 +302,29 @@ mod tests {
         let camera = CameraParams::from(&def).camera();
         assert!((camera.eye - def.position.0).length() < 1e-5, "{}", camera.eye);
         assert_eq!(camera.target, def.look_at.0);
+    }
+
+    #[test]
+    fn looking_around_keeps_the_eye_and_turns_the_view() {
+        let camera = CameraParams {
+            target: Vec3::new(3.0, 1.0, -2.0),
+            yaw_deg: 20.0,
+            pitch_deg: 30.0,
+            distance: 12.0,
+            fov_deg: 60.0,
+            near: 0.1,
+            far: 500.0,
+            fly_speed_m_s: 30.0,
+        };
+        let turned = camera.looked_around(-90.0, -10.0);
+        assert!((turned.eye() - camera.eye()).length() < 1e-4, "the eye stays");
+        assert_eq!((turned.yaw_deg, turned.pitch_deg, turned.distance), (-70.0, 20.0, 12.0));
+        // Yaw down by 90 degrees turns the horizontal direction of view a quarter turn to
+        // the right (clockwise seen from above).
+        let view = |c: &CameraParams| (c.target - c.eye()).with_y(0.0).normalize();
+        let right = view(&camera).cross(Vec3::Y);
+        assert!((view(&turned) - right).length() < 1e-4, "{} vs {right}", view(&turned));
+        assert_eq!(camera.looked_around(0.0, 80.0).pitch_deg, MAX_PITCH_DEG);
     }
 
     #[test]

@@ -136,6 +136,22 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     }
     x.xdotool(&["mouseup", "1"]);
     sleep(Duration::from_millis(300));
+    // Drag with the right button to look around from the eye, and fly faster with Shift and
+    // the wheel.
+    x.xdotool(&["mousedown", "3"]);
+    for step in 1..=5 {
+        sleep(Duration::from_millis(40));
+        x.xdotool(&["mousemove", "--window", &window, &(fx + 120 - step * 12).to_string(), &fy.to_string()]);
+    }
+    x.xdotool(&["mouseup", "3"]);
+    sleep(Duration::from_millis(200));
+    x.xdotool(&["keydown", "shift"]);
+    for _ in 0..3 {
+        x.xdotool(&["click", "4"]);
+        sleep(Duration::from_millis(60));
+    }
+    x.xdotool(&["keyup", "shift"]);
+    sleep(Duration::from_millis(300));
     click(&x, &window, at::KEYS);
     click(&x, &window, at::PAUSE);
     // A smaller window: the panel keeps to the right edge, the view takes the rest.
@@ -170,6 +186,10 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     let (from, to) = (position(&initial), position(&state));
     let moved: f64 = from.iter().zip(&to).map(|(a, b)| (a - b).abs()).sum();
     assert!(moved > 0.5, "dragging on the view orbits the camera: from {from:?} to {to:?}");
+    let camera = |state: &serde_json::Value, field: &str| entity(state, "camera")[field].clone();
+    assert_ne!(camera(&state, "target"), camera(&initial, "target"), "a right-button drag looks around");
+    let speed = |state: &serde_json::Value| camera(state, "fly_speed_m_s").as_f64().unwrap();
+    assert!(speed(&state) > speed(&initial) * 1.05, "Shift and the wheel fly faster: {}", speed(&state));
     let frame = state["frame"].as_u64().unwrap();
     assert!(frame < u64::from(FRAMES) * 3 / 4, "the Pause button stops the clock: {frame} steps in {FRAMES} frames");
 

@@ -185,12 +185,21 @@ pub(super) fn draw_ui(world: &mut World) {
             // The frame is copied in here when the window is composed; egui only takes the input.
             let (rect, response) = ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
             (actions.view_min, actions.view_size) = (rect.min, rect.size());
-            let scroll = if response.hovered() { ui.input(|input| input.smooth_scroll_delta.y) } else { 0.0 };
+            let flying = ui.input(|input| input.modifiers.shift) || response.dragged_by(egui::PointerButton::Secondary);
+            // egui turns the wheel into horizontal scrolling while Shift is held.
+            let delta = ui.input(|input| input.smooth_scroll_delta);
+            let scroll = if !response.hovered() {
+                0.0
+            } else if flying {
+                delta.x + delta.y
+            } else {
+                delta.y
+            };
             let click = response.clicked().then(|| response.interact_pointer_pos()).flatten().map(|pos| {
                 let at = (pos - rect.min) / rect.size();
                 ViewClicked { ndc: Vec2::new(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0), aspect: rect.aspect_ratio() }
             });
-            ((response.dragged().then(|| response.drag_delta()), scroll), click)
+            (ViewPointer { drag: response.dragged().then(|| response.drag_delta()), scroll, flying }, click)
         })
         .inner;
     let (view, click) = view;
@@ -219,7 +228,7 @@ pub(super) fn draw_ui(world: &mut World) {
     world.resource_mut::<ViewArea>().origin = UVec2::new(x as u32, y as u32);
     let pixels = (actions.view_size * pixels_per_point).round();
     world.resource_mut::<RasterTarget>().size = UVec2::new(pixels.x.max(1.0) as u32, pixels.y.max(1.0) as u32);
-    orbit_with_mouse(world, view, &mut actions.edits);
+    camera_with_mouse(world, view, &mut actions.edits);
     for (name, value) in actions.edits {
         if let Err(error) = set_param(world, &name, value) {
             warn!("{error}");
@@ -246,22 +255,48 @@ pub(super) fn draw_ui(world: &mut World) {
     world.insert_resource(state);
 }
 
-/// Turns a drag on the view into camera yaw and pitch edits and the wheel into distance.
-fn orbit_with_mouse(
-    world: &mut World,
-    (drag, scroll): (Option<egui::Vec2>, f32),
-    edits: &mut Vec<(String, ParamValue)>,
-) {
+/// What the pointer did over the 3D view this frame.
+struct ViewPointer {
+    /// The drag, in points.
+    drag: Option<egui::Vec2>,
+    /// The wheel, in points.
+    scroll: f32,
+    /// Shift held or the right button dragging: the fly camera's gestures.
+    flying: bool,
+}
+
+/// Turns a drag on the view into camera edits: yaw and pitch about the target, or with
+/// `flying` about the eye; and the wheel into the camera's distance, or with `flying` its fly
+/// speed.
+fn camera_with_mouse(world: &mut World, pointer: ViewPointer, edits: &mut Vec<(String, ParamValue)>) {
     let Some(camera) = world.query::<&CameraParams>().iter(world).next() else { return };
-    if let Some(drag) = drag {
-        let yaw = camera.yaw_deg - drag.x * DRAG_DEG_PER_POINT;
-        let pitch = camera.pitch_deg + drag.y * DRAG_DEG_PER_POINT;
-        edits.push(("camera.yaw_deg".into(), ParamValue::Number(yaw as f64)));
-        edits.push(("camera.pitch_deg".into(), ParamValue::Number(pitch.clamp(-89.0, 89.0) as f64)));
+    let number = |name: &str, value: f32| (format!("camera.{name}"), ParamValue::Number(f64::from(value)));
+    if let Some(drag) = pointer.drag {
+        let (yaw, pitch) = (-drag.x * DRAG_DEG_PER_POINT, drag.y * DRAG_DEG_PER_POINT);
+        let turned = match pointer.flying {
+            true => camera.looked_around(yaw, pitch),
+            false => CameraParams {
+                yaw_deg: camera.yaw_deg + yaw,
+                pitch_deg: (camera.pitch_deg + pitch).clamp(-89.0, 89.0),
+                ..camera.clone()
+            },
+        };
+        edits.push(number("yaw_deg", turned.yaw_deg));
+        edits.push(number("pitch_deg", turned.pitch_deg));
+        if turned.target != camera.target {
+            edits.extend(
+                [("target.x", turned.target.x), ("target.y", turned.target.y), ("target.z", turned.target.z)]
+                    .map(|(name, value)| number(name, value)),
+            );
+        }
     }
-    if scroll != 0.0 {
-        let distance = camera.distance * WHEEL_ZOOM_PER_POINT.powf(scroll);
-        edits.push(("camera.distance".into(), ParamValue::Number(distance.max(camera.near * 2.0) as f64)));
+    if pointer.scroll != 0.0 {
+        let factor = WHEEL_ZOOM_PER_POINT.powf(pointer.scroll);
+        edits.push(match pointer.flying {
+            // Scrolling up (away from the user) flies faster.
+            true => number("fly_speed_m_s", (camera.fly_speed_m_s / factor).clamp(0.1, 10_000.0)),
+            false => number("distance", (camera.distance * factor).max(camera.near * 2.0)),
+        });
     }
 }
 

@@ -61,26 +61,63 @@ pub struct WorldChunk {
     pub checksum: u64,
 }
 
+/// A chunk's meshes, ready to spawn.
+#[derive(Debug, Clone)]
+pub struct MadeChunk {
+    /// The checksum of its heights.
+    pub checksum: u64,
+    /// One mesh per surface, in [`TerrainSurface::index`] order (empty where it has none).
+    pub surfaces: Vec<Arc<MeshData>>,
+    /// Where its meshes' origin lies from the chunk's first vertex, metres.
+    pub barycentre: Vec3,
+    /// How long making it took.
+    pub time: Duration,
+}
+
 /// A chunk being made.
 #[derive(Debug)]
 struct PendingChunk {
     key: ChunkKey,
     level: u8,
-    task: Task<(ChunkHeights, Vec<MeshData>, Vec3, Duration)>,
+    task: Task<MadeChunk>,
     frames_left: u32,
 }
 
-/// The live world: what it is made of and which chunks it has.
-#[derive(Component, Debug)]
-pub struct WorldBody {
+/// What a world's chunks are made of, shared with the tasks that make them.
+#[derive(Debug)]
+struct ChunkMaker {
     recipe: Arc<Recipe>,
-    /// The seed the heights are made with.
-    pub seed: u64,
+    seed: u64,
     stream: StreamSettings,
     geometry: Geometry,
     rule: BandRule,
     skirt_m: f32,
     cells: u32,
+}
+
+impl ChunkMaker {
+    /// Makes chunk `key` at `level`.
+    fn make(&self, key: ChunkKey, level: u8) -> MadeChunk {
+        let started = Instant::now();
+        let heights = ChunkHeights::generate(&self.recipe, self.seed, key, level, self.cells);
+        let mesh = heights.mesh(self.geometry, &self.rule, self.skirt_m, self.stream.morph_band(level));
+        let barycentre = mesh.barycentre;
+        let surfaces = mesh.into_surfaces().into_iter().map(Arc::new).collect();
+        MadeChunk { checksum: heights.checksum(), surfaces, barycentre, time: started.elapsed() }
+    }
+
+    /// Where chunk `key` starts, metres.
+    fn origin(&self, key: ChunkKey) -> Vec3 {
+        Vec3::new(key.x as f32, 0.0, key.z as f32) * self.stream.chunk_m
+    }
+}
+
+/// The live world: what it is made of and which chunks it has.
+#[derive(Component, Debug)]
+pub struct WorldBody {
+    maker: Arc<ChunkMaker>,
+    /// The seed the heights are made with.
+    pub seed: u64,
     budget: usize,
     /// The surfaces a chunk is drawn in, with their materials.
     surfaces: Vec<(TerrainSurface, Material)>,
@@ -88,12 +125,14 @@ pub struct WorldBody {
     resident: HashMap<ChunkKey, (u8, Entity, u64)>,
     /// Chunks being made, in the order they were asked for.
     pending: Vec<PendingChunk>,
-    /// Chunks made since the world was spawned.
+    /// Chunks made (or taken ready-made) and spawned since the world was spawned.
     pub made: u64,
-    /// Time spent making them (on the pool's threads).
+    /// Time spent making them (on the pool's threads; none for those made in advance).
     pub making_time: Duration,
     /// When the chunks of the last second were spawned (wall clock, for the panel's rate).
     recent: VecDeque<Instant>,
+    /// Chunks made in advance ([`WorldBody::make_in_advance`]), taken instead of being made.
+    in_advance: HashMap<(ChunkKey, u8), MadeChunk>,
 }
 
 impl WorldBody {
@@ -118,6 +157,27 @@ impl WorldBody {
     pub fn mean_making_time(&self) -> Duration {
         self.making_time.checked_div(self.made.max(1) as u32).unwrap_or_default()
     }
+
+    /// Where and at what detail chunks are wanted.
+    pub fn stream(&self) -> &StreamSettings {
+        &self.maker.stream
+    }
+
+    /// Makes `chunks` (at their levels) now, on the async compute pool's threads, and keeps
+    /// them: streaming then takes them ready-made, at the same frames as it would have made
+    /// them. For a camera path known in advance, and to measure a flight with nothing left to
+    /// make against the same flight streamed.
+    pub fn make_in_advance(&mut self, chunks: impl IntoIterator<Item = (ChunkKey, u8)>) {
+        let wanted: Vec<(ChunkKey, u8)> =
+            chunks.into_iter().filter(|chunk| !self.in_advance.contains_key(chunk)).collect();
+        let made = AsyncComputeTaskPool::get().scope(|scope| {
+            for &(key, level) in &wanted {
+                let maker = &self.maker;
+                scope.spawn(async move { maker.make(key, level) });
+            }
+        });
+        self.in_advance.extend(wanted.into_iter().zip(made));
+    }
 }
 
 /// Spawns a world entity of `def`.
@@ -125,17 +185,20 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
     entity.insert((
         Transform::default(),
         WorldBody {
-            recipe: built.recipe.clone(),
+            maker: Arc::new(ChunkMaker {
+                recipe: built.recipe.clone(),
+                seed: built.seed,
+                stream: built.stream,
+                geometry: Geometry {
+                    cell_m: def.cell_m.0,
+                    height_m: def.height_m.0,
+                    texture_cells: def.bands.texture_cells.0,
+                },
+                rule: def.bands.rule(),
+                skirt_m: def.skirt_m.0,
+                cells: def.chunk_cells,
+            }),
             seed: built.seed,
-            stream: built.stream,
-            geometry: Geometry {
-                cell_m: def.cell_m.0,
-                height_m: def.height_m.0,
-                texture_cells: def.bands.texture_cells.0,
-            },
-            rule: def.bands.rule(),
-            skirt_m: def.skirt_m.0,
-            cells: def.chunk_cells,
             budget: def.spawn_budget as usize,
             surfaces: surface_materials(&def.bands),
             resident: HashMap::new(),
@@ -143,6 +206,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
             made: 0,
             making_time: Duration::ZERO,
             recent: VecDeque::new(),
+            in_advance: HashMap::new(),
         },
     ));
 }
@@ -157,27 +221,29 @@ fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody
         let body = &mut *body;
         let resident: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, &(level, ..))| (key, level)).collect();
         let pending: HashMap<ChunkKey, u8> = body.pending.iter().map(|p| (p.key, p.level)).collect();
-        let plan = plan(&body.stream, camera, forward, &resident, &pending);
+        let plan = plan(&body.maker.stream, camera, forward, &resident, &pending);
         for key in plan.unload {
             if let Some((_, entity, _)) = body.resident.remove(&key) {
                 commands.entity(entity).despawn();
             }
         }
-        let stream = body.stream;
+        let stream = body.maker.stream;
         body.pending.retain(|p| stream.centre(p.key).distance(camera) <= stream.unload_radius_m);
         let room = (body.budget * IN_FLIGHT_FRAMES).saturating_sub(body.pending.len());
         for (key, level) in plan.requests.into_iter().take(room) {
             // A chunk asked for at another level is asked for again at this one.
             body.pending.retain(|p| p.key != key);
-            let (recipe, seed, cells) = (body.recipe.clone(), body.seed, body.cells);
-            let (geometry, rule, skirt_m, morph) = (body.geometry, body.rule, body.skirt_m, stream.morph_band(level));
-            let task = AsyncComputeTaskPool::get().spawn(async move {
-                let started = Instant::now();
-                let heights = ChunkHeights::generate(&recipe, seed, key, level, cells);
-                let mesh = heights.mesh(geometry, &rule, skirt_m, morph);
-                let barycentre = mesh.barycentre;
-                (heights, mesh.into_surfaces(), barycentre, started.elapsed())
-            });
+            let pool = AsyncComputeTaskPool::get();
+            let task = match body.in_advance.get(&(key, level)) {
+                Some(made) => {
+                    let made = MadeChunk { time: Duration::ZERO, ..made.clone() };
+                    pool.spawn(async move { made })
+                }
+                None => {
+                    let maker = body.maker.clone();
+                    pool.spawn(async move { maker.make(key, level) })
+                }
+            };
             body.pending.push(PendingChunk { key, level, task, frames_left: CHUNK_FRAMES });
         }
     }
@@ -197,19 +263,19 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
         while spawned < body.budget {
             let Some(index) = body.pending.iter().position(|p| p.frames_left == 0) else { break };
             let PendingChunk { key, level, task, .. } = body.pending.remove(index);
-            let (heights, mut meshes, barycentre, time) = block_on(task);
+            let made = block_on(task);
             body.made += 1;
-            body.making_time += time;
+            body.making_time += made.time;
             body.recent.push_back(now);
-            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * body.cells as f32 * body.geometry.cell_m;
-            let chunk = WorldChunk { key, level, checksum: heights.checksum() };
+            let chunk = WorldChunk { key, level, checksum: made.checksum };
+            let place = Transform::from_translation(body.maker.origin(key) + made.barycentre);
             let entity = commands
-                .spawn((chunk, Transform::from_translation(origin + barycentre), ChildOf(world)))
+                .spawn((chunk, place, ChildOf(world)))
                 .with_children(|parts| {
                     for (surface, material) in &body.surfaces {
-                        let mesh = meshes.get_mut(surface.index()).map(std::mem::take).unwrap_or_default();
+                        let Some(mesh) = made.surfaces.get(surface.index()) else { continue };
                         if !mesh.triangles.is_empty() {
-                            parts.spawn((*surface, RasterMesh { mesh: Arc::new(mesh), material: material.clone() }));
+                            parts.spawn((*surface, RasterMesh { mesh: mesh.clone(), material: material.clone() }));
                         }
                     }
                 })

@@ -137,3 +137,41 @@ fn a_camera_jump_across_many_chunks_keeps_to_the_budget_and_settles() {
     assert!(chunks.iter().all(|c| c.key.x as f32 * CHUNK_M > 1500.0), "only chunks around the new place");
     assert!(chunks.iter().any(|c| c.level == 0) && chunks.len() > 50, "{} chunks", chunks.len());
 }
+
+#[test]
+fn chunks_made_in_advance_stream_as_the_same_chunks_at_the_same_frames() {
+    // The same short flight twice: streamed, and with every chunk of it made beforehand.
+    let resident = |in_advance: bool| {
+        let mut app = small_app(&path("scenes/world.yaml"));
+        let stream = *app.world_mut().query::<&WorldBody>().single(app.world()).unwrap().stream();
+        if in_advance {
+            let wanted: Vec<_> = (0..40)
+                .flat_map(|frame| {
+                    let camera = bevy::math::Vec2::new(frame as f32 * 4.0, 150.0);
+                    let none = std::collections::HashMap::new();
+                    canopy::terrain::stream::plan(&stream, camera, bevy::math::Vec2::X, &none, &none).requests
+                })
+                .collect();
+            for mut body in app.world_mut().query::<&mut WorldBody>().iter_mut(app.world_mut()) {
+                body.make_in_advance(wanted.iter().copied());
+            }
+        }
+        let mut frames = Vec::new();
+        for frame in 0..40 {
+            for mut camera in app.world_mut().query::<&mut canopy::view::CameraParams>().iter_mut(app.world_mut()) {
+                camera.target.x = frame as f32 * 4.0;
+            }
+            app.update();
+            let mut chunks: Vec<WorldChunk> =
+                app.world_mut().query::<&WorldChunk>().iter(app.world()).copied().collect();
+            chunks.sort_by_key(|c| (c.key, c.level));
+            frames.push(chunks);
+        }
+        let body = app.world_mut().query::<&WorldBody>().single(app.world()).unwrap();
+        (frames, body.making_time)
+    };
+    let ((streamed, made), (ready, made_before)) = (resident(false), resident(true));
+    assert_eq!(streamed, ready, "the same chunks, levels and heights at every frame");
+    assert!(made > std::time::Duration::ZERO);
+    assert!(made_before < made, "little left to make while flying: {made_before:?} against {made:?}");
+}

@@ -1,0 +1,116 @@
+//! A flight over `scenes/world.yaml`: the camera flies straight ahead at 30 m/s for 60 s of
+//! fixed 60 Hz steps, rendered at 1280x720 with the scene's shadows, and every frame's
+//! wall-clock time (streaming, simulation and raster) is taken. The same flight is flown with
+//! streaming and with every chunk it will want made in advance ("frozen": streaming takes
+//! them ready-made, so nothing is generated during the flight), alternating, in one run.
+//!
+//! Run with `cargo bench --profile dev --bench world_flight [-- SECONDS]` (the profile of
+//! `cargo run`); prints a table per flight and the ratios the goal is stated in.
+
+use bevy::math::{UVec2, Vec2, Vec3Swizzles};
+use canopy::app::headless_app;
+use canopy::raster::plugin::RenderPolicy;
+use canopy::run::update_until_loaded;
+use canopy::terrain::stream::plan;
+use canopy::view::CameraParams;
+use canopy::world::WorldBody;
+use std::collections::{BTreeSet, HashMap};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const SCENE: &str = "scenes/world.yaml";
+const SIZE: UVec2 = UVec2::new(1280, 720);
+/// Metres a second, along the camera's horizontal direction of view.
+const SPEED_M_S: f32 = 30.0;
+const STEP_S: f32 = 1.0 / 60.0;
+/// Frames before the flight: the world around the start fills in and the caches warm up.
+const SETTLE: u32 = 240;
+
+/// Where the camera's target is at frame `frame` of a flight from `start` along `heading`.
+fn target_at(start: Vec2, heading: Vec2, frame: u32) -> Vec2 {
+    start + heading * SPEED_M_S * STEP_S * frame as f32
+}
+
+/// One flight of `frames` frames; with `frozen`, every chunk it will want made first.
+fn fly(frames: u32, frozen: bool) -> Result<Vec<Duration>, String> {
+    let scene = Path::new(SCENE);
+    let mut app = headless_app(scene, SIZE, false).map_err(|e| e.to_string())?;
+    update_until_loaded(&mut app, scene).map_err(|e| e.to_string())?;
+    app.world_mut().resource_mut::<RenderPolicy>().every_frame = true;
+    let camera = app.world_mut().query::<&CameraParams>().single(app.world()).map_err(|e| e.to_string())?.clone();
+    let (start, eye) = (camera.target.xz(), camera.eye().xz());
+    let heading = (start - eye).normalize();
+    let eye_offset = eye - start;
+    if frozen {
+        let made = Instant::now();
+        let mut bodies = app.world_mut().query::<&mut WorldBody>();
+        for mut body in bodies.iter_mut(app.world_mut()) {
+            // Every chunk the plan wants at some frame of the flight, at that frame's level.
+            let stream = *body.stream();
+            let mut wanted = BTreeSet::new();
+            for frame in 0..frames + SETTLE {
+                let eye = target_at(start, heading, frame.saturating_sub(SETTLE)) + eye_offset;
+                let requests = plan(&stream, eye, heading, &HashMap::new(), &HashMap::new()).requests;
+                wanted.extend(requests);
+            }
+            let count = wanted.len();
+            body.make_in_advance(wanted);
+            eprintln!("frozen: {count} chunks made in advance in {:.1} s", made.elapsed().as_secs_f64());
+        }
+    }
+    let mut times = Vec::with_capacity(frames as usize);
+    for frame in 0..SETTLE + frames {
+        let at = target_at(start, heading, frame.saturating_sub(SETTLE));
+        for mut camera in app.world_mut().query::<&mut CameraParams>().iter_mut(app.world_mut()) {
+            camera.target.x = at.x;
+            camera.target.z = at.y;
+        }
+        let started = Instant::now();
+        app.update();
+        if frame >= SETTLE {
+            times.push(started.elapsed());
+        }
+    }
+    Ok(times)
+}
+
+/// Median, 99th percentile and maximum, milliseconds.
+fn figures(times: &[Duration]) -> [f64; 3] {
+    let mut ms: Vec<f64> = times.iter().map(|t| t.as_secs_f64() * 1e3).collect();
+    ms.sort_by(f64::total_cmp);
+    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+    [at(0.5), at(0.99), ms[ms.len() - 1]]
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; a number is the flight's length in seconds.
+    let seconds: f32 = std::env::args().skip(1).find_map(|a| a.parse().ok()).unwrap_or(60.0);
+    let frames = (seconds / STEP_S).round() as u32;
+    println!("{SCENE}, {}x{}, {seconds} s at {SPEED_M_S} m/s ({frames} frames), flights alternating", SIZE.x, SIZE.y);
+    println!("| flight | median ms | p99 ms | max ms | max / median |");
+    println!("|---|---|---|---|---|");
+    let mut results: HashMap<bool, Vec<[f64; 3]>> = HashMap::new();
+    for round in 0..2 {
+        for frozen in [false, true] {
+            let times = fly(frames, frozen).unwrap_or_else(|error| {
+                eprintln!("{error}");
+                std::process::exit(1)
+            });
+            let [median, p99, max] = figures(&times);
+            let name = if frozen { "frozen" } else { "streaming" };
+            println!("| {name} {} | {median:.1} | {p99:.1} | {max:.1} | {:.2} |", round + 1, max / median);
+            results.entry(frozen).or_default().push([median, p99, max]);
+        }
+    }
+    // Each round's streaming flight against the frozen one flown right after it.
+    println!();
+    for (round, (streaming, frozen)) in results[&false].iter().zip(&results[&true]).enumerate() {
+        println!(
+            "round {}: streaming / frozen: median {:.2}, p99 {:.2}; streaming max / its median {:.2}",
+            round + 1,
+            streaming[0] / frozen[0],
+            streaming[1] / frozen[1],
+            streaming[2] / streaming[0],
+        );
+    }
+}
