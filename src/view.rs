@@ -98,14 +98,19 @@ impl CameraParams {
             + self.distance * unit_from_angles(self.yaw_deg, self.pitch_deg.clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG))
     }
 
+    /// The camera turned by `yaw_deg` and `pitch_deg` about its target (orbiting).
+    pub fn orbited(&self, yaw_deg: f32, pitch_deg: f32) -> Self {
+        let yaw_deg = wrap_degrees(self.yaw_deg + yaw_deg);
+        let pitch_deg = (self.pitch_deg + pitch_deg).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        Self { yaw_deg, pitch_deg, ..self.clone() }
+    }
+
     /// The camera turned by `yaw_deg` and `pitch_deg` about its eye instead of its target:
     /// the eye stays, and the view turns as a head does (looking around while flying).
     pub fn looked_around(&self, yaw_deg: f32, pitch_deg: f32) -> Self {
-        let eye = self.eye();
-        let yaw_deg = wrap_degrees(self.yaw_deg + yaw_deg);
-        let pitch_deg = (self.pitch_deg + pitch_deg).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
-        let target = eye - self.distance * unit_from_angles(yaw_deg, pitch_deg);
-        Self { target, yaw_deg, pitch_deg, ..self.clone() }
+        let turned = self.orbited(yaw_deg, pitch_deg);
+        let target = self.eye() - self.distance * unit_from_angles(turned.yaw_deg, turned.pitch_deg);
+        Self { target, ..turned }
     }
 
     /// The rasterizer's camera, with edited values brought back into their valid ranges.
@@ -246,8 +251,7 @@ fn orbit_camera(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut cameras: Q
             camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
             continue;
         }
-        camera.yaw_deg = wrap_degrees(camera.yaw_deg + yaw * ORBIT_DEG_PER_S * dt);
-        camera.pitch_deg = (camera.pitch_deg + pitch * ORBIT_DEG_PER_S * dt).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        *camera = camera.orbited(yaw * ORBIT_DEG_PER_S * dt, pitch * ORBIT_DEG_PER_S * dt);
         camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
     }
 }

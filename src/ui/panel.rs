@@ -275,11 +275,7 @@ fn camera_with_mouse(world: &mut World, pointer: ViewPointer, edits: &mut Vec<(S
         let (yaw, pitch) = (-drag.x * DRAG_DEG_PER_POINT, drag.y * DRAG_DEG_PER_POINT);
         let turned = match pointer.flying {
             true => camera.looked_around(yaw, pitch),
-            false => CameraParams {
-                yaw_deg: camera.yaw_deg + yaw,
-                pitch_deg: (camera.pitch_deg + pitch).clamp(-89.0, 89.0),
-                ..camera.clone()
-            },
+            false => camera.orbited(yaw, pitch),
         };
         edits.push(number("yaw_deg", turned.yaw_deg));
         edits.push(number("pitch_deg", turned.pitch_deg));

@@ -10,7 +10,7 @@ pub fn world_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     let Some(body) = world.get::<WorldBody>(entity) else { return };
     egui::Grid::new("world-figures").num_columns(2).show(ui, |ui| {
         ui.label("seed");
-        ui.label(body.seed.to_string());
+        ui.label(body.seed().to_string());
         ui.end_row();
         for (level, count) in body.per_level().iter().enumerate() {
             ui.label(format!("level {level}"));

@@ -63,15 +63,15 @@ pub struct WorldChunk {
 
 /// A chunk's meshes, ready to spawn.
 #[derive(Debug, Clone)]
-pub struct MadeChunk {
+struct MadeChunk {
     /// The checksum of its heights.
-    pub checksum: u64,
+    checksum: u64,
     /// One mesh per surface, in [`TerrainSurface::index`] order (empty where it has none).
-    pub surfaces: Vec<Arc<MeshData>>,
+    surfaces: Vec<Arc<MeshData>>,
     /// Where its meshes' origin lies from the chunk's first vertex, metres.
-    pub barycentre: Vec3,
+    barycentre: Vec3,
     /// How long making it took.
-    pub time: Duration,
+    time: Duration,
 }
 
 /// A chunk being made.
@@ -116,8 +116,6 @@ impl ChunkMaker {
 #[derive(Component, Debug)]
 pub struct WorldBody {
     maker: Arc<ChunkMaker>,
-    /// The seed the heights are made with.
-    pub seed: u64,
     budget: usize,
     /// The surfaces a chunk is drawn in, with their materials.
     surfaces: Vec<(TerrainSurface, Material)>,
@@ -156,6 +154,11 @@ impl WorldBody {
     /// The mean time making a chunk took on the pool's threads.
     pub fn mean_making_time(&self) -> Duration {
         self.making_time.checked_div(self.made.max(1) as u32).unwrap_or_default()
+    }
+
+    /// The seed the heights are made with.
+    pub fn seed(&self) -> u64 {
+        self.maker.seed
     }
 
     /// Where and at what detail chunks are wanted.
@@ -198,7 +201,6 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
                 skirt_m: def.skirt_m.0,
                 cells: def.chunk_cells,
             }),
-            seed: built.seed,
             budget: def.spawn_budget as usize,
             surfaces: surface_materials(&def.bands),
             resident: HashMap::new(),
@@ -290,7 +292,7 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
 
 impl DumpState for WorldBody {
     fn dump(&self, out: &mut Map<String, Value>) {
-        out.insert("seed".into(), json!(self.seed));
+        out.insert("seed".into(), json!(self.seed()));
         let mut chunks: Vec<(ChunkKey, u8, u64)> =
             self.resident.iter().map(|(&key, &(level, _, checksum))| (key, level, checksum)).collect();
         chunks.sort();
