@@ -83,9 +83,12 @@ impl StreamSettings {
             return refuse(
                 "level_distances_m",
                 format!(
-                    "levels {} m and {} m apart: chunks of {} m need {need:.1} m between levels (a chunk's \
-                     diagonal, half a chunk of lead and a quarter of a chunk to morph over)",
-                    pair[0], pair[1], self.chunk_m
+                    "levels at {} m and {} m lie {} m apart: chunks of {} m need {need:.1} m between levels \
+                     (a chunk's diagonal, half a chunk of lead and a quarter of a chunk to morph over)",
+                    pair[0],
+                    pair[1],
+                    pair[1] - pair[0],
+                    self.chunk_m
                 ),
             );
         }
