@@ -5,7 +5,7 @@
 //! Run with `cargo bench --bench world_chunks`.
 
 use canopy::terrain::bands::{BandBlend, BandRule};
-use canopy::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS};
+use canopy::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
 use canopy::terrain::generate::Recipe;
 use canopy::terrain::section::Geometry;
 use canopy::terrain::stream::StreamSettings;
@@ -23,6 +23,7 @@ fn main() {
          {perlin: {scale: 400, octaves: 3}, weight: 0.9, apply: [{power: 3}]}]}",
     )
     .expect("the world's recipe");
+    let heights = WorldHeights::Unbounded { recipe: std::sync::Arc::new(recipe), seed: 11 };
     let geometry = Geometry { cell_m: 1.0, height_m: 60.0, texture_cells: 8.0 };
     let rule = BandRule {
         thresholds: [0.32, 0.36, 0.62, 0.8],
@@ -35,6 +36,7 @@ fn main() {
         load_radius_m: 180.0,
         unload_radius_m: 220.0,
         level_distances_m: [50.0, 100.0, 150.0],
+        bounds: None,
     };
     println!("chunks of {CELLS} x {CELLS} cells, one core, {CHUNKS} chunks a level");
     println!("| level | vertices a side | chunks / s | ms / chunk | mesh bytes / chunk |");
@@ -45,7 +47,7 @@ fn main() {
         let started = Instant::now();
         for k in 0..CHUNKS {
             let key = ChunkKey { x: k % 8, z: k / 8 + 100 * i32::from(level) };
-            let heights = ChunkHeights::generate(&recipe, 11, key, level, CELLS);
+            let heights = ChunkHeights::generate(&heights, key, level, CELLS);
             let mesh = black_box(heights.mesh(geometry, &rule, 3.0, world.morph_band(level)));
             bytes += mesh
                 .into_surfaces()

@@ -1,6 +1,7 @@
-//! Chunks of an unbounded world: square pieces of the world's heights, `cells` cells a side,
-//! at a level of detail, each made from the world's recipe at world sample positions alone, so
-//! that neighbouring chunks share their edge heights, and their edge normals, bit for bit.
+//! Chunks of a world: square pieces of the world's heights, `cells` cells a side, at a level of
+//! detail, each made from the world's heights (a recipe without bounds, or a finite map) at
+//! world sample positions alone, so that neighbouring chunks share their edge heights, and
+//! their edge normals, bit for bit.
 //!
 //! Level `l` keeps every `2^l`-th sample: a chunk has `cells / 2^l + 1` vertices a side, and
 //! two rings of samples beyond its edges (at its own spacing) from which the normals at its
@@ -20,6 +21,7 @@ use super::heightmap::Heightmap;
 use super::section::{Geometry, MorphTargets, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals};
 use bevy::math::Vec3;
 use canopy_raster::MeshData;
+use std::sync::Arc;
 
 /// Levels of detail: level 0 has every sample, each next level every second of the one
 /// before.
@@ -40,6 +42,50 @@ pub struct MorphBand {
     pub start_m: f32,
     /// Where they have the coarser level's shape.
     pub end_m: f32,
+}
+
+/// Where a world's heights come from.
+#[derive(Debug, Clone)]
+pub enum WorldHeights {
+    /// A recipe (checked, and unbounded by [`Recipe::check_unbounded`]) and its seed: heights
+    /// of their position alone, without bounds.
+    Unbounded {
+        /// The recipe.
+        recipe: Arc<Recipe>,
+        /// Its seed.
+        seed: u64,
+    },
+    /// A finite map, its first sample at world sample `(0, 0)`; a sample beyond its edges has
+    /// the height of the nearest one on them.
+    Map(Arc<Heightmap>),
+}
+
+impl WorldHeights {
+    /// The heights at the world samples `(x0 + i * step, z0 + j * step)` for `i < width`,
+    /// `j < depth`, row by row; grids that share a sample give it bit for bit.
+    pub fn sample_grid(&self, origin: [i32; 2], step: i32, size: [usize; 2]) -> Vec<f32> {
+        match self {
+            Self::Unbounded { recipe, seed } => recipe.sample_grid(*seed, origin, step, size),
+            Self::Map(map) => {
+                let [x0, z0] = origin.map(i64::from);
+                let step = i64::from(step.max(1));
+                let clamp = |v: i64, samples: u32| v.clamp(0, i64::from(samples) - 1) as u32;
+                (0..size[1] as i64)
+                    .flat_map(|j| (0..size[0] as i64).map(move |i| (i, j)))
+                    .map(|(i, j)| map.at(clamp(x0 + i * step, map.width()), clamp(z0 + j * step, map.height())))
+                    .collect()
+            }
+        }
+    }
+
+    /// Chunks of `cells` cells along x and z that cover a finite map, from chunk `(0, 0)`
+    /// (its far edges extended by their samples to whole chunks); `None` without bounds.
+    pub fn chunks(&self, cells: u32) -> Option<[u32; 2]> {
+        match self {
+            Self::Unbounded { .. } => None,
+            Self::Map(map) => Some([map.width(), map.height()].map(|samples| (samples - 1).div_ceil(cells).max(1))),
+        }
+    }
 }
 
 /// Which chunk: its place on the grid of chunks (chunk `(x, z)` starts at world sample
@@ -66,9 +112,8 @@ pub struct ChunkHeights {
 
 impl ChunkHeights {
     /// The heights of chunk `key` at `level` (below [`LEVELS`]) of a world of chunks of
-    /// `cells` cells (one of [`CHUNK_CELLS`]) made by `recipe` (checked, and unbounded by
-    /// [`Recipe::check_unbounded`]) with `seed`.
-    pub fn generate(recipe: &Recipe, seed: u64, key: ChunkKey, level: u8, cells: u32) -> Self {
+    /// `cells` cells (one of [`CHUNK_CELLS`]) with `heights`.
+    pub fn generate(heights: &WorldHeights, key: ChunkKey, level: u8, cells: u32) -> Self {
         let level = level.min(LEVELS - 1);
         // Other sizes are brought to the nearest allowed bound: a chunk stays small.
         let cells = cells.clamp(CHUNK_CELLS[0], CHUNK_CELLS[CHUNK_CELLS.len() - 1]);
@@ -76,7 +121,7 @@ impl ChunkHeights {
         let side = (cells >> level) + 1 + 2 * RING;
         let ring = RING as i32 * step;
         let origin = [key.x * cells as i32 - ring, key.z * cells as i32 - ring];
-        let heights = recipe.sample_grid(seed, origin, step, [side as usize; 2]);
+        let heights = heights.sample_grid(origin, step, [side as usize; 2]);
         let map =
             Heightmap::from_values(side, side, heights).expect("a grid of side x side heights, at most 133 a side");
         Self { key, level, map }
@@ -212,12 +257,18 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
-    fn world() -> Recipe {
-        serde_yaml::from_str(
+    /// A world of hills and mountains with `seed`.
+    fn world_seeded(seed: u64) -> WorldHeights {
+        let recipe = serde_yaml::from_str(
             "{size: [1, 1], seed: 3, layers: [{perlin: {scale: 40, octaves: 5}}, \
              {perlin: {scale: 150, octaves: 2}, weight: 0.8, apply: [{power: 3}]}]}",
         )
-        .unwrap()
+        .unwrap();
+        WorldHeights::Unbounded { recipe: Arc::new(recipe), seed }
+    }
+
+    fn world() -> WorldHeights {
+        world_seeded(3)
     }
 
     /// The heights of a chunk's vertices (without the ring), row by row.
@@ -230,7 +281,7 @@ mod tests {
     fn neighbours_share_their_edges_at_every_level() {
         let recipe = world();
         for level in 0..LEVELS {
-            let chunk = |x, z| ChunkHeights::generate(&recipe, 3, ChunkKey { x, z }, level, 32);
+            let chunk = |x, z| ChunkHeights::generate(&recipe, ChunkKey { x, z }, level, 32);
             let (here, east, south) = (chunk(-1, 2), chunk(0, 2), chunk(-1, 3));
             let (rows, east_rows, south_rows) = (vertex_rows(&here), vertex_rows(&east), vertex_rows(&south));
             let n = rows.len();
@@ -261,6 +312,34 @@ mod tests {
         }
     }
 
+    #[test]
+    fn chunks_of_a_finite_map_cover_it_and_take_its_samples() {
+        // 50 x 35 samples: 49 x 34 cells, whole chunks of 16 cells 4 x 3, the last ones
+        // reaching beyond the map.
+        let map = Heightmap::from_fn(50, 35, |x, z| (x * 100 + z) as f32 * 1e-4).unwrap();
+        let heights = WorldHeights::Map(Arc::new(map.clone()));
+        assert_eq!(heights.chunks(16), Some([4, 3]));
+        assert_eq!(heights.chunks(64), Some([1, 1]));
+        assert_eq!(world().chunks(16), None);
+        for level in 0..LEVELS {
+            let step = 1u32 << level;
+            for (x, z) in [(0, 0), (3, 1), (2, 2)] {
+                let chunk = ChunkHeights::generate(&heights, ChunkKey { x, z }, level, 16);
+                let n = chunk.vertices();
+                for (j, i) in (0..n).flat_map(|j| (0..n).map(move |i| (j, i))) {
+                    // Samples beyond the map take the nearest edge sample's height.
+                    let sample = |v: u32, key: i32, samples: u32| (key as u32 * 16 + v * step).min(samples - 1);
+                    let expected = map.at(sample(i, x, 50), sample(j, z, 35));
+                    assert_eq!(chunk.height(i, j), expected, "level {level}, chunk ({x}, {z}), vertex ({i}, {j})");
+                }
+                // The ring before the map's first sample repeats it.
+                if x == 0 {
+                    assert_eq!(chunk.map.at(0, RING), chunk.map.at(RING, RING));
+                }
+            }
+        }
+    }
+
     /// The eye and target the drawings look with: from above chunk `(0, 0)` across the border
     /// with chunk `(1, 0)` (chunks of 32 m).
     const EYE: Vec3 = Vec3::new(10.0, 75.0, 16.0);
@@ -276,12 +355,11 @@ mod tests {
         use crate::raster::{Camera, Frame, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
         use bevy::math::Mat4;
         use bevy::tasks::TaskPool;
-        use std::sync::Arc;
         let geometry = Geometry { cell_m: 1.0, height_m: 60.0, texture_cells: 8.0 };
         let mut instances = Vec::new();
         let (mut lowest, mut highest) = (f32::MAX, f32::MIN);
         for &(key, level) in chunks {
-            let chunk = ChunkHeights::generate(&world(), 3, key, level, 32);
+            let chunk = ChunkHeights::generate(&world(), key, level, 32);
             let stats = chunk.map.stats();
             (lowest, highest) = (lowest.min(stats.min * geometry.height_m), highest.max(stats.max * geometry.height_m));
             let mesh = chunk.mesh(geometry, &BandRule::default(), skirt_m, morph);
@@ -346,7 +424,7 @@ mod tests {
         // The texture coordinates along one edge of a chunk, by the edge vertex's place along
         // z in level-0 samples.
         let edge = |key: ChunkKey, level: u8, east: bool| {
-            let chunk = ChunkHeights::generate(&recipe, 3, key, level, 32);
+            let chunk = ChunkHeights::generate(&recipe, key, level, 32);
             let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0, None);
             let spacing = chunk.spacing_m(geometry.cell_m);
             let column = if east { 32.0 } else { 0.0 };
@@ -375,16 +453,15 @@ mod tests {
     fn a_coarser_level_keeps_every_other_sample_and_chunks_are_deterministic() {
         let recipe = world();
         let key = ChunkKey { x: 4, z: -7 };
-        let (fine, coarse) =
-            (ChunkHeights::generate(&recipe, 3, key, 0, 64), ChunkHeights::generate(&recipe, 3, key, 1, 64));
+        let (fine, coarse) = (ChunkHeights::generate(&recipe, key, 0, 64), ChunkHeights::generate(&recipe, key, 1, 64));
         let (fine_rows, coarse_rows) = (vertex_rows(&fine), vertex_rows(&coarse));
         for (j, row) in coarse_rows.iter().enumerate() {
             for (i, h) in row.iter().enumerate() {
                 assert_eq!(*h, fine_rows[2 * j][2 * i], "({i}, {j})");
             }
         }
-        assert_eq!(fine.checksum(), ChunkHeights::generate(&recipe, 3, key, 0, 64).checksum());
-        assert_ne!(fine.checksum(), ChunkHeights::generate(&recipe, 4, key, 0, 64).checksum());
+        assert_eq!(fine.checksum(), ChunkHeights::generate(&recipe, key, 0, 64).checksum());
+        assert_ne!(fine.checksum(), ChunkHeights::generate(&world_seeded(4), key, 0, 64).checksum());
     }
 
     #[test]
@@ -394,13 +471,9 @@ mod tests {
         let band = MorphBand { start_m: 10.0, end_m: 20.0 };
         let key = ChunkKey { x: -2, z: 5 };
         for level in 0..LEVELS - 1 {
-            let fine = ChunkHeights::generate(&recipe, 3, key, level, 32).mesh(
-                geometry,
-                &BandRule::default(),
-                0.0,
-                Some(band),
-            );
-            let coarse_heights = ChunkHeights::generate(&recipe, 3, key, level + 1, 32);
+            let fine =
+                ChunkHeights::generate(&recipe, key, level, 32).mesh(geometry, &BandRule::default(), 0.0, Some(band));
+            let coarse_heights = ChunkHeights::generate(&recipe, key, level + 1, 32);
             let coarse = coarse_heights.mesh(geometry, &BandRule::default(), 0.0, None);
             let spacing = coarse_heights.spacing_m(geometry.cell_m);
             let at = |i: u32, j: u32| coarse_heights.height(i, j) * geometry.height_m;

@@ -61,6 +61,73 @@ impl HeightDef {
             apply: self.apply.clone(),
         }
     }
+
+    /// Why the entry (field `key` of its entity) names no source of heights, or two.
+    pub fn validate(&self, key: &str, cx: &EntityContext) -> Result<(), FileError> {
+        match (&self.image, self.size.is_some() || !self.layers.is_empty()) {
+            (Some(_), true) => {
+                Err(cx.field_error("image", 0, key, "heights come from an image or from size and layers, not both"))
+            }
+            (None, false) => {
+                Err(cx.field_error(key, 0, key, "expected `image: FILE`, or `size` and `layers` to generate the map"))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The image file it reads, if any.
+    pub fn references(&self) -> Option<String> {
+        self.image.as_ref().map(|file| file.path.clone())
+    }
+
+    /// Decodes `file` if it is the image (the entry being field `key` of its entity).
+    pub fn resolve(&mut self, key: &str, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        if self.image.as_ref().is_some_and(|image| image.path == file.file) {
+            let field = format!("{key}.image");
+            let map = file
+                .decoded(|_, bytes| image_io::decode(bytes).map_err(|error| error.to_string()))
+                .map_err(|error| cx.field_error("image", 0, &field, format!("{}: {error}", file.path.display())))?;
+            self.decoded = Some(map);
+        }
+        Ok(())
+    }
+
+    /// The map (the entry being field `key` of its entity): the image's with the functions
+    /// applied, or generated, with the seed it was generated with (drawn, and printed, for -1).
+    pub fn build(&self, key: &str, cx: &BuildContext) -> Result<(Heightmap, Option<u64>), FileError> {
+        let (map, seed) = match &self.image {
+            Some(_) => {
+                let field = format!("{key}.image");
+                let Some(map) = &self.decoded else {
+                    return Err(cx.entity.field_error("image", 0, &field, "the image was not read"));
+                };
+                let mut map = (**map).clone();
+                for function in &self.apply {
+                    let field = format!("{key}.apply");
+                    function.check().map_err(|message| cx.entity.field_error("apply", 0, &field, message))?;
+                    function.apply(&mut map);
+                }
+                (map, None)
+            }
+            None => {
+                let recipe = self.recipe();
+                recipe.check().map_err(|error| {
+                    let located = if error.key == "size" && self.size.is_none() { key } else { error.key };
+                    cx.entity.field_error(located, error.nth, &format!("{key}.{}", error.field), &error.message)
+                })?;
+                let seed = recipe.seed_used(draw_seed);
+                if recipe.seed == -1 {
+                    println!("{}: seed -1 drew seed {seed}", cx.entity.field(&format!("{key}.seed")));
+                }
+                let map = recipe.generate(seed).map_err(|error| cx.entity.field_error(key, 0, key, error))?;
+                (map, Some(seed))
+            }
+        };
+        if map.values().iter().any(|h| !h.is_finite()) {
+            return Err(cx.entity.field_error(key, 0, key, "the map algebra made heights that are not finite numbers"));
+        }
+        Ok((map, seed))
+    }
 }
 
 /// The visible section: its first vertex in the map and its size in vertices.
@@ -262,75 +329,20 @@ impl EntityKind for TerrainKind {
     type Plugin = TerrainPlugin;
 
     fn validate(def: &TerrainDef, cx: &EntityContext) -> Result<(), FileError> {
-        let height = &def.height;
-        match (&height.image, height.size.is_some() || !height.layers.is_empty()) {
-            (Some(_), true) => Err(cx.field_error(
-                "image",
-                0,
-                "height",
-                "heights come from an image or from size and layers, not both",
-            )),
-            (None, false) => Err(cx.field_error(
-                "height",
-                0,
-                "height",
-                "expected `image: FILE`, or `size` and `layers` to generate the map",
-            )),
-            _ => Ok(()),
-        }
+        def.height.validate("height", cx)
     }
 
     fn references(def: &TerrainDef) -> Vec<String> {
-        let image = def.height.image.iter().map(|file| file.path.clone());
-        image.chain(def.bands.references()).collect()
+        def.height.references().into_iter().chain(def.bands.references()).collect()
     }
 
     fn resolve(def: &mut TerrainDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        if def.height.image.as_ref().is_some_and(|image| image.path == file.file) {
-            let map = file.decoded(|_, bytes| image_io::decode(bytes).map_err(|error| error.to_string())).map_err(
-                |error| cx.field_error("image", 0, "height.image", format!("{}: {error}", file.path.display())),
-            )?;
-            def.height.decoded = Some(map);
-        }
+        def.height.resolve("height", file, cx)?;
         def.bands.resolve(file, cx)
     }
 
     fn build(def: &TerrainDef, cx: &BuildContext) -> Result<TerrainBuilt, FileError> {
-        let height = &def.height;
-        let (map, seed) = match &height.image {
-            Some(_) => {
-                let Some(map) = &height.decoded else {
-                    return Err(cx.entity.field_error("image", 0, "height.image", "the image was not read"));
-                };
-                let mut map = (**map).clone();
-                for function in &height.apply {
-                    function.check().map_err(|message| cx.entity.field_error("apply", 0, "height.apply", message))?;
-                    function.apply(&mut map);
-                }
-                (map, None)
-            }
-            None => {
-                let recipe = height.recipe();
-                recipe.check().map_err(|error| {
-                    let key = if error.key == "size" && height.size.is_none() { "height" } else { error.key };
-                    cx.entity.field_error(key, error.nth, &format!("height.{}", error.field), &error.message)
-                })?;
-                let seed = recipe.seed_used(draw_seed);
-                if recipe.seed == -1 {
-                    println!("{}: seed -1 drew seed {seed}", cx.entity.field("height.seed"));
-                }
-                let map = recipe.generate(seed).map_err(|error| cx.entity.field_error("height", 0, "height", error))?;
-                (map, Some(seed))
-            }
-        };
-        if map.values().iter().any(|h| !h.is_finite()) {
-            return Err(cx.entity.field_error(
-                "height",
-                0,
-                "height",
-                "the map algebra made heights that are not finite numbers",
-            ));
-        }
+        let (map, seed) = def.height.build("height", cx)?;
         let section = Section { origin: def.section.origin, size: def.section.size };
         // The default size fits small maps; a size the file asks for must fit.
         let section = if def.section.size == default_section_size() { section.clamped(&map) } else { section };

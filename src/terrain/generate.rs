@@ -383,7 +383,8 @@ impl Recipe {
             key,
             nth,
             message: format!(
-                "{message}: an unbounded world is made piece by piece, each height from its position alone"
+                "{message}: an unbounded world is made piece by piece, each height from its position alone \
+                 (a finite world's `map` may use it)"
             ),
         };
         let mut applies = 0;

@@ -1,7 +1,8 @@
-//! Which chunks of an unbounded world to have, around a camera: the plan that streaming
-//! carries out each frame.
+//! Which chunks of a world to have, around a camera: the plan that streaming carries out each
+//! frame.
 //!
-//! Chunks whose centre lies within the load radius of the camera are wanted, each at the level
+//! Chunks whose centre lies within the load radius of the camera (and, in a finite world,
+//! within its bounds) are wanted, each at the level
 //! of detail its distance asks for; they are requested nearest first, those ahead of the camera
 //! before those behind. A chunk is let go only beyond the unload radius, larger than the load
 //! radius, so that a camera moving back and forth across the border makes no churn. Resident
@@ -39,6 +40,8 @@ pub struct StreamSettings {
     pub unload_radius_m: f32,
     /// From these distances on (metres, rising) chunks take levels 1, 2, ... of detail.
     pub level_distances_m: [f32; LEVELS as usize - 1],
+    /// Chunks along x and z of a finite world, from chunk `(0, 0)`; `None` without bounds.
+    pub bounds: Option<[u32; 2]>,
 }
 
 impl StreamSettings {
@@ -123,7 +126,14 @@ impl StreamSettings {
     /// radius of some point, at most a square of chunks around it.
     pub fn max_resident(&self) -> usize {
         let across = 2 * (self.unload_radius_m / self.chunk_m).ceil() as usize + 1;
-        across * across
+        let [x, z] = self.bounds.map_or([across; 2], |bounds| bounds.map(|b| (b as usize).min(across)));
+        x * z
+    }
+
+    /// Whether chunk `key` is part of the world.
+    pub fn contains(&self, key: ChunkKey) -> bool {
+        self.bounds
+            .is_none_or(|[x, z]| (0..x as i64).contains(&i64::from(key.x)) && (0..z as i64).contains(&i64::from(key.z)))
     }
 
     /// The centre of chunk `key`, in metres.
@@ -184,6 +194,7 @@ pub fn plan(
     // Every chunk wanted whose level is neither resident nor asked for yet.
     let mut requests: Vec<(ChunkKey, u8, bool, f32)> = (-reach..=reach)
         .flat_map(|dz| (-reach..=reach).map(move |dx| ChunkKey { x: around.x + dx, z: around.y + dz }))
+        .filter(|&key| settings.contains(key))
         .filter_map(|key| {
             let d = distance(key);
             (d < settings.load_radius_m).then(|| (key, settings.chunk_level(key, camera), d))
@@ -211,7 +222,22 @@ mod tests {
             load_radius_m: 140.0,
             unload_radius_m: 170.0,
             level_distances_m: [30.0, 65.0, 100.0],
+            bounds: None,
         }
+    }
+
+    #[test]
+    fn a_finite_world_wants_its_own_chunks_alone() {
+        let settings = StreamSettings { bounds: Some([5, 3]), ..settings() };
+        assert_eq!(settings.max_resident(), 15);
+        // From inside, beside its edge, and from far outside it.
+        for (camera, wanted) in [(Vec2::new(8.0, 8.0), 15), (Vec2::new(-60.0, 20.0), 15), (Vec2::new(-400.0, 0.0), 0)] {
+            let plan = plan(&settings, camera, Vec2::X, &HashMap::new(), &HashMap::new());
+            assert!(plan.requests.iter().all(|&(key, _)| settings.contains(key)), "{camera}: {plan:?}");
+            assert_eq!(plan.requests.len(), wanted, "{camera}");
+        }
+        assert!(!settings.contains(ChunkKey { x: 5, z: 0 }) && !settings.contains(ChunkKey { x: 0, z: -1 }));
+        assert!(settings.contains(ChunkKey { x: 4, z: 2 }));
     }
 
     #[test]

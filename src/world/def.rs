@@ -1,12 +1,12 @@
-//! The `world:` entry of a scene file: the heights' recipe, the chunks, the streaming radii and
-//! levels, and the bands.
+//! The `world:` entry of a scene file: the heights (a recipe without bounds, or a finite map),
+//! the chunks, the streaming radii and levels, and the bands.
 
 use super::plugin::spawn_world;
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::values::PositiveMetres;
 use crate::foundation::yaml::FileError;
-use crate::terrain::chunk::{CHUNK_CELLS, LEVELS};
-use crate::terrain::def::{BandsDef, draw_seed};
+use crate::terrain::chunk::{CHUNK_CELLS, LEVELS, WorldHeights};
+use crate::terrain::def::{BandsDef, HeightDef, draw_seed};
 use crate::terrain::generate::{Function, Layer, Recipe};
 use crate::terrain::stream::StreamSettings;
 use bevy::ecs::world::EntityWorldMut;
@@ -17,11 +17,17 @@ use std::sync::Arc;
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldDef {
-    /// The seed; -1 (the default) draws one, which is printed and dumped.
+    /// A finite world: its heights from an image or a generated map, as a terrain's
+    /// `height` (any generator and function), its first sample at the origin. Without it the
+    /// world has no bounds and its heights are `layers`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<HeightDef>,
+    /// The seed of the layers; -1 (the default) draws one, which is printed and dumped.
     #[serde(default = "random_seed")]
     pub seed: i64,
-    /// The height layers: Perlin noise, combined by map algebra (heights of their position
-    /// alone: no diamond-square, hills or `normalize`).
+    /// The height layers of a world without bounds: Perlin noise, combined by map algebra
+    /// (heights of their position alone: no diamond-square, hills or `normalize`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub layers: Vec<Layer>,
     /// Functions applied to the combined heights, in order.
     #[serde(default, with = "serde_yaml::with::singleton_map_recursive", skip_serializing_if = "Vec::is_empty")]
@@ -84,29 +90,50 @@ fn default_skirt() -> PositiveMetres {
 }
 
 impl WorldDef {
-    /// The heights' recipe (its size unused: a world has none).
+    /// The recipe of the layers (its size unused: a world without bounds has none).
     pub fn recipe(&self) -> Recipe {
         Recipe { size: [1, 1], seed: self.seed, layers: self.layers.clone(), apply: self.apply.clone() }
     }
 
-    /// The streaming settings.
-    pub fn stream(&self) -> StreamSettings {
+    /// The streaming settings, for a world of `bounds` chunks (`None` without bounds).
+    pub fn stream(&self, bounds: Option<[u32; 2]>) -> StreamSettings {
         StreamSettings {
             chunk_m: self.chunk_cells as f32 * self.cell_m.0,
             load_radius_m: self.load_radius_m.0,
             unload_radius_m: self.unload_radius_m.0,
             level_distances_m: self.level_distances_m,
+            bounds,
         }
+    }
+
+    /// The heights, and the seed they were made with (none for an image): the map's, or the
+    /// recipe's, checked.
+    fn heights(&self, cx: &BuildContext) -> Result<(WorldHeights, Option<u64>), FileError> {
+        if let Some(map) = &self.map {
+            let (map, seed) = map.build("map", cx)?;
+            return Ok((WorldHeights::Map(Arc::new(map)), seed));
+        }
+        let recipe = self.recipe();
+        let located = |error: crate::terrain::generate::RecipeError| {
+            cx.entity.field_error(error.key, error.nth, &error.field, &error.message)
+        };
+        recipe.check().map_err(located)?;
+        recipe.check_unbounded().map_err(located)?;
+        let seed = recipe.seed_used(draw_seed);
+        if recipe.seed == -1 {
+            println!("{}: seed -1 drew seed {seed}", cx.entity.field("seed"));
+        }
+        Ok((WorldHeights::Unbounded { recipe: Arc::new(recipe), seed }, Some(seed)))
     }
 }
 
-/// What a world's build made: its checked recipe, the seed used and the streaming settings.
+/// What a world's build made: its heights, the seed used and the streaming settings.
 #[derive(Debug, Clone)]
 pub struct WorldBuilt {
-    /// The heights' recipe.
-    pub recipe: Arc<Recipe>,
-    /// The seed (drawn when the file says -1).
-    pub seed: u64,
+    /// The heights.
+    pub heights: WorldHeights,
+    /// The seed the heights were made with (drawn when the file says -1); none for an image.
+    pub seed: Option<u64>,
     /// Where chunks are wanted.
     pub stream: StreamSettings,
 }
@@ -121,26 +148,51 @@ impl EntityKind for WorldKind {
     type Built = WorldBuilt;
     type Plugin = super::plugin::WorldPlugin;
 
+    fn validate(def: &WorldDef, cx: &EntityContext) -> Result<(), FileError> {
+        match &def.map {
+            Some(_) if !def.layers.is_empty() || !def.apply.is_empty() || def.seed != -1 => {
+                let beside = if !def.layers.is_empty() {
+                    "layers"
+                } else if !def.apply.is_empty() {
+                    "apply"
+                } else {
+                    "seed"
+                };
+                let message = format!(
+                    "`{beside}` beside `map`: a finite world's heights are its map's, so its seed, layers and \
+                     apply go inside `map`"
+                );
+                Err(cx.field_error("map", 0, "map", message))
+            }
+            Some(map) => map.validate("map", cx),
+            None if def.layers.is_empty() => Err(cx.field_error(
+                "world",
+                0,
+                "layers",
+                "expected `layers` for a world without bounds, or a `map` for a finite one",
+            )),
+            None => Ok(()),
+        }
+    }
+
     fn references(def: &WorldDef) -> Vec<String> {
-        def.bands.references()
+        def.map.iter().flat_map(HeightDef::references).chain(def.bands.references()).collect()
     }
 
     fn resolve(def: &mut WorldDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        if let Some(map) = &mut def.map {
+            map.resolve("map", file, cx)?;
+        }
         def.bands.resolve(file, cx)
     }
 
     fn build(def: &WorldDef, cx: &BuildContext) -> Result<WorldBuilt, FileError> {
-        let recipe = def.recipe();
-        let located = |error: crate::terrain::generate::RecipeError| {
-            cx.entity.field_error(error.key, error.nth, &error.field, &error.message)
-        };
-        recipe.check().map_err(located)?;
-        recipe.check_unbounded().map_err(located)?;
         if !CHUNK_CELLS.contains(&def.chunk_cells) {
             let message = format!("expected one of {CHUNK_CELLS:?} cells, found {}", def.chunk_cells);
             return Err(cx.entity.field_error("chunk_cells", 0, "chunk_cells", message));
         }
-        let stream = def.stream();
+        let (heights, seed) = def.heights(cx)?;
+        let stream = def.stream(heights.chunks(def.chunk_cells));
         stream.check().map_err(|error| {
             // The chunk's side follows from `chunk_cells` and `cell_m`, both checked already.
             let key = if error.field == "chunk_m" { "chunk_cells" } else { error.field };
@@ -151,14 +203,18 @@ impl EntityKind for WorldKind {
             return Err(cx.entity.field_error("spawn_budget", 0, "spawn_budget", message));
         }
         def.bands.rule().check().map_err(|message| cx.entity.field_error("bands", 0, "bands", message))?;
-        let seed = recipe.seed_used(draw_seed);
-        if recipe.seed == -1 {
-            println!("{}: seed -1 drew seed {seed}", cx.entity.field("seed"));
-        }
-        Ok(WorldBuilt { recipe: Arc::new(recipe), seed, stream })
+        Ok(WorldBuilt { heights, seed, stream })
     }
 
     fn spawn(def: &WorldDef, built: &WorldBuilt, entity: &mut EntityWorldMut) {
         spawn_world(entity, def, built);
+    }
+
+    fn saved(def: &WorldDef) -> WorldDef {
+        let mut saved = def.clone();
+        if let Some(map) = &mut saved.map {
+            map.decoded = None;
+        }
+        saved
     }
 }

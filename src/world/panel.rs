@@ -9,9 +9,16 @@ use bevy_egui::egui;
 pub fn world_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     let Some(body) = world.get::<WorldBody>(entity) else { return };
     egui::Grid::new("world-figures").num_columns(2).show(ui, |ui| {
-        ui.label("seed");
-        ui.label(body.seed().to_string());
-        ui.end_row();
+        if let Some(seed) = body.seed() {
+            ui.label("seed");
+            ui.label(seed.to_string());
+            ui.end_row();
+        }
+        if let Some([x, z]) = body.stream().bounds {
+            ui.label("bounds");
+            ui.label(format!("{x} x {z} chunks"));
+            ui.end_row();
+        }
         for (level, count) in body.per_level().iter().enumerate() {
             ui.label(format!("level {level}"));
             ui.label(format!("{count} chunks"));

@@ -13,8 +13,7 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::ControlSystems;
 use crate::raster::{Material, MeshData, RasterMesh};
 use crate::terrain::bands::BandRule;
-use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS};
-use crate::terrain::generate::Recipe;
+use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
 use crate::terrain::plugin::{TerrainSurface, surface_materials};
 use crate::terrain::section::Geometry;
 use crate::terrain::stream::{StreamSettings, plan};
@@ -86,8 +85,7 @@ struct PendingChunk {
 /// What a world's chunks are made of, shared with the tasks that make them.
 #[derive(Debug)]
 struct ChunkMaker {
-    recipe: Arc<Recipe>,
-    seed: u64,
+    heights: WorldHeights,
     stream: StreamSettings,
     geometry: Geometry,
     rule: BandRule,
@@ -99,7 +97,7 @@ impl ChunkMaker {
     /// Makes chunk `key` at `level`.
     fn make(&self, key: ChunkKey, level: u8) -> MadeChunk {
         let started = Instant::now();
-        let heights = ChunkHeights::generate(&self.recipe, self.seed, key, level, self.cells);
+        let heights = ChunkHeights::generate(&self.heights, key, level, self.cells);
         let mesh = heights.mesh(self.geometry, &self.rule, self.skirt_m, self.stream.morph_band(level));
         let barycentre = mesh.barycentre;
         let surfaces = mesh.into_surfaces().into_iter().map(Arc::new).collect();
@@ -116,6 +114,8 @@ impl ChunkMaker {
 #[derive(Component, Debug)]
 pub struct WorldBody {
     maker: Arc<ChunkMaker>,
+    /// The seed the heights were made with; none for an image.
+    seed: Option<u64>,
     budget: usize,
     /// The surfaces a chunk is drawn in, with their materials.
     surfaces: Vec<(TerrainSurface, Material)>,
@@ -156,9 +156,9 @@ impl WorldBody {
         self.making_time.checked_div(self.made.max(1) as u32).unwrap_or_default()
     }
 
-    /// The seed the heights are made with.
-    pub fn seed(&self) -> u64 {
-        self.maker.seed
+    /// The seed the heights are made with; none for an image.
+    pub fn seed(&self) -> Option<u64> {
+        self.seed
     }
 
     /// Where and at what detail chunks are wanted.
@@ -189,8 +189,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
         Transform::default(),
         WorldBody {
             maker: Arc::new(ChunkMaker {
-                recipe: built.recipe.clone(),
-                seed: built.seed,
+                heights: built.heights.clone(),
                 stream: built.stream,
                 geometry: Geometry {
                     cell_m: def.cell_m.0,
@@ -201,6 +200,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
                 skirt_m: def.skirt_m.0,
                 cells: def.chunk_cells,
             }),
+            seed: built.seed,
             budget: def.spawn_budget as usize,
             surfaces: surface_materials(&def.bands),
             resident: HashMap::new(),
@@ -293,6 +293,9 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
 impl DumpState for WorldBody {
     fn dump(&self, out: &mut Map<String, Value>) {
         out.insert("seed".into(), json!(self.seed()));
+        if let Some(bounds) = self.stream().bounds {
+            out.insert("bounds_chunks".into(), json!(bounds));
+        }
         let mut chunks: Vec<(ChunkKey, u8, u64)> =
             self.resident.iter().map(|(&key, &(level, _, checksum))| (key, level, checksum)).collect();
         chunks.sort();

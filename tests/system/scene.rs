@@ -108,6 +108,14 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("world_hills.yaml", Some(6), &["entities[0].world.layers[1]", "the hill algorithm needs a whole map"]),
     ("world_radii.yaml", Some(6), &["entities[0].world.unload_radius_m", "greater than the load radius (200)"]),
     ("world_cells.yaml", Some(5), &["entities[0].world.chunk_cells", "one of [16, 32, 64, 128]", "found 20"]),
+    ("world_map_and_layers.yaml", Some(3), &["entities[0].world.map", "`layers` beside `map`", "go inside `map`"]),
+    ("world_no_heights.yaml", Some(3), &["entities[0].world.layers", "expected `layers`", "or a `map`"]),
+    ("world_map_image_and_size.yaml", Some(4), &["entities[0].world.map", "an image or from size and layers"]),
+    (
+        "world_levels_too_close.yaml",
+        Some(6),
+        &["entities[0].world.level_distances_m", "levels at 50 m and 80 m lie 30 m apart", "need 69.3 m"],
+    ),
 ];
 
 #[test]

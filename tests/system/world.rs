@@ -1,8 +1,12 @@
 //! The streamed world: chunks around the camera at their levels, the same chunks for the same
-//! camera path, new chunks ahead of a moving camera and far ones let go, and the per-frame
-//! spawn budget.
+//! camera path, new chunks ahead of a moving camera and far ones let go, the per-frame spawn
+//! budget, and finite worlds (a generated map, an image) streamed within their bounds.
 
 use super::common::*;
+use canopy::run::{RunOptions, run_headless};
+use canopy::terrain::chunk::{ChunkHeights, ChunkKey, WorldHeights};
+use canopy::terrain::heightmap::Heightmap;
+use canopy::terrain::image_io::{self, Encoding};
 use canopy::world::{WorldBody, WorldChunk};
 use serde_json::Value;
 
@@ -174,4 +178,72 @@ fn chunks_made_in_advance_stream_as_the_same_chunks_at_the_same_frames() {
     assert_eq!(streamed, ready, "the same chunks, levels and heights at every frame");
     assert!(made > std::time::Duration::ZERO);
     assert!(made_before < made, "little left to make while flying: {made_before:?} against {made:?}");
+}
+
+/// The valley scene's world definition as the app reads it.
+fn valley_def() -> canopy::world::WorldDef {
+    let loaded = canopy::app::entity_kinds().load(&path("scenes/valley.yaml")).unwrap();
+    let entity = loaded.def.entities.iter().find(|e| e.key == "world").unwrap();
+    entity.def.as_any().downcast_ref::<canopy::world::WorldDef>().unwrap().clone()
+}
+
+/// The checksum a chunk of `heights` has, as dumped.
+fn checksum(heights: &WorldHeights, (x, z, level): (i64, i64, u64), cells: u32) -> String {
+    let key = ChunkKey { x: x as i32, z: z as i32 };
+    format!("{:016x}", ChunkHeights::generate(heights, key, level as u8, cells).checksum())
+}
+
+#[test]
+fn a_finite_world_streams_the_chunks_of_its_map_and_no_others() {
+    let output = run("scenes/valley.yaml", 90, None, SMALL);
+    let valley = entity(&output.dump, "valley");
+    assert_eq!(valley["bounds_chunks"], serde_json::json!([16, 16]), "257 samples: 16 chunks of 16 cells");
+    let camera = vec3(&entity(&output.dump, "camera")["position"]);
+    let resident = chunks(valley);
+    let inside = |x: i64, z: i64| (0..16).contains(&x) && (0..16).contains(&z);
+    assert!(resident.iter().all(|&(x, z, ..)| inside(x, z)), "only the map's chunks");
+    // Every chunk of the map within the load radius (400 m) is there.
+    let wanted = (0..16).flat_map(|z| (0..16).map(move |x| (x, z))).filter(|&(x, z)| distance(camera, x, z) < 400.0);
+    assert_eq!(resident.len(), wanted.count());
+    // Each has the map's heights: the whole generated map (hills and `normalize`), cut.
+    let def = valley_def();
+    let map = def.map.as_ref().unwrap().recipe().generate(5).unwrap();
+    let heights = WorldHeights::Map(std::sync::Arc::new(map));
+    for &(x, z, level, ref dumped) in &resident {
+        assert_eq!(*dumped, checksum(&heights, (x, z, level), 16), "({x}, {z}) at level {level}");
+    }
+}
+
+#[test]
+fn a_world_over_an_image_streams_its_heights() {
+    let folder = tempfile::tempdir().unwrap();
+    // 40 x 24 samples: chunks of 16 cells 3 x 2, the last ones reaching beyond the image.
+    let map =
+        Heightmap::from_fn(40, 24, |x, z| ((x as f32 * 0.3).sin() + (z as f32 * 0.2).cos()) * 0.25 + 0.5).unwrap();
+    image_io::save(&map, &folder.path().join("heights.png"), Encoding::Png16).unwrap();
+    let scene = "
+camera: { position: [20, 40, -30], look_at: [20, 0, 12] }
+background: \"#ff00ff\"
+entities:
+  - name: land
+    world:
+      map: { image: heights.png }
+      height_m: 10
+";
+    std::fs::write(folder.path().join("scene.yaml"), scene).unwrap();
+    let options =
+        RunOptions { scene: folder.path().join("scene.yaml"), frames: 10, timeline: None, size: SMALL, log: false };
+    let output = run_headless(&options).unwrap_or_else(|e| panic!("{e}"));
+    let land = entity(&output.dump, "land");
+    assert_eq!(land["seed"], Value::Null, "an image has no seed");
+    assert_eq!(land["bounds_chunks"], serde_json::json!([3, 2]));
+    let decoded = image_io::decode(&std::fs::read(folder.path().join("heights.png")).unwrap()).unwrap();
+    let heights = WorldHeights::Map(std::sync::Arc::new(decoded));
+    let resident = chunks(land);
+    assert_eq!(resident.len(), 6);
+    for &(x, z, level, ref dumped) in &resident {
+        assert_eq!(*dumped, checksum(&heights, (x, z, level), 16), "({x}, {z}) at level {level}");
+    }
+    // The ground fills the middle of the frame.
+    assert_ne!(output.framebuffer.pixel(80, 60), [255, 0, 255, 255]);
 }
