@@ -47,11 +47,13 @@ fn main() {
         let started = Instant::now();
         for k in 0..CHUNKS {
             let key = ChunkKey { x: k % 8, z: k / 8 + 100 * i32::from(level) };
-            let heights = ChunkHeights::generate(&heights, key, level, CELLS);
-            let mesh = black_box(heights.mesh(geometry, &rule, 3.0, world.morph_band(level)));
+            let chunk = ChunkHeights::generate(&heights, key, level, CELLS);
+            let mesh = black_box(chunk.mesh(geometry, &rule, 3.0, world.morph_band(level)));
             bytes += mesh
+                .surfaces
                 .into_surfaces()
                 .iter()
+                .chain(mesh.skirts.iter().flatten())
                 .map(|m| {
                     let morph = m.morph.as_ref().map_or(0, |morph| morph.positions.len() * 24);
                     m.positions.len() * 24 + morph + m.uvs.len() * 8 + m.blend.len() * 4 + m.triangles.len() * 12

@@ -7,6 +7,9 @@
 //! Run with `cargo bench --profile dev --bench world_flight [-- SECONDS]` (the profile of
 //! `cargo run`); prints a table per flight and the ratios the goal is stated in.
 
+#[path = "common/frame_times.rs"]
+mod frame_times;
+
 use bevy::math::{UVec2, Vec2, Vec3Swizzles};
 use canopy::app::headless_app;
 use canopy::raster::plugin::RenderPolicy;
@@ -14,6 +17,7 @@ use canopy::run::update_until_loaded;
 use canopy::terrain::stream::plan;
 use canopy::view::CameraParams;
 use canopy::world::WorldBody;
+use frame_times::figures;
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -72,14 +76,6 @@ fn fly(frames: u32, frozen: bool) -> Result<Vec<Duration>, String> {
         }
     }
     Ok(times)
-}
-
-/// Median, 99th percentile and maximum, milliseconds.
-fn figures(times: &[Duration]) -> [f64; 3] {
-    let mut ms: Vec<f64> = times.iter().map(|t| t.as_secs_f64() * 1e3).collect();
-    ms.sort_by(f64::total_cmp);
-    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
-    [at(0.5), at(0.99), ms[ms.len() - 1]]
 }
 
 fn main() {

@@ -18,9 +18,11 @@
 use super::bands::BandRule;
 use super::generate::Recipe;
 use super::heightmap::Heightmap;
-use super::section::{Geometry, MorphTargets, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals};
+use super::section::{
+    Geometry, MorphTargets, Placement, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals,
+};
 use bevy::math::Vec3;
-use canopy_raster::MeshData;
+use canopy_raster::{MeshData, Morph};
 use std::sync::Arc;
 
 /// Levels of detail: level 0 has every sample, each next level every second of the one
@@ -88,6 +90,21 @@ impl WorldHeights {
     }
 }
 
+/// The four sides of a chunk, as the step to the chunk across each: -x, +x, -z, +z.
+pub const SIDES: [[i32; 2]; 4] = [[-1, 0], [1, 0], [0, -1], [0, 1]];
+
+/// A chunk's meshes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChunkMesh {
+    /// The surface itself.
+    pub surfaces: SectionMesh,
+    /// Per side of [`SIDES`], one strip per surface (in [`SectionMesh::into_surfaces`] order,
+    /// empty where the surface has no edge there) hanging below that side's edges; no strips
+    /// without skirts. Chunks of one level meet without a gap, so only where levels meet
+    /// are they needed.
+    pub skirts: [Vec<MeshData>; 4],
+}
+
 /// Which chunk: its place on the grid of chunks (chunk `(x, z)` starts at world sample
 /// `(x * cells, z * cells)`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -144,32 +161,39 @@ impl ChunkHeights {
 
     /// The chunk's meshes, banded by `rule`, with `geometry`'s spacing between level-0
     /// samples (the chunk's own vertices are `2^level` times as far apart), skirts `skirt_m`
-    /// metres deep along its four edges (none for 0), and with `morph` (below the coarsest
-    /// level) morphing into the next level's shape over its distances.
-    pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32, morph: Option<MorphBand>) -> SectionMesh {
+    /// metres deep along its four sides (none for 0), and with `morph` (below the coarsest
+    /// level) morphing into the next level's shape over its distances. Positions are in the
+    /// world's metres (the barycentre is zero), so that the vertices neighbouring chunks share
+    /// are placed bit for bit alike and their meshes meet without a gap.
+    pub fn mesh(&self, geometry: Geometry, rule: &BandRule, skirt_m: f32, morph: Option<MorphBand>) -> ChunkMesh {
         let geometry = Geometry { cell_m: self.spacing_m(geometry.cell_m), ..geometry };
+        let frame = self.frame();
         let n = self.vertices();
-        // Texture coordinates fixed to the world's samples, so that textures run on across
-        // chunks of every level.
-        let step = 1u32 << self.level;
-        let origin = [self.key.x, self.key.z].map(|k| i64::from(k) * i64::from((n - 1) * step));
         let section = Section { origin: [RING, RING], size: [n, n] };
         let targets = morph.filter(|_| self.level + 1 < LEVELS).map(|band| self.morph_targets(geometry, band));
-        let frame = SampleFrame { origin, step };
-        let mut mesh = mesh_section_in(&self.map, section, geometry, rule, frame, targets.as_ref());
-        if skirt_m > 0.0 {
-            let last = (n - 1) as f32 * geometry.cell_m;
-            for part in mesh.bands.iter_mut().chain(&mut mesh.borders) {
-                add_skirts(part, mesh.barycentre, last, skirt_m);
+        let surfaces = mesh_section_in(&self.map, section, geometry, rule, frame, Placement::Samples, targets.as_ref());
+        let corners = [frame.metres([0, 0], geometry.cell_m), frame.metres([n - 1, n - 1], geometry.cell_m)];
+        let skirts = std::array::from_fn(|side| match skirt_m > 0.0 {
+            true => {
+                surfaces.bands.iter().chain(&surfaces.borders).map(|part| skirt(part, side, corners, skirt_m)).collect()
             }
-        }
-        mesh
+            false => Vec::new(),
+        });
+        ChunkMesh { surfaces, skirts }
+    }
+
+    /// The world samples the chunk's vertices stand for: texture coordinates and positions
+    /// fixed to them run on across chunks of every level.
+    fn frame(&self) -> SampleFrame {
+        let step = 1u32 << self.level;
+        let cells = (self.vertices() - 1) * step;
+        SampleFrame { origin: [self.key.x, self.key.z].map(|k| i64::from(k) * i64::from(cells)), step }
     }
 
     /// Where each vertex lies on the next coarser level's mesh, and that mesh's normal there,
     /// for vertices `geometry.cell_m` apart.
     fn morph_targets(&self, geometry: Geometry, band: MorphBand) -> MorphTargets {
-        let n = self.vertices();
+        let (n, frame) = (self.vertices(), self.frame());
         // The coarser level's samples are every second of this chunk's, the first ring
         // dropped and the second kept as theirs.
         let side = self.map.width() / 2 + 1;
@@ -196,7 +220,8 @@ impl ChunkHeights {
                     true => (metres(a), normal(a)),
                     false => ((metres(a) + metres(b)) * 0.5, (normal(a) + normal(b)).normalize_or(Vec3::Y)),
                 };
-                positions.push(Vec3::new(i as f32 * geometry.cell_m, height, j as f32 * geometry.cell_m));
+                let [x, z] = frame.metres([i, j], geometry.cell_m);
+                positions.push(Vec3::new(x, height, z));
                 normals.push(normal);
             }
         }
@@ -210,46 +235,55 @@ impl ChunkHeights {
     }
 }
 
-/// Hangs a strip `depth` metres deep below every edge of `mesh` on the border of its chunk,
-/// whose vertices lie from 0 to `last` metres along x and z (positions relative to
-/// `barycentre`), facing out of the chunk.
-fn add_skirts(mesh: &mut MeshData, barycentre: Vec3, last: f32, depth: f32) {
-    // Which border line a vertex lies on, as a bit each: -x, +x, -z, +z.
-    let tolerance = last * 1e-5;
-    let sides = |p: Vec3| {
-        let p = p + barycentre;
-        let on = |v: f32, at: f32| u8::from((v - at).abs() <= tolerance);
-        on(p.x, 0.0) | on(p.x, last) << 1 | on(p.z, 0.0) << 2 | on(p.z, last) << 3
+/// The strip hanging `depth` metres below the edges of `mesh` on side `side` (an index into
+/// [`SIDES`]) of its chunk, whose vertices lie from `corners[0]` to `corners[1]` metres along
+/// x and z, facing out of the chunk; empty where the mesh has no edge there. Its top vertices
+/// are copies of the edge's own, so it meets the surface without a gap.
+fn skirt(mesh: &MeshData, side: usize, [low, high]: [[f32; 2]; 2], depth: f32) -> MeshData {
+    // A vertex on the side has the corners' own coordinate there.
+    let on_side = |v: u32| {
+        let p = mesh.positions[v as usize];
+        [p.x == low[0], p.x == high[0], p.z == low[1], p.z == high[1]][side]
     };
-    let mut skirts = Vec::new();
+    let mut strip = MeshData {
+        morph: mesh.morph.as_ref().map(|morph| Morph { positions: Vec::new(), normals: Vec::new(), ..*morph }),
+        ..MeshData::default()
+    };
+    // Each edge vertex's top copy in the strip (its bottom copy follows it).
+    let mut copies = vec![u32::MAX; mesh.positions.len()];
     for triangle in &mesh.triangles {
         for k in 0..3 {
             let (a, b) = (triangle[k], triangle[(k + 1) % 3]);
-            if sides(mesh.positions[a as usize]) & sides(mesh.positions[b as usize]) != 0 {
-                skirts.push((a, b));
+            if !(on_side(a) && on_side(b)) {
+                continue;
             }
+            let [a, b] = [a, b].map(|v| {
+                if copies[v as usize] == u32::MAX {
+                    copies[v as usize] = strip.positions.len() as u32;
+                    let v = v as usize;
+                    for drop in [0.0, depth] {
+                        strip.positions.push(mesh.positions[v] - Vec3::Y * drop);
+                        strip.normals.push(mesh.normals[v]);
+                        if let (Some(from), Some(to)) = (&mesh.morph, &mut strip.morph) {
+                            to.positions.push(from.positions[v] - Vec3::Y * drop);
+                            to.normals.push(from.normals[v]);
+                        }
+                        strip.uvs.push(mesh.uvs[v]);
+                        if !mesh.blend.is_empty() {
+                            strip.blend.push(mesh.blend[v]);
+                        }
+                    }
+                }
+                copies[v as usize]
+            });
+            // Taken in its triangle's winding, the edge gives the strip's triangles the
+            // winding that faces out of the chunk (front faces are counter-clockwise from
+            // outside).
+            strip.triangles.push([a, a + 1, b]);
+            strip.triangles.push([b, a + 1, b + 1]);
         }
     }
-    for (a, b) in skirts {
-        // Taken in its triangle's winding, the edge gives the strip's triangles the winding
-        // that faces out of the chunk (front faces are counter-clockwise from outside).
-        let [a_low, b_low] = [a, b].map(|v| {
-            let v = v as usize;
-            mesh.positions.push(mesh.positions[v] - Vec3::Y * depth);
-            mesh.normals.push(mesh.normals[v]);
-            if let Some(morph) = &mut mesh.morph {
-                morph.positions.push(morph.positions[v] - Vec3::Y * depth);
-                morph.normals.push(morph.normals[v]);
-            }
-            mesh.uvs.push(mesh.uvs[v]);
-            if !mesh.blend.is_empty() {
-                mesh.blend.push(mesh.blend[v]);
-            }
-            (mesh.positions.len() - 1) as u32
-        });
-        mesh.triangles.push([a, a_low, b]);
-        mesh.triangles.push([b, a_low, b_low]);
-    }
+    strip
 }
 
 #[cfg(test)]
@@ -271,6 +305,12 @@ mod tests {
         world_seeded(3)
     }
 
+    /// Where world position `p` lies from the first vertex of `chunk` (samples `cell_m` apart).
+    fn local(chunk: &ChunkHeights, p: Vec3, cell_m: f32) -> Vec3 {
+        let cells = ((chunk.vertices() - 1) << chunk.level) as f32;
+        p - Vec3::new(chunk.key.x as f32, 0.0, chunk.key.z as f32) * cells * cell_m
+    }
+
     /// The heights of a chunk's vertices (without the ring), row by row.
     fn vertex_rows(chunk: &ChunkHeights) -> Vec<Vec<u32>> {
         let n = chunk.vertices() as usize;
@@ -290,25 +330,28 @@ mod tests {
                 assert_eq!(row[n - 1], east_row[0], "level {level}: the east edge");
             }
             assert_eq!(rows[n - 1], south_rows[0], "level {level}: the south edge");
-            // The meshes' normals along the shared edge are equal too.
+            // The meshes' vertices along the shared edge, placed in the world, and their
+            // normals are equal too.
             let geometry = Geometry { cell_m: 0.3, height_m: 30.0, texture_cells: 8.0 };
             let rule = BandRule::default();
-            let normals = |chunk: &ChunkHeights, column: usize| {
-                let mesh = chunk.mesh(geometry, &rule, 0.0, None);
+            let edge = |chunk: &ChunkHeights, column: usize| {
+                let mesh = chunk.mesh(geometry, &rule, 0.0, None).surfaces;
                 let spacing = geometry.cell_m * (1u32 << level) as f32;
-                let mut edge: Vec<(i64, [u32; 3])> = mesh
+                let mut edge: Vec<(i64, [u32; 3], [u32; 3])> = mesh
                     .bands
                     .iter()
                     .flat_map(|m| m.positions.iter().zip(&m.normals))
-                    .map(|(p, n)| (*p + mesh.barycentre, n))
-                    .filter(|(p, _)| (p.x / spacing).round() as usize == column)
-                    .map(|(p, n)| ((p.z / spacing).round() as i64, n.to_array().map(f32::to_bits)))
+                    .filter(|(p, _)| (local(chunk, **p, geometry.cell_m).x / spacing).round() as usize == column)
+                    .map(|(p, n)| {
+                        let row = (local(chunk, *p, geometry.cell_m).z / spacing).round() as i64;
+                        (row, p.to_array().map(f32::to_bits), n.to_array().map(f32::to_bits))
+                    })
                     .collect();
                 edge.sort();
                 edge.dedup();
                 edge
             };
-            assert_eq!(normals(&here, n - 1), normals(&east, 0), "level {level}: normals across the east edge");
+            assert_eq!(edge(&here, n - 1), edge(&east, 0), "level {level}: vertices across the east edge");
         }
     }
 
@@ -363,9 +406,8 @@ mod tests {
             let stats = chunk.map.stats();
             (lowest, highest) = (lowest.min(stats.min * geometry.height_m), highest.max(stats.max * geometry.height_m));
             let mesh = chunk.mesh(geometry, &BandRule::default(), skirt_m, morph);
-            let origin = Vec3::new(key.x as f32, 0.0, key.z as f32) * 32.0 + mesh.barycentre;
-            for part in mesh.bands {
-                let model = Mat4::from_translation(origin);
+            for part in mesh.surfaces.bands.into_iter().chain(mesh.skirts.into_iter().flatten()) {
+                let model = Mat4::IDENTITY;
                 instances.push(Instance { mesh: Arc::new(part), model, material: Material::colored(Vec3::ONE) });
             }
         }
@@ -381,11 +423,11 @@ mod tests {
 
     const BACKGROUND: [u8; 4] = [255, 0, 255, 255];
 
-    /// Two chunks side by side, the first at level 0 and the second at level 2, seen from
-    /// above the first looking across their border: how many pixels whose ray must meet the
-    /// ground (it ends below the lowest height inside the two chunks) show the background.
-    fn background_through_the_border(skirt_m: f32) -> usize {
-        let chunks = [(ChunkKey { x: 0, z: 0 }, 0), (ChunkKey { x: 1, z: 0 }, 2)];
+    /// Chunks `(0, 0)` and `(1, 0)` side by side at `levels`, seen from above the first
+    /// looking across their border: how many pixels whose ray must meet the ground (it ends
+    /// below the lowest height inside the two chunks) show the background.
+    fn background_through_the_border(levels: [u8; 2], skirt_m: f32) -> usize {
+        let chunks = [(ChunkKey { x: 0, z: 0 }, levels[0]), (ChunkKey { x: 1, z: 0 }, levels[1])];
         let (image, camera, [lowest, _]) = draw_chunks(&chunks, skirt_m, None);
         let (width, height) = (image.width(), image.height());
         let world_from_ndc = camera.view_projection(width as f32 / height as f32).inverse();
@@ -413,8 +455,40 @@ mod tests {
 
     #[test]
     fn skirts_close_the_cracks_between_levels() {
-        assert!(background_through_the_border(0.0) > 0, "without skirts the border shows cracks");
-        assert_eq!(background_through_the_border(4.0), 0);
+        assert!(background_through_the_border([0, 2], 0.0) > 0, "without skirts the border shows cracks");
+        assert_eq!(background_through_the_border([0, 2], 4.0), 0);
+    }
+
+    #[test]
+    fn each_sides_skirt_hangs_from_that_side_alone_and_faces_out() {
+        let geometry = Geometry { cell_m: 0.5, height_m: 30.0, texture_cells: 8.0 };
+        let chunk = ChunkHeights::generate(&world(), ChunkKey { x: -3, z: 2 }, 1, 32);
+        let mesh = chunk.mesh(geometry, &BandRule::default(), 2.0, None);
+        // Chunk (-3, 2) of 16 m spans x from -48 to -32 m and z from 32 to 48 m.
+        let sides = [(0, -48.0), (0, -32.0), (2, 32.0), (2, 48.0)];
+        for (side, strips) in mesh.skirts.iter().enumerate() {
+            let (axis, at) = sides[side];
+            let outward = Vec3::new(SIDES[side][0] as f32, 0.0, SIDES[side][1] as f32);
+            let mut triangles = 0;
+            for strip in strips {
+                assert!(strip.positions.iter().all(|p| p.to_array()[axis] == at), "side {side}");
+                for t in &strip.triangles {
+                    let [a, b, c] = t.map(|v| strip.positions[v as usize]);
+                    // Counter-clockwise seen from outside: the face's normal points out.
+                    assert!((b - a).cross(c - a).dot(outward) > 0.0, "side {side}: {t:?}");
+                }
+                triangles += strip.triangles.len();
+            }
+            assert_eq!(triangles, 2 * 16, "side {side}: two triangles under each of its 16 edges");
+        }
+        assert!(chunk.mesh(geometry, &BandRule::default(), 0.0, None).skirts.iter().all(Vec::is_empty));
+    }
+
+    #[test]
+    fn chunks_of_one_level_meet_without_a_crack_and_without_skirts() {
+        for level in 0..LEVELS {
+            assert_eq!(background_through_the_border([level; 2], 0.0), 0, "level {level}");
+        }
     }
 
     #[test]
@@ -425,14 +499,14 @@ mod tests {
         // z in level-0 samples.
         let edge = |key: ChunkKey, level: u8, east: bool| {
             let chunk = ChunkHeights::generate(&recipe, key, level, 32);
-            let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0, None);
+            let mesh = chunk.mesh(geometry, &BandRule::default(), 0.0, None).surfaces;
             let spacing = chunk.spacing_m(geometry.cell_m);
             let column = if east { 32.0 } else { 0.0 };
             let mut uvs: Vec<(i64, [u32; 2])> = mesh
                 .bands
                 .iter()
                 .flat_map(|m| m.uvs.iter().zip(&m.positions))
-                .map(|(uv, p)| (uv, *p + mesh.barycentre))
+                .map(|(uv, p)| (uv, local(&chunk, *p, geometry.cell_m)))
                 .filter(|(_, p)| ((p.x / spacing).round() * (1 << level) as f32 - column).abs() < 0.5)
                 .map(|(uv, p)| (((p.z / spacing).round() as i64) << level, uv.to_array().map(f32::to_bits)))
                 .collect();
@@ -471,10 +545,11 @@ mod tests {
         let band = MorphBand { start_m: 10.0, end_m: 20.0 };
         let key = ChunkKey { x: -2, z: 5 };
         for level in 0..LEVELS - 1 {
-            let fine =
-                ChunkHeights::generate(&recipe, key, level, 32).mesh(geometry, &BandRule::default(), 0.0, Some(band));
+            let fine = ChunkHeights::generate(&recipe, key, level, 32)
+                .mesh(geometry, &BandRule::default(), 0.0, Some(band))
+                .surfaces;
             let coarse_heights = ChunkHeights::generate(&recipe, key, level + 1, 32);
-            let coarse = coarse_heights.mesh(geometry, &BandRule::default(), 0.0, None);
+            let coarse = coarse_heights.mesh(geometry, &BandRule::default(), 0.0, None).surfaces;
             let spacing = coarse_heights.spacing_m(geometry.cell_m);
             let at = |i: u32, j: u32| coarse_heights.height(i, j) * geometry.height_m;
             // The coarse mesh's normals by vertex.
@@ -482,7 +557,12 @@ mod tests {
             let coarse_normals: HashMap<(u32, u32), Vec3> = coarse
                 .bands
                 .iter()
-                .flat_map(|m| m.positions.iter().zip(&m.normals).map(|(p, n)| (grid(*p + coarse.barycentre), *n)))
+                .flat_map(|m| {
+                    m.positions
+                        .iter()
+                        .zip(&m.normals)
+                        .map(|(p, n)| (grid(local(&coarse_heights, *p, geometry.cell_m)), *n))
+                })
                 .collect();
             let mut on_vertices = 0;
             for part in &fine.bands {
@@ -490,7 +570,7 @@ mod tests {
                 assert_eq!((morph.start_m, morph.end_m), (10.0, 20.0));
                 assert_eq!(morph.positions.len(), part.positions.len());
                 for (target, normal) in morph.positions.iter().zip(&morph.normals) {
-                    let p = *target + fine.barycentre;
+                    let p = local(&coarse_heights, *target, geometry.cell_m);
                     // The height of the coarse triangle under the target (cells split along
                     // their a d diagonal).
                     let (u, v) = (p.x / spacing, p.z / spacing);

@@ -100,8 +100,9 @@ pub struct SectionMesh {
     pub borders: [MeshData; 10],
     /// Triangles per band by the per-triangle rule (the source's count, blended or not).
     pub counts: [usize; 5],
-    /// The mean of the section's vertices in metres, the section's first vertex at the
-    /// origin: the centre it turns and scales about.
+    /// What the positions are measured from, metres: the mean of the section's vertices (its
+    /// first vertex at the origin), the centre it turns and scales about; zero for
+    /// [`Placement::Samples`].
     pub barycentre: Vec3,
 }
 
@@ -128,9 +129,31 @@ pub struct SampleFrame {
     pub step: u32,
 }
 
+impl SampleFrame {
+    /// Where vertex `(i, j)` lies from the samples' origin along x and z, for vertices
+    /// `spacing_m` metres apart: its sample times the metres between samples.
+    pub fn metres(&self, vertex: [u32; 2], spacing_m: f32) -> [f32; 2] {
+        let sample_m = spacing_m / self.step as f32;
+        [0, 1].map(|axis| (self.origin[axis] + i64::from(vertex[axis]) * i64::from(self.step)) as f32 * sample_m)
+    }
+}
+
+/// What a section's mesh positions are measured from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placement {
+    /// The mean of its vertices (the first vertex at the origin): the centre a section turns
+    /// and scales about.
+    Barycentre,
+    /// The origin of the frame's samples, each vertex at its sample times the metres between
+    /// samples (`geometry.cell_m / frame.step`): pieces of one grid so place the vertices they
+    /// share bit for bit alike, whichever piece and level they belong to.
+    Samples,
+}
+
 /// Where a section's vertices move as it morphs into a coarser mesh (see
-/// [`canopy_raster::Morph`]): per vertex, row by row, its target position (metres, the
-/// section's first vertex at the origin) and unit normal, and the distances of the morph.
+/// [`canopy_raster::Morph`]): per vertex, row by row, its target position (metres, measured
+/// as the placement of [`mesh_section_in`] places the vertices before their barycentre is
+/// taken away) and unit normal, and the distances of the morph.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MorphTargets {
     /// Target positions, `w x h`.
@@ -147,12 +170,13 @@ pub struct MorphTargets {
 /// fixed to the map's samples.
 pub fn mesh_section(map: &Heightmap, section: Section, geometry: Geometry, rule: &BandRule) -> SectionMesh {
     let frame = SampleFrame { origin: section.origin.map(i64::from), step: 1 };
-    mesh_section_in(map, section, geometry, rule, frame, None)
+    mesh_section_in(map, section, geometry, rule, frame, Placement::Barycentre, None)
 }
 
 /// [`mesh_section`] with the texture coordinates of the samples of `frame`: vertex `(i, j)`
 /// reads the texture at sample `origin + step (i, j)`, one repetition every
-/// `geometry.texture_cells` samples; and with `morph`, the meshes morph into its targets.
+/// `geometry.texture_cells` samples; positions measured from what `placement` says; and with
+/// `morph`, the meshes morph into its targets.
 ///
 /// Two passes: the first decides each triangle's surface (a band, or with blending a border)
 /// and numbers the vertices each surface uses; the second fills every mesh at its final size,
@@ -163,23 +187,32 @@ pub fn mesh_section_in(
     geometry: Geometry,
     rule: &BandRule,
     frame: SampleFrame,
+    placement: Placement,
     morph: Option<&MorphTargets>,
 ) -> SectionMesh {
     let [x0, z0] = section.origin;
     let [w, h] = section.size.map(|n| n as usize);
     let count = w * h;
-    // The section's heights and positions, row by row, the first vertex at the origin.
+    // The section's heights and positions, row by row.
     let heights: Vec<f32> =
         (z0..z0 + h as u32).flat_map(|z| map.row(z)[x0 as usize..x0 as usize + w].iter().copied()).collect();
+    let place = |i: usize, j: usize| match placement {
+        Placement::Barycentre => [i, j].map(|k| k as f32 * geometry.cell_m),
+        Placement::Samples => frame.metres([i as u32, j as u32], geometry.cell_m),
+    };
     let positions: Vec<Vec3> = (0..h)
         .flat_map(|j| (0..w).map(move |i| (i, j)))
         .zip(&heights)
         .map(|((i, j), &height)| {
-            Vec3::new(i as f32 * geometry.cell_m, height * geometry.height_m, j as f32 * geometry.cell_m)
+            let [x, z] = place(i, j);
+            Vec3::new(x, height * geometry.height_m, z)
         })
         .collect();
     let normals = vertex_normals(map, section, geometry);
-    let barycentre = positions.iter().fold(Vec3::ZERO, |sum, &p| sum + p) / count as f32;
+    let barycentre = match placement {
+        Placement::Barycentre => positions.iter().fold(Vec3::ZERO, |sum, &p| sum + p) / count as f32,
+        Placement::Samples => Vec3::ZERO,
+    };
     // Each vertex's share of every band, when blending.
     let weights: Vec<[f32; 5]> = match rule.blend {
         Some(_) => heights.iter().zip(&normals).map(|(&height, normal)| rule.weights(height, normal.y)).collect(),

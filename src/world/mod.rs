@@ -3,7 +3,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`def`] | the `world:` entry of a scene file and [`WorldKind`] |
-//! | [`plugin`] | [`WorldPlugin`] and its set [`WorldSystems`]: the streaming plan, chunks made off the main thread (or in advance) and spawned within a budget, the dump |
+//! | [`plugin`] | [`WorldPlugin`] and its set [`WorldSystems`]: the streaming plan, chunks made off the main thread (or in advance) and spawned within a budget, skirts where levels meet, the dump |
 //! | [`panel`] | the window's world section: chunks per level, arriving a second, time to make one |
 //!
 //! The heights, chunks, levels of detail and the plan are the terrain kind's pure cores
@@ -14,4 +14,4 @@ pub mod panel;
 pub mod plugin;
 
 pub use def::{WorldDef, WorldKind};
-pub use plugin::{WorldBody, WorldChunk, WorldPlugin, WorldSystems};
+pub use plugin::{ChunkSkirt, WorldBody, WorldChunk, WorldPlugin, WorldSystems};

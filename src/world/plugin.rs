@@ -1,6 +1,6 @@
 //! [`WorldPlugin`]: each frame the streaming plan around the camera, chunks made on the async
 //! compute pool, finished chunks spawned within the per-frame budget, far chunks despawned,
-//! and the dump of the resident chunks.
+//! skirts hung where chunks of different levels meet, and the dump of the resident chunks.
 //!
 //! A chunk asked for is taken [`CHUNK_FRAMES`] frames later (waiting for it then if it is
 //! late), so that headless runs with the same camera path have the same chunks at the same
@@ -13,7 +13,7 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::ControlSystems;
 use crate::raster::{Material, MeshData, RasterMesh};
 use crate::terrain::bands::BandRule;
-use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
+use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, SIDES, WorldHeights};
 use crate::terrain::plugin::{TerrainSurface, surface_materials};
 use crate::terrain::section::Geometry;
 use crate::terrain::stream::{StreamSettings, plan};
@@ -44,7 +44,7 @@ impl Plugin for WorldPlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<WorldBody>().register_panel_section("world", panel::world_section).add_systems(
             Update,
-            (stream_chunks, spawn_finished).chain().after(ControlSystems::Input).in_set(WorldSystems),
+            (stream_chunks, spawn_finished, hang_skirts).chain().after(ControlSystems::Input).in_set(WorldSystems),
         );
     }
 }
@@ -60,17 +60,40 @@ pub struct WorldChunk {
     pub checksum: u64,
 }
 
+/// A skirt: a child of its chunk, the parent of one strip per surface, hanging below the
+/// chunk's edges on one side where a chunk of another level lies across it.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChunkSkirt {
+    /// Which side, an index into [`SIDES`].
+    pub side: usize,
+}
+
+/// One mesh per surface, in [`TerrainSurface::index`] order (empty where it has none),
+/// positions in the world's metres.
+type Surfaces = Vec<Arc<MeshData>>;
+
 /// A chunk's meshes, ready to spawn.
 #[derive(Debug, Clone)]
 struct MadeChunk {
     /// The checksum of its heights.
     checksum: u64,
-    /// One mesh per surface, in [`TerrainSurface::index`] order (empty where it has none).
-    surfaces: Vec<Arc<MeshData>>,
-    /// Where its meshes' origin lies from the chunk's first vertex, metres.
-    barycentre: Vec3,
+    /// The surface.
+    surfaces: Surfaces,
+    /// The strips of each side of [`SIDES`], hung where levels meet.
+    skirts: Arc<[Surfaces; 4]>,
     /// How long making it took.
     time: Duration,
+}
+
+/// A resident chunk as its world keeps it.
+#[derive(Debug)]
+struct Resident {
+    level: u8,
+    entity: Entity,
+    checksum: u64,
+    /// Its skirts' strips, and the skirt entity of each side where one hangs.
+    skirts: Arc<[Surfaces; 4]>,
+    hung: [Option<Entity>; 4],
 }
 
 /// A chunk being made.
@@ -99,14 +122,10 @@ impl ChunkMaker {
         let started = Instant::now();
         let heights = ChunkHeights::generate(&self.heights, key, level, self.cells);
         let mesh = heights.mesh(self.geometry, &self.rule, self.skirt_m, self.stream.morph_band(level));
-        let barycentre = mesh.barycentre;
-        let surfaces = mesh.into_surfaces().into_iter().map(Arc::new).collect();
-        MadeChunk { checksum: heights.checksum(), surfaces, barycentre, time: started.elapsed() }
-    }
-
-    /// Where chunk `key` starts, metres.
-    fn origin(&self, key: ChunkKey) -> Vec3 {
-        Vec3::new(key.x as f32, 0.0, key.z as f32) * self.stream.chunk_m
+        let shared = |meshes: Vec<MeshData>| meshes.into_iter().map(Arc::new).collect();
+        let surfaces = shared(mesh.surfaces.into_surfaces());
+        let skirts = Arc::new(mesh.skirts.map(shared));
+        MadeChunk { checksum: heights.checksum(), surfaces, skirts, time: started.elapsed() }
     }
 }
 
@@ -119,8 +138,10 @@ pub struct WorldBody {
     budget: usize,
     /// The surfaces a chunk is drawn in, with their materials.
     surfaces: Vec<(TerrainSurface, Material)>,
-    /// Resident chunks: their level, entity and checksum.
-    resident: HashMap<ChunkKey, (u8, Entity, u64)>,
+    /// Resident chunks.
+    resident: HashMap<ChunkKey, Resident>,
+    /// Whether chunks came or went since the skirts were last hung.
+    changed: bool,
     /// Chunks being made, in the order they were asked for.
     pending: Vec<PendingChunk>,
     /// Chunks made (or taken ready-made) and spawned since the world was spawned.
@@ -137,7 +158,7 @@ impl WorldBody {
     /// Resident chunks at each level of detail.
     pub fn per_level(&self) -> [usize; LEVELS as usize] {
         let mut counts = [0; LEVELS as usize];
-        self.resident.values().for_each(|&(level, ..)| counts[level as usize] += 1);
+        self.resident.values().for_each(|chunk| counts[chunk.level as usize] += 1);
         counts
     }
 
@@ -204,6 +225,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
             budget: def.spawn_budget as usize,
             surfaces: surface_materials(&def.bands),
             resident: HashMap::new(),
+            changed: false,
             pending: Vec::new(),
             made: 0,
             making_time: Duration::ZERO,
@@ -221,12 +243,13 @@ fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody
     let (camera, forward) = (eye.xz(), (target - eye).xz());
     for mut body in &mut worlds {
         let body = &mut *body;
-        let resident: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, &(level, ..))| (key, level)).collect();
+        let resident: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, chunk)| (key, chunk.level)).collect();
         let pending: HashMap<ChunkKey, u8> = body.pending.iter().map(|p| (p.key, p.level)).collect();
         let plan = plan(&body.maker.stream, camera, forward, &resident, &pending);
         for key in plan.unload {
-            if let Some((_, entity, _)) = body.resident.remove(&key) {
-                commands.entity(entity).despawn();
+            if let Some(chunk) = body.resident.remove(&key) {
+                commands.entity(chunk.entity).despawn();
+                body.changed = true;
             }
         }
         let stream = body.maker.stream;
@@ -270,22 +293,63 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
             body.making_time += made.time;
             body.recent.push_back(now);
             let chunk = WorldChunk { key, level, checksum: made.checksum };
-            let place = Transform::from_translation(body.maker.origin(key) + made.barycentre);
+            // The meshes are placed in the world already: with no transform of their own, the
+            // vertices neighbouring chunks share stay alike bit for bit.
             let entity = commands
-                .spawn((chunk, place, ChildOf(world)))
-                .with_children(|parts| {
-                    for (surface, material) in &body.surfaces {
-                        let Some(mesh) = made.surfaces.get(surface.index()) else { continue };
-                        if !mesh.triangles.is_empty() {
-                            parts.spawn((*surface, RasterMesh { mesh: mesh.clone(), material: material.clone() }));
-                        }
-                    }
-                })
+                .spawn((chunk, Transform::IDENTITY, ChildOf(world)))
+                .with_children(|parts| spawn_surfaces(parts, &body.surfaces, &made.surfaces))
                 .id();
-            if let Some((_, old, _)) = body.resident.insert(key, (level, entity, chunk.checksum)) {
-                commands.entity(old).despawn();
+            let resident = Resident { level, entity, checksum: made.checksum, skirts: made.skirts, hung: [None; 4] };
+            if let Some(old) = body.resident.insert(key, resident) {
+                commands.entity(old.entity).despawn();
             }
+            body.changed = true;
             spawned += 1;
+        }
+    }
+}
+
+/// Spawns one mesh entity per non-empty surface of `meshes` under `parent`, with its material.
+fn spawn_surfaces(parent: &mut ChildSpawnerCommands, materials: &[(TerrainSurface, Material)], meshes: &Surfaces) {
+    for (surface, material) in materials {
+        let Some(mesh) = meshes.get(surface.index()) else { continue };
+        if !mesh.triangles.is_empty() {
+            parent.spawn((*surface, RasterMesh { mesh: mesh.clone(), material: material.clone() }));
+        }
+    }
+}
+
+/// Hangs a skirt on each side of a resident chunk where a chunk of another level lies across
+/// it, and takes down those that no longer have one: chunks of one level meet without a gap,
+/// and a skirt drawn where it is not needed costs raster time for nothing. Runs the frame
+/// chunks come or go, so a border between levels never goes a frame without its skirts.
+fn hang_skirts(mut worlds: Query<&mut WorldBody>, mut commands: Commands) {
+    for mut body in &mut worlds {
+        let body = &mut *body;
+        if !std::mem::take(&mut body.changed) {
+            continue;
+        }
+        let levels: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, chunk)| (key, chunk.level)).collect();
+        for (key, chunk) in &mut body.resident {
+            for (side, [dx, dz]) in SIDES.into_iter().enumerate() {
+                let across = levels.get(&ChunkKey { x: key.x + dx, z: key.z + dz });
+                let wanted = across.is_some_and(|&level| level != chunk.level);
+                match (wanted, chunk.hung[side]) {
+                    (true, None) => {
+                        let strips = &chunk.skirts[side];
+                        let skirt = commands
+                            .spawn((ChunkSkirt { side }, Transform::IDENTITY, ChildOf(chunk.entity)))
+                            .with_children(|parts| spawn_surfaces(parts, &body.surfaces, strips))
+                            .id();
+                        chunk.hung[side] = Some(skirt);
+                    }
+                    (false, Some(skirt)) => {
+                        commands.entity(skirt).despawn();
+                        chunk.hung[side] = None;
+                    }
+                    _ => {}
+                }
+            }
         }
     }
 }
@@ -297,10 +361,12 @@ impl DumpState for WorldBody {
             out.insert("bounds_chunks".into(), json!(bounds));
         }
         let mut chunks: Vec<(ChunkKey, u8, u64)> =
-            self.resident.iter().map(|(&key, &(level, _, checksum))| (key, level, checksum)).collect();
+            self.resident.iter().map(|(&key, chunk)| (key, chunk.level, chunk.checksum)).collect();
         chunks.sort();
         out.insert("resident".into(), json!(chunks.len()));
         out.insert("resident_per_level".into(), json!(self.per_level()));
+        let skirts = self.resident.values().flat_map(|chunk| chunk.hung).flatten().count();
+        out.insert("skirts".into(), json!(skirts));
         out.insert("pending".into(), json!(self.pending.len()));
         out.insert("made".into(), json!(self.made));
         let keys: Vec<Value> = chunks

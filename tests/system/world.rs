@@ -4,10 +4,10 @@
 
 use super::common::*;
 use canopy::run::{RunOptions, run_headless};
-use canopy::terrain::chunk::{ChunkHeights, ChunkKey, WorldHeights};
+use canopy::terrain::chunk::{ChunkHeights, ChunkKey, SIDES, WorldHeights};
 use canopy::terrain::heightmap::Heightmap;
 use canopy::terrain::image_io::{self, Encoding};
-use canopy::world::{WorldBody, WorldChunk};
+use canopy::world::{ChunkSkirt, WorldBody, WorldChunk};
 use serde_json::Value;
 
 /// The world scene's chunks as dumped: `(x, z, level, checksum)`.
@@ -246,4 +246,40 @@ entities:
     }
     // The ground fills the middle of the frame.
     assert_ne!(output.framebuffer.pixel(80, 60), [255, 0, 255, 255]);
+}
+
+#[test]
+fn skirts_hang_where_levels_meet_and_nowhere_else() {
+    let mut app = small_app(&path("scenes/world.yaml"));
+    for frame in 0..120 {
+        // Some flight, so that chunks change level under their skirts.
+        for mut camera in app.world_mut().query::<&mut canopy::view::CameraParams>().iter_mut(app.world_mut()) {
+            camera.target.x = frame as f32 * 0.5;
+        }
+        app.update();
+    }
+    let chunks: std::collections::HashMap<(i32, i32), (bevy::prelude::Entity, u8)> = app
+        .world_mut()
+        .query::<(bevy::prelude::Entity, &WorldChunk)>()
+        .iter(app.world())
+        .map(|(entity, c)| ((c.key.x, c.key.z), (entity, c.level)))
+        .collect();
+    let mut hung: Vec<(bevy::prelude::Entity, usize)> = app
+        .world_mut()
+        .query::<(&ChunkSkirt, &bevy::prelude::ChildOf)>()
+        .iter(app.world())
+        .map(|(skirt, parent)| (parent.parent(), skirt.side))
+        .collect();
+    hung.sort();
+    let mut wanted = Vec::new();
+    for (&(x, z), &(entity, level)) in &chunks {
+        for (side, [dx, dz]) in SIDES.into_iter().enumerate() {
+            if chunks.get(&(x + dx, z + dz)).is_some_and(|&(_, across)| across != level) {
+                wanted.push((entity, side));
+            }
+        }
+    }
+    wanted.sort();
+    assert!(wanted.len() > 20, "levels meet along many sides: {}", wanted.len());
+    assert_eq!(hung, wanted, "a skirt on both sides of every border between levels, and on no other side");
 }
