@@ -4,15 +4,22 @@
 //! streaming and with every chunk it will want made in advance ("frozen": streaming takes
 //! them ready-made, so nothing is generated during the flight), alternating, in one run.
 //!
+//! Every frame over twice its flight's median is traced: how much of it the rasterizer took,
+//! how long the threads that draw it (the main thread and the compute pool's) waited, runnable,
+//! for a core (their `/proc/self/task/*/schedstat`), how much time the machine's hypervisor
+//! took from its cores (`steal` in `/proc/stat`, in ticks of 10 ms), and how many chunks were
+//! spawned in it.
+//!
 //! Run with `cargo bench --profile dev --bench world_flight [-- SECONDS]` (the profile of
-//! `cargo run`); prints a table per flight and the ratios the goal is stated in.
+//! `cargo run`); prints a table per flight, the slow frames' trace and the ratios the goal is
+//! stated in.
 
 #[path = "common/frame_times.rs"]
 mod frame_times;
 
 use bevy::math::{UVec2, Vec2, Vec3Swizzles};
 use canopy::app::headless_app;
-use canopy::raster::plugin::RenderPolicy;
+use canopy::raster::plugin::{RasterTarget, RenderPolicy};
 use canopy::run::update_until_loaded;
 use canopy::terrain::stream::plan;
 use canopy::view::CameraParams;
@@ -35,8 +42,54 @@ fn target_at(start: Vec2, heading: Vec2, frame: u32) -> Vec2 {
     start + heading * SPEED_M_S * STEP_S * frame as f32
 }
 
+/// What one frame took.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    /// Wall-clock time of its `App::update`.
+    time: Duration,
+    /// Of which the rasterizer's.
+    raster: Duration,
+    /// Time the threads drawing it waited for a core while runnable, summed.
+    waited: Duration,
+    /// Time the hypervisor took from the machine's cores, to the 10 ms tick.
+    stolen: Duration,
+    /// Chunks spawned.
+    spawned: u64,
+}
+
+/// The time the threads that draw frames (all but the background pools') have spent runnable
+/// but waiting for a core so far, summed, if the system says.
+fn waited() -> Duration {
+    let Ok(threads) = std::fs::read_dir("/proc/self/task") else { return Duration::ZERO };
+    let nanos = threads
+        .flatten()
+        .filter(|thread| {
+            let name = std::fs::read_to_string(thread.path().join("comm")).unwrap_or_default();
+            !(name.starts_with("Async Compute") || name.starts_with("IO Task"))
+        })
+        .filter_map(|thread| {
+            let schedstat = std::fs::read_to_string(thread.path().join("schedstat")).ok()?;
+            schedstat.split_whitespace().nth(1)?.parse::<u64>().ok()
+        })
+        .sum();
+    Duration::from_nanos(nanos)
+}
+
+/// Time stolen from the machine's cores by its hypervisor so far, if the system says (the
+/// `steal` column of `/proc/stat`, in ticks of 10 ms).
+fn stolen() -> Duration {
+    let stat = std::fs::read_to_string("/proc/stat").unwrap_or_default();
+    let ticks: u64 = stat.lines().next().and_then(|cpu| cpu.split_whitespace().nth(8)?.parse().ok()).unwrap_or(0);
+    Duration::from_millis(ticks * 10)
+}
+
+/// Chunks spawned so far by the worlds of `app`.
+fn spawned(app: &mut bevy::app::App) -> u64 {
+    app.world_mut().query::<&WorldBody>().iter(app.world()).map(|body| body.made).sum()
+}
+
 /// One flight of `frames` frames; with `frozen`, every chunk it will want made first.
-fn fly(frames: u32, frozen: bool) -> Result<Vec<Duration>, String> {
+fn fly(frames: u32, frozen: bool) -> Result<Vec<Frame>, String> {
     let scene = Path::new(SCENE);
     let mut app = headless_app(scene, SIZE, false).map_err(|e| e.to_string())?;
     update_until_loaded(&mut app, scene).map_err(|e| e.to_string())?;
@@ -69,10 +122,18 @@ fn fly(frames: u32, frozen: bool) -> Result<Vec<Duration>, String> {
             camera.target.x = at.x;
             camera.target.z = at.y;
         }
+        let (before, waited_before, stolen_before) = (spawned(&mut app), waited(), stolen());
         let started = Instant::now();
         app.update();
+        let time = started.elapsed();
         if frame >= SETTLE {
-            times.push(started.elapsed());
+            times.push(Frame {
+                time,
+                raster: app.world().resource::<RasterTarget>().raster_time,
+                waited: waited() - waited_before,
+                stolen: stolen() - stolen_before,
+                spawned: spawned(&mut app) - before,
+            });
         }
     }
     Ok(times)
@@ -86,18 +147,25 @@ fn main() {
     println!("| flight | median ms | p99 ms | max ms | max / median |");
     println!("|---|---|---|---|---|");
     let mut results: HashMap<bool, Vec<[f64; 3]>> = HashMap::new();
+    let mut traces = Vec::new();
     for round in 0..2 {
         for frozen in [false, true] {
-            let times = fly(frames, frozen).unwrap_or_else(|error| {
+            let flight = fly(frames, frozen).unwrap_or_else(|error| {
                 eprintln!("{error}");
                 std::process::exit(1)
             });
-            let [median, p99, max] = figures(&times);
-            let name = if frozen { "frozen" } else { "streaming" };
-            println!("| {name} {} | {median:.1} | {p99:.1} | {max:.1} | {:.2} |", round + 1, max / median);
+            let [median, p99, max] = figures(&flight.iter().map(|f| f.time).collect::<Vec<_>>());
+            let name = format!("{} {}", if frozen { "frozen" } else { "streaming" }, round + 1);
+            println!("| {name} | {median:.1} | {p99:.1} | {max:.1} | {:.2} |", max / median);
             results.entry(frozen).or_default().push([median, p99, max]);
+            traces.push(trace(&name, &flight, median));
         }
     }
+    println!();
+    println!(
+        "frames over 2x their flight's median, each: ms over the median / raster ms / ms waiting for a core / ms stolen / chunks spawned"
+    );
+    traces.iter().for_each(|trace| println!("{trace}"));
     // Each round's streaming flight against the frozen one flown right after it.
     println!();
     for (round, (streaming, frozen)) in results[&false].iter().zip(&results[&true]).enumerate() {
@@ -109,4 +177,25 @@ fn main() {
             streaming[2] / streaming[0],
         );
     }
+}
+
+/// The frames of `flight` over twice its `median` (milliseconds), with the typical frame's
+/// raster time and chunks spawned to compare them with.
+fn trace(name: &str, flight: &[Frame], median: f64) -> String {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let [raster, ..] = figures(&flight.iter().map(|f| f.raster).collect::<Vec<_>>());
+    let spawned = flight.iter().map(|f| f.spawned).sum::<u64>() as f64 / flight.len() as f64;
+    let slow: Vec<String> = flight
+        .iter()
+        .filter(|f| ms(f.time) > 2.0 * median)
+        .map(|f| {
+            let over = ms(f.time) - median;
+            format!("{over:.0}/{:.0}/{:.0}/{:.0}/{}", ms(f.raster), ms(f.waited), ms(f.stolen), f.spawned)
+        })
+        .collect();
+    format!(
+        "{name}: {} slow frames (typical: raster {raster:.1} ms, {spawned:.2} chunks): {}",
+        slow.len(),
+        if slow.is_empty() { "none".to_string() } else { slow.join(", ") }
+    )
 }

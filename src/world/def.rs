@@ -53,7 +53,7 @@ pub struct WorldDef {
     /// Finished chunks spawned a frame at most; 4 by default.
     #[serde(default = "default_budget")]
     pub spawn_budget: u32,
-    /// How deep the skirts along the chunks' edges hang, metres; 2 by default.
+    /// How deep the skirts hang along the chunks' edges where levels meet, metres; 2 by default.
     #[serde(default = "default_skirt")]
     pub skirt_m: PositiveMetres,
     /// Height bands and their textures, as for `terrain`.
