@@ -10,7 +10,7 @@
 //! | layer | modules | what it holds |
 //! |---|---|---|
 //! | app | [`app`], [`run`], [`ui`], `main` | the plugin group and the list of kinds, headless runs, the window |
-//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`terrain`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
+//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`soft_body`], [`terrain`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
 //! | scene | [`scene`] | loading, checking, spawning and saving through the kind registry, naming no kind |
 //! | foundation | [`foundation`] | the entity marker, the kind trait, checked values, located errors, parameters, dumps, keys, panel sections, the schedule |
 //! | rasterizer | the `canopy_raster` crate | pixels from plain data |
@@ -64,6 +64,7 @@ pub mod run;
 pub mod scene;
 pub mod shape;
 pub mod sloth;
+pub mod soft_body;
 pub mod terrain;
 pub mod tree;
 pub mod ui;

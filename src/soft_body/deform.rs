@@ -1,0 +1,423 @@
+//! The surface deformers: each shrinks the movable part of a [`Surface`] towards `k` times its
+//! size while the fixed vertices stay where they are, bit for bit, and reports how many
+//! iterations it took, the error it ended with and why it stopped. None loops forever.
+//!
+//! - [`Method::EdgeLengths`]: every edge its own length constraint, `d_e = k |p1 - p2|`,
+//!   projected in turn as in position-based dynamics (Mueller et al. 2006); the error is the
+//!   sum of the shifts' lengths in an iteration.
+//! - [`Method::EdgeSum`]: one constraint on the sum of edge lengths, `C = sum |e| - k sum |e0|`,
+//!   whose gradient at a vertex is the sum of the unit vectors from its neighbours. The
+//!   projection of that one constraint moves vertex `i` by `-w_i C n_i / sum_j w_j |n_j|^2`;
+//!   the source's variant moves it by `-C n_i / (its neighbour count)`, which can overshoot.
+//!   Stops when `|C| < eps k sum |e0|`.
+//! - [`Method::Area`]: one constraint on the area, `C = area - k area0` (`0 < k < 1`), projected
+//!   along the area's gradient (per triangle `1/2 n x (c - b)` at `a`). Stops when
+//!   `|C| < eps k area0`.
+//!
+//! Neither global constraint is linear: their projections search back along the step (halving
+//! it while `|C|` does not fall), where the source's edge-sum step goes as it is.
+
+use super::surface::{Surface, triangle_cross};
+use bevy::math::Vec3;
+
+/// Which deformer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// A length constraint per edge.
+    EdgeLengths,
+    /// One constraint on the sum of edge lengths.
+    EdgeSum(Variant),
+    /// One constraint on the surface's area.
+    Area,
+}
+
+/// How a single global constraint is stepped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Variant {
+    /// The projection of the constraint.
+    Projection,
+    /// The source's step: each vertex by `C` over its neighbour count along the gradient.
+    Source,
+}
+
+/// How far to go.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The coefficient: the movable part's edges or area become `k` times what they were; in
+    /// `(0, 1]` (the area method needs `k < 1`), and 1 changes nothing.
+    pub k: f32,
+    /// The convergence threshold: metres of shift for the edge lengths, a share of the
+    /// target for the global constraints.
+    pub eps: f64,
+    /// Iterations at most.
+    pub max_iterations: u32,
+}
+
+/// Why a deformer stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// The error fell below the threshold.
+    Converged,
+    /// The error stopped falling.
+    Stalled,
+    /// The iteration cap was reached.
+    Cap,
+}
+
+/// What a deformer did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Deformed {
+    /// The new positions, one per vertex: those of the iteration with the least error.
+    pub positions: Vec<Vec3>,
+    /// Iterations used.
+    pub iterations: u32,
+    /// The least error reached: metres of shift in an iteration for the edge lengths, the
+    /// constraint's `|C|` over its target for the global ones.
+    pub error: f64,
+    /// Why it stopped.
+    pub stop: Stop,
+}
+
+/// Why settings make no sense.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SettingsError {
+    /// `k` is outside the range the method allows.
+    #[error("expected k greater than 0 and at most 1 (below 1 for the area method), found {0}")]
+    K(f32),
+    /// The threshold is not a positive number.
+    #[error("expected a convergence threshold greater than 0, found {0}")]
+    Eps(f64),
+}
+
+impl Settings {
+    /// Why these settings cannot drive `method`, if they cannot.
+    pub fn check(&self, method: Method) -> Result<(), SettingsError> {
+        let below = if method == Method::Area { self.k < 1.0 } else { self.k <= 1.0 };
+        if !(self.k > 0.0 && below) {
+            return Err(SettingsError::K(self.k));
+        }
+        if !(self.eps.is_finite() && self.eps > 0.0) {
+            return Err(SettingsError::Eps(self.eps));
+        }
+        Ok(())
+    }
+}
+
+/// One iteration of a deformer on the positions; returns its error.
+trait Step: FnMut(&mut Vec<Vec3>) -> f64 {}
+impl<F: FnMut(&mut Vec<Vec3>) -> f64> Step for F {}
+
+/// Deforms `surface` by `method` with `settings` (checked with [`Settings::check`]).
+pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed {
+    let mut positions = surface.positions.clone();
+    let mut stepper: Box<dyn Step + '_> = match method {
+        Method::EdgeLengths => Box::new(edge_lengths(surface, settings.k)),
+        Method::EdgeSum(variant) => Box::new(edge_sum(surface, settings.k, variant)),
+        Method::Area => Box::new(area(surface, settings.k)),
+    };
+    // The positions with the least error so far: a solver that stalls, or whose steps run
+    // away (the source's edge-sum step can), returns those.
+    let (mut best, mut best_error, mut since_best) = (positions.clone(), f64::INFINITY, 0);
+    for iteration in 1..=settings.max_iterations {
+        let error = stepper(&mut positions);
+        let finite = error.is_finite() && positions.iter().all(|p| p.is_finite());
+        if finite && error < best_error {
+            best.clone_from(&positions);
+            (best_error, since_best) = (error, 0);
+        } else {
+            since_best += 1;
+        }
+        let stop = if finite && error < settings.eps {
+            Some(Stop::Converged)
+        } else if !finite || since_best >= PATIENCE {
+            Some(Stop::Stalled)
+        } else {
+            None
+        };
+        if let Some(stop) = stop {
+            return Deformed { positions: best, iterations: iteration, error: best_error, stop };
+        }
+    }
+    Deformed { positions: best, iterations: settings.max_iterations, error: best_error, stop: Stop::Cap }
+}
+
+/// Iterations without a new least error after which a deformer has stalled: the per-edge
+/// projections' error does not fall every iteration on its way down.
+const PATIENCE: u32 = 32;
+
+/// The inverse masses: 1 for a vertex that may move, 0 for a fixed one.
+fn weights(surface: &Surface) -> Vec<f32> {
+    surface.movable.iter().map(|&movable| f32::from(u8::from(movable))).collect()
+}
+
+/// One iteration of the per-edge constraints: every edge projected onto its rest length in
+/// turn; returns the sum of the shifts' lengths.
+fn edge_lengths(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
+    let w = weights(surface);
+    let rest: Vec<f32> = surface
+        .edges()
+        .iter()
+        .map(|&[a, b]| k * surface.positions[a as usize].distance(surface.positions[b as usize]))
+        .collect();
+    move |positions| {
+        let mut shifted = 0.0;
+        for (&[a, b], &rest) in surface.edges().iter().zip(&rest) {
+            let (a, b) = (a as usize, b as usize);
+            let total = w[a] + w[b];
+            let delta = positions[a] - positions[b];
+            let length = delta.length();
+            if total == 0.0 || length == 0.0 {
+                continue;
+            }
+            let correction = delta * ((length - rest) / (length * total));
+            // Fixed ends have no weight: they are not written at all, so they keep their bits.
+            if w[a] > 0.0 {
+                positions[a] -= correction * w[a];
+            }
+            if w[b] > 0.0 {
+                positions[b] += correction * w[b];
+            }
+            shifted += f64::from(correction.length() * total);
+        }
+        shifted
+    }
+}
+
+/// The gradient of the sum of edge lengths at each vertex: the sum of the unit vectors from
+/// its neighbours to it.
+fn edge_sum_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
+    (0..positions.len())
+        .map(|v| {
+            surface.neighbours(v).iter().map(|&n| (positions[v] - positions[n as usize]).normalize_or_zero()).sum()
+        })
+        .collect()
+}
+
+/// One step of the edge-sum constraint; returns `|C|` over its target.
+fn edge_sum(surface: &Surface, k: f32, variant: Variant) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
+    let w = weights(surface);
+    let target = f64::from(k) * surface.edge_sum(&surface.positions);
+    let relative =
+        move |positions: &[Vec3]| (surface.edge_sum(positions) - target).abs() / target.max(f64::MIN_POSITIVE);
+    move |positions| {
+        let c = surface.edge_sum(positions) - target;
+        let gradient = edge_sum_gradient(surface, positions);
+        match variant {
+            Variant::Projection => project(positions, &gradient, &w, c, relative),
+            Variant::Source => {
+                for (v, p) in positions.iter_mut().enumerate() {
+                    if w[v] > 0.0 {
+                        *p -= gradient[v] * (c / surface.neighbours(v).len().max(1) as f64) as f32;
+                    }
+                }
+                relative(positions)
+            }
+        }
+    }
+}
+
+/// Step halvings a projection's line search tries before it gives the step up.
+const HALVINGS: u32 = 30;
+
+/// Projects one constraint of value `c` and `gradient` (per vertex) with inverse masses `w`:
+/// every vertex moved by `-w_i c g_i / sum_j w_j |g_j|^2`, the step halved while `relative`
+/// (the constraint's `|C|` over its target) does not fall, as the constraint is not linear.
+/// Returns `relative` at the positions kept.
+fn project(positions: &mut Vec<Vec3>, gradient: &[Vec3], w: &[f32], c: f64, relative: impl Fn(&[Vec3]) -> f64) -> f64 {
+    let before = relative(positions);
+    let norm: f64 = gradient.iter().zip(w).map(|(g, &w)| f64::from(w * g.length_squared())).sum();
+    if norm == 0.0 {
+        return before;
+    }
+    let mut step = (c / norm) as f32;
+    let mut trial = positions.clone();
+    for _ in 0..HALVINGS {
+        for (v, p) in trial.iter_mut().enumerate() {
+            if w[v] > 0.0 {
+                *p = positions[v] - gradient[v] * (step * w[v]);
+            }
+        }
+        let after = relative(&trial);
+        if after < before {
+            *positions = trial;
+            return after;
+        }
+        step *= 0.5;
+    }
+    before
+}
+
+/// The gradient of the area at each vertex: over its triangles `1/2 n x (c - b)` for the
+/// corner `a` of the counter-clockwise triangle `a b c` with unit normal `n`.
+fn area_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
+    let mut gradient = vec![Vec3::ZERO; positions.len()];
+    for &t in &surface.triangles {
+        let n = triangle_cross(positions, t).normalize_or_zero();
+        for k in 0..3 {
+            let (a, b, c) = (t[k] as usize, t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
+            gradient[a] += n.cross(positions[c] - positions[b]) * 0.5;
+        }
+    }
+    gradient
+}
+
+/// One step of the area constraint, projected along the area's gradient; returns `|C|` over
+/// its target.
+fn area(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
+    let w = weights(surface);
+    let target = f64::from(k) * surface.area(&surface.positions);
+    let relative = move |positions: &[Vec3]| (surface.area(positions) - target).abs() / target.max(f64::MIN_POSITIVE);
+    move |positions| {
+        let c = surface.area(positions) - target;
+        let gradient = area_gradient(surface, positions);
+        project(positions, &gradient, &w, c, relative)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::sample;
+    use super::super::surface::Facts;
+    use super::*;
+
+    /// A belly on a patch of body surface, its border fixed: what a region cut from a scanned
+    /// body looks like.
+    fn cap() -> Surface {
+        sample::belly(33)
+    }
+
+    fn settings(k: f32) -> Settings {
+        Settings { k, eps: 1e-5, max_iterations: 2000 }
+    }
+
+    const METHODS: [Method; 4] =
+        [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::EdgeSum(Variant::Source), Method::Area];
+
+    /// The methods that shrink a surface steadily (the source's edge-sum step overshoots).
+    const STEADY: [Method; 3] = [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::Area];
+
+    /// Two coefficients the belly can reach without folding, for the edge sum and for the
+    /// area: a third and two thirds of the way from 1 to what flattening it would leave.
+    fn reachable(surface: &Surface) -> [[f32; 2]; 2] {
+        let flat: Vec<Vec3> = surface.positions.iter().map(|p| p.with_y(0.0)).collect();
+        let limits = [
+            surface.edge_sum(&flat) / surface.edge_sum(&surface.positions),
+            surface.area(&flat) / surface.area(&surface.positions),
+        ];
+        limits.map(|flat| [0.3, 0.6].map(|t| (1.0 - (1.0 - flat) * t) as f32))
+    }
+
+    #[test]
+    fn every_method_shrinks_the_region_keeps_its_border_and_inverts_nothing() {
+        let cap = cap();
+        for method in STEADY {
+            for k in reachable(&cap)[usize::from(method == Method::Area)] {
+                let done = deform(&cap, method, settings(k));
+                let facts = Facts::of(&cap, &done.positions, k);
+                assert!(facts.fixed_unchanged, "{method:?} at {k}: the border moved");
+                // The area's gradient flow folds a few triangles when it is driven far.
+                let folds_allowed = if method == Method::Area && k < reachable(&cap)[1][0] { 8 } else { 0 };
+                assert!(!facts.has_nan && facts.inverted <= folds_allowed, "{method:?} at {k}: {facts:?}");
+                assert!(facts.area_ratio < 1.0 && facts.edge_sum_ratio < 1.0, "{method:?} at {k}: {facts:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_global_constraints_reach_their_targets() {
+        let cap = cap();
+        let [edge_sums, areas] = reachable(&cap);
+        for k in edge_sums {
+            let done = deform(&cap, Method::EdgeSum(Variant::Projection), settings(k));
+            assert_eq!(done.stop, Stop::Converged, "{k}: {:?} after {} at {}", done.stop, done.iterations, done.error);
+            let ratio = Facts::of(&cap, &done.positions, k).edge_sum_ratio;
+            assert!((ratio - f64::from(k)).abs() < 2e-5, "{k}: edge sum ratio {ratio}");
+        }
+        for k in areas {
+            let done = deform(&cap, Method::Area, settings(k));
+            let ratio = Facts::of(&cap, &done.positions, k).area_ratio;
+            assert!((ratio - f64::from(k)).abs() < 1e-4, "{k}: area ratio {ratio}, {:?} at {}", done.stop, done.error);
+        }
+        let mild = deform(&cap, Method::Area, settings(areas[0]));
+        assert_eq!(mild.stop, Stop::Converged, "{:?} after {} at {}", mild.stop, mild.iterations, mild.error);
+    }
+
+    #[test]
+    fn edge_lengths_move_towards_k_and_a_free_surface_reaches_it() {
+        // Nothing fixed: every edge can take k times its length (a uniform shrink).
+        let mut free = sample::belly(9);
+        free.movable.iter_mut().for_each(|m| *m = true);
+        let done = deform(&free, Method::EdgeLengths, Settings { k: 0.8, eps: 1e-6, max_iterations: 20_000 });
+        let facts = Facts::of(&free, &done.positions, 0.8);
+        let report = format!("{facts:?} after {} ({:?})", done.iterations, done.stop);
+        assert!(facts.mean_edge_error < 1e-3 && facts.max_edge_error < 1e-2, "{report}");
+        // With the border fixed the lengths cannot all reach k: they move part of the way.
+        let cap = cap();
+        let done = deform(&cap, Method::EdgeLengths, settings(0.8));
+        let facts = Facts::of(&cap, &done.positions, 0.8);
+        assert!(facts.edge_sum_ratio < 0.97 && facts.inverted == 0, "{facts:?}");
+    }
+
+    #[test]
+    fn k_of_one_changes_nothing_and_runs_are_deterministic() {
+        let cap = cap();
+        for method in [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::EdgeSum(Variant::Source)] {
+            let done = deform(&cap, method, settings(1.0));
+            assert_eq!(done.stop, Stop::Converged, "{method:?}");
+            let moved = done.positions.iter().zip(&cap.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
+            assert!(moved < 1e-5, "{method:?} moved a vertex {moved} m");
+        }
+        let bits =
+            |done: Deformed| done.positions.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        for method in METHODS {
+            assert!(
+                bits(deform(&cap, method, settings(0.95))) == bits(deform(&cap, method, settings(0.95))),
+                "{method:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_solver_stops_within_its_cap() {
+        let cap = cap();
+        for method in METHODS {
+            let done = deform(&cap, method, Settings { k: 0.5, eps: 1e-30, max_iterations: 7 });
+            assert!(
+                done.iterations <= 7 && done.stop != Stop::Converged,
+                "{method:?}: {:?} after {}",
+                done.stop,
+                done.iterations
+            );
+        }
+    }
+
+    #[test]
+    fn settings_outside_their_ranges_are_refused() {
+        assert!(settings(0.8).check(Method::Area).is_ok());
+        assert_eq!(settings(1.0).check(Method::Area), Err(SettingsError::K(1.0)));
+        assert!(settings(1.0).check(Method::EdgeLengths).is_ok());
+        for k in [0.0, -0.5, 1.5, f32::NAN] {
+            assert!(settings(k).check(Method::EdgeLengths).is_err(), "{k}");
+        }
+        assert!(Settings { eps: 0.0, ..settings(0.5) }.check(Method::EdgeLengths).is_err());
+    }
+
+    #[test]
+    fn the_projection_lands_near_the_edge_sum_target_in_one_step_where_the_sources_step_overshoots() {
+        // The projection removes the constraint's error to first order in one step; the
+        // source's step, the whole constraint over each vertex's neighbour count along a
+        // gradient that is short on a smooth surface, flies far past it.
+        let cap = cap();
+        let first = |variant| {
+            let done = deform(&cap, Method::EdgeSum(variant), Settings { max_iterations: 1, ..settings(0.97) });
+            Facts::of(&cap, &done.positions, 0.97)
+        };
+        let (projection, source) = (first(Variant::Projection), first(Variant::Source));
+        assert!((projection.edge_sum_ratio - 0.97).abs() < 0.01, "the projection: {projection:?}");
+        assert!(projection.inverted == 0);
+        assert!((source.edge_sum_ratio - 0.97).abs() > 0.05 && source.inverted > 0, "the source's step: {source:?}");
+    }
+}

@@ -1,0 +1,12 @@
+//! Soft bodies: surfaces shrunk over a marked region with their border held, as in planning
+//! plastic surgery, after a surgery-planning program's library of surface deformers.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`surface`] | a triangle surface with its derived edges and adjacency, and the facts a deformation is judged by |
+//! | [`deform`] | the deformers: per-edge lengths, the sum of edge lengths, the area; their stopping rules and reports |
+//! | [`sample`] | sample surfaces made by the project |
+
+pub mod deform;
+pub mod sample;
+pub mod surface;
