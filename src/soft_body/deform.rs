@@ -12,7 +12,12 @@
 //!   Stops when `|C| < eps k sum |e0|`.
 //! - [`Method::Area`]: one constraint on the area, `C = area - k area0` (`0 < k < 1`), projected
 //!   along the area's gradient (per triangle `1/2 n x (c - b)` at `a`). Stops when
-//!   `|C| < eps k area0`.
+//!   `|C| < eps k area0`. The source's variant is not the gradient: it draws every edge's ends
+//!   together along the edge, by `C` over the current area (a quarter of that each, so that
+//!   a shrink of every edge by `C / 2A` would remove `C` from a flat surface), and applies the
+//!   same shift again while `C` keeps falling by more than the shift's error (the sum of its
+//!   squared lengths) times `eps`. Its pseudocode has the shift's sign reversed, which would
+//!   grow the surface; this follows its intent, a shrink.
 //!
 //! Neither global constraint is linear: their projections search back along the step (halving
 //! it while `|C|` does not fall), where the source's edge-sum step goes as it is.
@@ -29,7 +34,7 @@ pub enum Method {
     /// One constraint on the sum of edge lengths.
     EdgeSum(Variant),
     /// One constraint on the surface's area.
-    Area,
+    Area(Variant),
 }
 
 /// How a single global constraint is stepped.
@@ -38,7 +43,8 @@ pub enum Method {
 pub enum Variant {
     /// The projection of the constraint.
     Projection,
-    /// The source's step: each vertex by `C` over its neighbour count along the gradient.
+    /// The source's step: for the edge sum, each vertex by `C` over its neighbour count along
+    /// the gradient; for the area, every edge's ends drawn together along it.
     Source,
 }
 
@@ -95,7 +101,7 @@ pub enum SettingsError {
 impl Settings {
     /// Why these settings cannot drive `method`, if they cannot.
     pub fn check(&self, method: Method) -> Result<(), SettingsError> {
-        let below = if method == Method::Area { self.k < 1.0 } else { self.k <= 1.0 };
+        let below = if matches!(method, Method::Area(_)) { self.k < 1.0 } else { self.k <= 1.0 };
         if !(self.k > 0.0 && below) {
             return Err(SettingsError::K(self.k));
         }
@@ -116,7 +122,8 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
     let mut stepper: Box<dyn Step + '_> = match method {
         Method::EdgeLengths => Box::new(edge_lengths(surface, settings.k)),
         Method::EdgeSum(variant) => Box::new(edge_sum(surface, settings.k, variant)),
-        Method::Area => Box::new(area(surface, settings.k)),
+        Method::Area(Variant::Projection) => Box::new(area(surface, settings.k)),
+        Method::Area(Variant::Source) => Box::new(area_by_edges(surface, settings.k, settings.eps)),
     };
     // The positions with the least error so far: a solver that stalls, or whose steps run
     // away (the source's edge-sum step can), returns those.
@@ -250,6 +257,41 @@ fn project(positions: &mut Vec<Vec3>, gradient: &[Vec3], w: &[f32], c: f64, rela
     before
 }
 
+/// Repetitions of one shift the source's area step makes at most.
+const REPEATS: u32 = 64;
+
+/// One step of the source's area method: every edge's ends drawn together along the edge
+/// by `C` over the current area (a quarter each), the same shift applied again while `C`
+/// keeps falling by more than its squared length times `eps`; returns `|C|` over its target.
+fn area_by_edges(surface: &Surface, k: f32, eps: f64) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
+    let w = weights(surface);
+    let target = f64::from(k) * surface.area(&surface.positions);
+    move |positions| {
+        let area = surface.area(positions);
+        let c = area - target;
+        let mut shift = vec![Vec3::ZERO; positions.len()];
+        let scale = (c / area.max(f64::MIN_POSITIVE) * 0.25) as f32;
+        for &[a, b] in surface.edges() {
+            let (a, b) = (a as usize, b as usize);
+            let edge = positions[b] - positions[a];
+            shift[a] += edge * (scale * w[a]);
+            shift[b] -= edge * (scale * w[b]);
+        }
+        let error: f64 = shift.iter().map(|s| f64::from(s.length_squared())).sum();
+        let mut last = c.abs();
+        for _ in 0..REPEATS {
+            let trial: Vec<Vec3> = positions.iter().zip(&shift).map(|(p, s)| *p + *s).collect();
+            let now = (surface.area(&trial) - target).abs();
+            if last - now <= error * eps {
+                break;
+            }
+            *positions = trial;
+            last = now;
+        }
+        last / target.max(f64::MIN_POSITIVE)
+    }
+}
+
 /// The gradient of the area at each vertex: over its triangles `1/2 n x (c - b)` for the
 /// corner `a` of the counter-clockwise triangle `a b c` with unit normal `n`.
 fn area_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
@@ -293,11 +335,21 @@ mod tests {
         Settings { k, eps: 1e-5, max_iterations: 2000 }
     }
 
-    const METHODS: [Method; 4] =
-        [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::EdgeSum(Variant::Source), Method::Area];
+    const METHODS: [Method; 5] = [
+        Method::EdgeLengths,
+        Method::EdgeSum(Variant::Projection),
+        Method::EdgeSum(Variant::Source),
+        Method::Area(Variant::Projection),
+        Method::Area(Variant::Source),
+    ];
 
     /// The methods that shrink a surface steadily (the source's edge-sum step overshoots).
-    const STEADY: [Method; 3] = [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::Area];
+    const STEADY: [Method; 4] = [
+        Method::EdgeLengths,
+        Method::EdgeSum(Variant::Projection),
+        Method::Area(Variant::Projection),
+        Method::Area(Variant::Source),
+    ];
 
     /// Two coefficients the belly can reach without folding, for the edge sum and for the
     /// area: a third and two thirds of the way from 1 to what flattening it would leave.
@@ -314,12 +366,13 @@ mod tests {
     fn every_method_shrinks_the_region_keeps_its_border_and_inverts_nothing() {
         let cap = cap();
         for method in STEADY {
-            for k in reachable(&cap)[usize::from(method == Method::Area)] {
+            for k in reachable(&cap)[usize::from(matches!(method, Method::Area(_)))] {
                 let done = deform(&cap, method, settings(k));
                 let facts = Facts::of(&cap, &done.positions, k);
                 assert!(facts.fixed_unchanged, "{method:?} at {k}: the border moved");
                 // The area's gradient flow folds a few triangles when it is driven far.
-                let folds_allowed = if method == Method::Area && k < reachable(&cap)[1][0] { 8 } else { 0 };
+                let folds_allowed =
+                    if method == Method::Area(Variant::Projection) && k < reachable(&cap)[1][0] { 8 } else { 0 };
                 assert!(!facts.has_nan && facts.inverted <= folds_allowed, "{method:?} at {k}: {facts:?}");
                 assert!(facts.area_ratio < 1.0 && facts.edge_sum_ratio < 1.0, "{method:?} at {k}: {facts:?}");
             }
@@ -337,11 +390,11 @@ mod tests {
             assert!((ratio - f64::from(k)).abs() < 2e-5, "{k}: edge sum ratio {ratio}");
         }
         for k in areas {
-            let done = deform(&cap, Method::Area, settings(k));
+            let done = deform(&cap, Method::Area(Variant::Projection), settings(k));
             let ratio = Facts::of(&cap, &done.positions, k).area_ratio;
             assert!((ratio - f64::from(k)).abs() < 1e-4, "{k}: area ratio {ratio}, {:?} at {}", done.stop, done.error);
         }
-        let mild = deform(&cap, Method::Area, settings(areas[0]));
+        let mild = deform(&cap, Method::Area(Variant::Projection), settings(areas[0]));
         assert_eq!(mild.stop, Stop::Converged, "{:?} after {} at {}", mild.stop, mild.iterations, mild.error);
     }
 
@@ -364,8 +417,8 @@ mod tests {
     #[test]
     fn k_of_one_changes_nothing_and_runs_are_deterministic() {
         let cap = cap();
-        for method in [Method::EdgeLengths, Method::EdgeSum(Variant::Projection), Method::EdgeSum(Variant::Source)] {
-            let done = deform(&cap, method, settings(1.0));
+        for method in &METHODS[..3] {
+            let done = deform(&cap, *method, settings(1.0));
             assert_eq!(done.stop, Stop::Converged, "{method:?}");
             let moved = done.positions.iter().zip(&cap.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
             assert!(moved < 1e-5, "{method:?} moved a vertex {moved} m");
@@ -378,6 +431,17 @@ mod tests {
                 "{method:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_sources_area_step_shrinks_the_area_towards_its_target() {
+        let cap = cap();
+        let k = reachable(&cap)[1][0];
+        let done = deform(&cap, Method::Area(Variant::Source), settings(k));
+        let facts = Facts::of(&cap, &done.positions, k);
+        let report = format!("{facts:?} after {} ({:?} at {})", done.iterations, done.stop, done.error);
+        assert!(facts.area_ratio < 1.0 - (1.0 - f64::from(k)) * 0.5, "at least half way: {report}");
+        assert!(facts.fixed_unchanged && facts.inverted == 0 && !facts.has_nan, "{report}");
     }
 
     #[test]
@@ -396,8 +460,8 @@ mod tests {
 
     #[test]
     fn settings_outside_their_ranges_are_refused() {
-        assert!(settings(0.8).check(Method::Area).is_ok());
-        assert_eq!(settings(1.0).check(Method::Area), Err(SettingsError::K(1.0)));
+        assert!(settings(0.8).check(Method::Area(Variant::Source)).is_ok());
+        assert_eq!(settings(1.0).check(Method::Area(Variant::Projection)), Err(SettingsError::K(1.0)));
         assert!(settings(1.0).check(Method::EdgeLengths).is_ok());
         for k in [0.0, -0.5, 1.5, f32::NAN] {
             assert!(settings(k).check(Method::EdgeLengths).is_err(), "{k}");

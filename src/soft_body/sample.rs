@@ -39,12 +39,17 @@ pub fn sphere_cap(radius: f32, angle_deg: f32, rings: u32, segments: u32) -> Sur
     Surface::new(positions, triangles, movable).expect("a cap of finite positions and valid indices")
 }
 
-/// A patch of body surface with a belly: `n x n` vertices (at least 3) over a square 0.4 m a
-/// side in x and z, raised by a smooth bump 0.12 m high in its middle, split along one
-/// diagonal of each cell and facing +y; the outer ring of vertices is fixed.
+/// A patch of body surface with a belly: [`patch`] with a bump 0.12 m high.
 pub fn belly(n: u32) -> Surface {
+    patch(n, 0.12)
+}
+
+/// A patch of `n x n` vertices (at least 3) over a square 0.4 m a side in x and z, raised by
+/// a smooth bump `height_m` high in its middle (7 cm wide), split along one diagonal of each
+/// cell and facing +y; the outer ring of vertices is fixed.
+pub fn patch(n: u32, height_m: f32) -> Surface {
     let n = n.max(3);
-    let (side, height, width) = (0.4f32, 0.12f32, 0.07f32);
+    let (side, height, width) = (0.4f32, height_m, 0.07f32);
     let mut positions = Vec::with_capacity((n * n) as usize);
     for j in 0..n {
         for i in 0..n {
