@@ -1,0 +1,376 @@
+//! Triangle meshes in files: OBJ, PLY (ASCII or binary) and STL read with their crates, OBJ and
+//! PLY written; every mesh read is welded (vertices at the same position become one), so that
+//! a surface from STL, which repeats its vertices per triangle, deforms as one piece. Faces
+//! that collapse and edges shared by more than two faces are counted, not refused.
+
+use bevy::math::Vec3;
+use std::collections::HashMap;
+use std::io::{BufReader, Cursor, Write};
+use std::path::Path;
+
+/// The most vertices or triangles a mesh file may hold, so that no file can exhaust memory.
+pub const MAX_ELEMENTS: usize = 4_000_000;
+
+/// The largest mesh file read, bytes.
+pub const MAX_FILE_BYTES: u64 = 512 << 20;
+
+/// A mesh file's format, by its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Wavefront OBJ.
+    Obj,
+    /// Stanford PLY.
+    Ply,
+    /// STL (read only).
+    Stl,
+}
+
+impl Format {
+    /// The format of `path`'s extension.
+    pub fn of(path: &Path) -> Result<Self, MeshError> {
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("obj") => Ok(Self::Obj),
+            Some("ply") => Ok(Self::Ply),
+            Some("stl") => Ok(Self::Stl),
+            _ => Err(MeshError::Format(path.display().to_string())),
+        }
+    }
+}
+
+/// Why a mesh could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// Not a format the project reads.
+    #[error("{0}: expected an .obj, .ply or .stl file")]
+    Format(String),
+    /// The file could not be read or written.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    /// The file's contents are not a mesh of its format.
+    #[error("not a valid {format} mesh: {message}")]
+    Parse {
+        /// The format.
+        format: &'static str,
+        /// What the reader said.
+        message: String,
+    },
+    /// Too large a mesh.
+    #[error("{what} of {count} is more than the {MAX_ELEMENTS} a mesh may have")]
+    TooLarge {
+        /// What there are too many of.
+        what: &'static str,
+        /// How many.
+        count: usize,
+    },
+    /// A position that is not a finite number.
+    #[error("vertex {0} has a position that is not a finite number")]
+    NotFinite(usize),
+    /// A face names a vertex that does not exist.
+    #[error("face {face} names vertex {vertex}, but there are {count} vertices")]
+    IndexOutOfRange {
+        /// The face.
+        face: usize,
+        /// The index it names.
+        vertex: i64,
+        /// Vertices there are.
+        count: usize,
+    },
+}
+
+/// A triangle mesh.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Index triples.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// What reading a mesh found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct MeshReport {
+    /// Vertices merged into another at the same position.
+    pub welded: usize,
+    /// Faces dropped because two of their corners became one.
+    pub degenerate: usize,
+    /// Edges shared by more than two faces.
+    pub non_manifold_edges: usize,
+}
+
+/// Reads the mesh at `path`, welded.
+pub fn read(path: &Path) -> Result<(TriangleMesh, MeshReport), MeshError> {
+    let format = Format::of(path)?;
+    let size = std::fs::metadata(path)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(MeshError::TooLarge { what: "a file of bytes", count: size as usize });
+    }
+    parse(&std::fs::read(path)?, format)
+}
+
+/// The mesh in `bytes` of `format`, welded.
+pub fn parse(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport), MeshError> {
+    let (positions, faces) = match format {
+        Format::Obj => parse_obj(bytes)?,
+        Format::Ply => parse_ply(bytes)?,
+        Format::Stl => parse_stl(bytes)?,
+    };
+    for (what, count) in [("a vertex count", positions.len()), ("a face count", faces.len())] {
+        if count > MAX_ELEMENTS {
+            return Err(MeshError::TooLarge { what, count });
+        }
+    }
+    if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(MeshError::NotFinite(bad));
+    }
+    let count = positions.len();
+    let triangles = faces
+        .iter()
+        .enumerate()
+        .map(|(face, corners)| {
+            let index = |v: i64| match u32::try_from(v).ok().filter(|&v| (v as usize) < count) {
+                Some(v) => Ok(v),
+                None => Err(MeshError::IndexOutOfRange { face, vertex: v, count }),
+            };
+            Ok([index(corners[0])?, index(corners[1])?, index(corners[2])?])
+        })
+        .collect::<Result<Vec<_>, MeshError>>()?;
+    Ok(weld(positions, triangles))
+}
+
+/// `positions` and `triangles` with the vertices at one position merged (bit for bit), the
+/// faces that collapse dropped, and what was found.
+fn weld(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (TriangleMesh, MeshReport) {
+    let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    let mut kept = Vec::with_capacity(positions.len());
+    let remap: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            // -0.0 and 0.0 are one position.
+            let key = p.to_array().map(|c| (c + 0.0).to_bits());
+            *first.entry(key).or_insert_with(|| {
+                kept.push(*p);
+                (kept.len() - 1) as u32
+            })
+        })
+        .collect();
+    let welded = positions.len() - kept.len();
+    let mapped: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|v| remap[v as usize])).collect();
+    let triangles: Vec<[u32; 3]> = mapped.iter().copied().filter(|[a, b, c]| a != b && b != c && c != a).collect();
+    let degenerate = mapped.len() - triangles.len();
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for &[a, b, c] in &triangles {
+        for (u, v) in [(a, b), (b, c), (c, a)] {
+            *uses.entry((u.min(v), u.max(v))).or_default() += 1;
+        }
+    }
+    let non_manifold_edges = uses.values().filter(|&&n| n > 2).count();
+    (TriangleMesh { positions: kept, triangles }, MeshReport { welded, degenerate, non_manifold_edges })
+}
+
+/// Positions and faces (split into triangles) of an OBJ file.
+fn parse_obj(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let error = |message: String| MeshError::Parse { format: "OBJ", message };
+    // Materials are not read: only the shape is deformed.
+    let (models, _) =
+        tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| error(e.to_string()))?;
+    let (mut positions, mut faces) = (Vec::new(), Vec::new());
+    for model in models {
+        let base = positions.len() as i64;
+        positions.extend(model.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        faces.extend(model.mesh.indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| base + i64::from(t[k]))));
+    }
+    Ok((positions, faces))
+}
+
+/// Positions and faces (fans of triangles) of a PLY file.
+fn parse_ply(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    let error = |message: String| MeshError::Parse { format: "PLY", message };
+    let ply = Parser::<DefaultElement>::new().read_ply(&mut Cursor::new(bytes)).map_err(|e| error(e.to_string()))?;
+    let number = |property: Option<&Property>| -> Option<f64> {
+        Some(match property? {
+            Property::Float(v) => f64::from(*v),
+            Property::Double(v) => *v,
+            Property::Char(v) => f64::from(*v),
+            Property::UChar(v) => f64::from(*v),
+            Property::Short(v) => f64::from(*v),
+            Property::UShort(v) => f64::from(*v),
+            Property::Int(v) => f64::from(*v),
+            Property::UInt(v) => f64::from(*v),
+            _ => return None,
+        })
+    };
+    let vertices = ply.payload.get("vertex").ok_or_else(|| error("no `vertex` element".into()))?;
+    let positions = vertices
+        .iter()
+        .enumerate()
+        .map(|(index, vertex)| {
+            let [x, y, z] = ["x", "y", "z"].map(|axis| number(vertex.get(axis)));
+            match (x, y, z) {
+                (Some(x), Some(y), Some(z)) => Ok(Vec3::new(x as f32, y as f32, z as f32)),
+                _ => Err(error(format!("vertex {index} lacks a numeric x, y or z"))),
+            }
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut faces = Vec::new();
+    for (index, face) in ply.payload.get("face").into_iter().flatten().enumerate() {
+        let list = face.get("vertex_indices").or_else(|| face.get("vertex_index"));
+        let corners: Vec<i64> = match list {
+            Some(Property::ListInt(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUInt(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListShort(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUShort(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListChar(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            Some(Property::ListUChar(v)) => v.iter().map(|&i| i64::from(i)).collect(),
+            _ => return Err(error(format!("face {index} lacks an integer list `vertex_indices`"))),
+        };
+        // A polygon as a fan from its first corner.
+        faces.extend((1..corners.len().saturating_sub(1)).map(|k| [corners[0], corners[k], corners[k + 1]]));
+    }
+    Ok((positions, faces))
+}
+
+/// Positions and faces of an STL file (ASCII or binary).
+fn parse_stl(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
+    let mesh = stl_io::read_stl(&mut Cursor::new(bytes))
+        .map_err(|e| MeshError::Parse { format: "STL", message: e.to_string() })?;
+    let positions = mesh.vertices.iter().map(|v| Vec3::from_array(v.0)).collect();
+    let faces = mesh.faces.iter().map(|f| f.vertices.map(|v| v as i64)).collect();
+    Ok((positions, faces))
+}
+
+/// Writes `mesh` to `path` as OBJ or ASCII PLY, by its extension.
+pub fn write(mesh: &TriangleMesh, path: &Path) -> Result<(), MeshError> {
+    let bytes = match Format::of(path)? {
+        Format::Obj => to_obj(mesh),
+        Format::Ply => to_ply(mesh),
+        Format::Stl => return Err(MeshError::Format(format!("{} (STL is read, not written)", path.display()))),
+    };
+    let mut file = std::fs::File::create(path)?;
+    file.write_all(&bytes)?;
+    Ok(())
+}
+
+/// `mesh` as Wavefront OBJ text.
+fn to_obj(mesh: &TriangleMesh) -> Vec<u8> {
+    let mut text = String::with_capacity(mesh.positions.len() * 32 + mesh.triangles.len() * 24);
+    text.push_str("# written by Canopy\n");
+    for p in &mesh.positions {
+        text.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+    }
+    for [a, b, c] in &mesh.triangles {
+        text.push_str(&format!("f {} {} {}\n", a + 1, b + 1, c + 1));
+    }
+    text.into_bytes()
+}
+
+/// `mesh` as ASCII PLY text.
+fn to_ply(mesh: &TriangleMesh) -> Vec<u8> {
+    let mut text = format!(
+        "ply\nformat ascii 1.0\ncomment written by Canopy\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    for p in &mesh.positions {
+        text.push_str(&format!("{} {} {}\n", p.x, p.y, p.z));
+    }
+    for [a, b, c] in &mesh.triangles {
+        text.push_str(&format!("3 {a} {b} {c}\n"));
+    }
+    text.into_bytes()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square of two triangles.
+    fn square() -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z],
+            triangles: vec![[0, 2, 1], [0, 3, 2]],
+        }
+    }
+
+    /// The mesh's triangles as their corners' positions, each turned to start at its least
+    /// corner (keeping its winding), sorted: equal for equal meshes whatever their numbering.
+    fn shape(mesh: &TriangleMesh) -> Vec<[[u32; 3]; 3]> {
+        let mut triangles: Vec<[[u32; 3]; 3]> = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let corners = t.map(|v| mesh.positions[v as usize].to_array().map(f32::to_bits));
+                let first = (0..3).min_by_key(|&k| corners[k]).unwrap_or(0);
+                [0, 1, 2].map(|k| corners[(first + k) % 3])
+            })
+            .collect();
+        triangles.sort();
+        triangles
+    }
+
+    #[test]
+    fn obj_and_ply_written_read_back_the_same_mesh() {
+        let folder = tempfile::tempdir().unwrap();
+        for name in ["square.obj", "square.ply"] {
+            let path = folder.path().join(name);
+            write(&square(), &path).unwrap();
+            let (mesh, report) = read(&path).unwrap();
+            assert_eq!((mesh.positions.len(), shape(&mesh)), (4, shape(&square())), "{name}");
+            assert_eq!(report, MeshReport::default(), "{name}");
+        }
+    }
+
+    #[test]
+    fn stl_repeats_its_vertices_and_is_welded_into_one_piece() {
+        let stl = b"solid square
+facet normal 0 1 0
+ outer loop
+  vertex 0 0 0
+  vertex 1 0 1
+  vertex 1 0 0
+ endloop
+endfacet
+facet normal 0 1 0
+ outer loop
+  vertex 0 0 0
+  vertex 0 0 1
+  vertex 1 0 1
+ endloop
+endfacet
+endsolid square
+";
+        let (mesh, _) = parse(stl, Format::Stl).unwrap();
+        assert_eq!((mesh.positions.len(), mesh.triangles.len()), (4, 2), "two triangles on four shared corners");
+    }
+
+    #[test]
+    fn welding_merges_coincident_vertices_and_counts_what_it_finds() {
+        // The square with its diagonal's ends repeated, a face collapsed by the weld, and a
+        // fin: a third face on the diagonal.
+        let positions =
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), Vec3::Z, Vec3::Y];
+        let triangles = vec![[0, 2, 1], [3, 5, 4], [0, 3, 1], [0, 2, 6]];
+        let (mesh, report) = weld(positions, triangles);
+        assert_eq!(mesh.positions.len(), 5);
+        assert_eq!(report, MeshReport { welded: 2, degenerate: 1, non_manifold_edges: 1 });
+    }
+
+    #[test]
+    fn bad_meshes_are_errors_not_panics() {
+        let too_far = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
+        assert!(parse(too_far, Format::Obj).is_err(), "a face beyond the vertices");
+        let nan = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                    element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n";
+        assert!(matches!(parse(nan, Format::Ply), Err(MeshError::NotFinite(1)) | Err(MeshError::Parse { .. })));
+        let out = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                    element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
+        assert!(matches!(parse(out, Format::Ply), Err(MeshError::IndexOutOfRange { face: 0, vertex: 7, count: 3 })));
+        assert!(matches!(parse(b"not a mesh at all", Format::Stl), Err(MeshError::Parse { .. })));
+        assert!(matches!(Format::of(Path::new("a.fbx")), Err(MeshError::Format(_))));
+    }
+}
