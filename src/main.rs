@@ -71,11 +71,48 @@ enum Command {
         #[command(subcommand)]
         action: TerrainCommand,
     },
+    /// Shrink a region of a mesh file with a surface deformer and print the report as JSON.
+    Deform(DeformArgs),
     /// Measurements.
     Bench {
         #[command(subcommand)]
         action: BenchCommand,
     },
+}
+
+/// `canopy deform`.
+#[derive(Args, Debug)]
+struct DeformArgs {
+    /// The mesh: an .obj, .ply or .stl file.
+    input: PathBuf,
+    /// The outline: three or more points on the surface as x:y:z in metres
+    /// (`0.1:0.05:0,-0.1:0.05:0,0:0.05:0.1`), or vertex indices of the mesh as read (welded;
+    /// an OBJ's numbered by first use in its faces), joined along the surface.
+    #[arg(long, allow_hyphen_values = true)]
+    region: String,
+    /// The deformer: edge (a length constraint per edge), edge-sum or area.
+    #[arg(long, default_value = "edge")]
+    method: String,
+    /// For edge-sum and area: projection (the constraint's projection) or source (the
+    /// source's step).
+    #[arg(long, default_value = "projection")]
+    variant: String,
+    /// The coefficient, in (0, 1] (below 1 for area).
+    #[arg(long)]
+    k: f32,
+    /// The convergence threshold: metres of shift for edge, a share of the target for
+    /// edge-sum and area.
+    #[arg(long, default_value_t = 1e-5)]
+    eps: f64,
+    /// Iterations at most.
+    #[arg(long, default_value_t = 10_000)]
+    max_iterations: u32,
+    /// Where to write the whole deformed mesh: an .obj or .ply file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace `--out` if it exists.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -257,7 +294,36 @@ fn main() -> ExitCode {
         Command::Terrain { action: TerrainCommand::Generate(args) } => generate_heightmap(&args),
         Command::Terrain { action: TerrainCommand::Stats { maps } } => heightmap_stats(&maps),
         Command::Terrain { action: TerrainCommand::Textures { out } } => write_band_textures(&out),
+        Command::Deform(args) => deform_mesh(&args),
         Command::Bench { action: BenchCommand::Terrain { out, runs, sizes } } => bench_terrain(&out, runs, &sizes),
+    }
+}
+
+/// `canopy deform`: exit 0 with the report printed, 1 for bad input, 2 for bad settings.
+fn deform_mesh(args: &DeformArgs) -> ExitCode {
+    use canopy::soft_body::batch::{self, BatchError};
+    use canopy::soft_body::deform::Settings;
+    if args.out.exists() && !args.force {
+        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
+        return ExitCode::from(1);
+    }
+    let settings = Settings { k: args.k, eps: args.eps, max_iterations: args.max_iterations };
+    let result = batch::method(&args.method, &args.variant)
+        .and_then(|method| Ok((method, batch::parse_marks(&args.region)?)))
+        .and_then(|(method, marks)| batch::run(&args.input, &marks, method, settings, &args.out));
+    match result {
+        Ok(report) => {
+            println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+            ExitCode::SUCCESS
+        }
+        Err(error @ BatchError::Settings(_)) => {
+            eprintln!("canopy deform: {error}");
+            ExitCode::from(2)
+        }
+        Err(error) => {
+            eprintln!("canopy deform: {error}");
+            ExitCode::from(1)
+        }
     }
 }
 

@@ -173,3 +173,38 @@ fn generated_forests_are_deterministic_valid_and_never_overwrite() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(stderr(&bad).contains("depth: expected at most 4 levels"), "{}", stderr(&bad));
 }
+
+#[test]
+fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
+    use canopy::soft_body::{mesh_io, sample};
+    let folder = tempfile::tempdir().unwrap();
+    let belly = sample::belly(25);
+    let input = folder.path().join("belly.obj");
+    let mesh = mesh_io::TriangleMesh { positions: belly.positions.clone(), triangles: belly.triangles.clone() };
+    mesh_io::write(&mesh, &input).unwrap();
+    let corner = |i: u32, j: u32| {
+        let p = belly.positions[(j * 25 + i) as usize];
+        format!("{}:{}:{}", p.x, p.y, p.z)
+    };
+    let region = [corner(6, 6), corner(18, 6), corner(18, 18), corner(6, 18)].join(",");
+    let out = folder.path().join("shrunk.obj");
+    let (input, out) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let args = ["deform", input, "--region", &region, "--method", "edge-sum", "--k", "0.97", "--out", out];
+    let output = canopy(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["region_vertices"], 121);
+    assert_eq!(report["stop"], "converged");
+    assert_eq!(report["facts"]["fixed_unchanged"], true);
+    let ratio = report["facts"]["edge_sum_ratio"].as_f64().unwrap();
+    assert!((ratio - 0.97).abs() < 1e-4, "{ratio}");
+    assert!(mesh_io::read(std::path::Path::new(out)).is_ok());
+    // The result is never overwritten unasked; settings out of range are usage errors.
+    let again = canopy(&args);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(stderr(&again).contains("already exists"), "{}", stderr(&again));
+    let area_of_one = ["deform", input, "--region", &region, "--method", "area", "--k", "1", "--out", "x.obj"];
+    let bad = canopy(&area_of_one);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(!Path::new("x.obj").exists());
+}

@@ -1,0 +1,205 @@
+//! The batch deformation behind `canopy deform`: a mesh file read and welded, a region
+//! outlined on it, shrunk by a deformer, put back and written, with a report of what was done.
+
+use super::deform::{Method, Settings, Stop, Variant, deform};
+use super::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
+use super::region::{Mark, RegionError, select};
+use super::surface::{Facts, Surface, SurfaceError};
+use bevy::math::Vec3;
+use std::path::Path;
+use std::time::Instant;
+
+/// How far from the surface a marked point may lie, metres.
+pub const POINT_TOLERANCE_M: f32 = 1e-3;
+
+/// Why a batch deformation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BatchError {
+    /// The mesh file.
+    #[error("{path}: {error}")]
+    Mesh {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        error: MeshError,
+    },
+    /// The marks.
+    #[error("--region: {0}")]
+    Marks(String),
+    /// The region.
+    #[error("--region: {0}")]
+    Region(#[from] RegionError),
+    /// The settings.
+    #[error("{0}")]
+    Settings(String),
+    /// The mesh as a surface.
+    #[error("{0}")]
+    Surface(#[from] SurfaceError),
+}
+
+/// The marks of `text`: comma-separated vertex indices (`12,40,77`; of the mesh as read:
+/// welded, and numbered as the file's reader numbers them, for OBJ by first use in the faces)
+/// or points on the surface as `x:y:z` in metres (`0.1:0.05:0,-0.1:0.05:0,0:0.05:0.1`).
+pub fn parse_marks(text: &str) -> Result<Vec<Mark>, BatchError> {
+    text.split(',')
+        .map(str::trim)
+        .enumerate()
+        .map(|(index, mark)| {
+            if let Ok(vertex) = mark.parse::<u32>() {
+                return Ok(Mark::Vertex(vertex));
+            }
+            let coordinates: Vec<f32> = mark.split(':').filter_map(|c| c.trim().parse().ok()).collect();
+            match coordinates[..] {
+                [x, y, z] if mark.split(':').count() == 3 && [x, y, z].iter().all(|c| c.is_finite()) => {
+                    Ok(Mark::Point(Vec3::new(x, y, z)))
+                }
+                _ => Err(BatchError::Marks(format!(
+                    "point {index}, `{mark}`: expected a vertex index or x:y:z in metres"
+                ))),
+            }
+        })
+        .collect()
+}
+
+/// What a batch deformation did, as the command prints it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Report {
+    /// The mesh read: its vertices and triangles after welding, and what welding found.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// What reading found.
+    pub mesh: MeshReport,
+    /// Vertices of the region that moved freely, and those of its outline.
+    pub region_vertices: usize,
+    /// Vertices on the outline.
+    pub outline_vertices: usize,
+    /// The method and its variant.
+    pub method: Method,
+    /// The coefficient.
+    pub k: f32,
+    /// Iterations used.
+    pub iterations: u32,
+    /// The least error reached.
+    pub error: f64,
+    /// Why it stopped.
+    pub stop: Stop,
+    /// The facts of the result.
+    pub facts: Facts,
+    /// Wall-clock time of the deformation, milliseconds.
+    pub time_ms: f64,
+}
+
+/// Deforms the region of the mesh at `input` outlined by `marks` with `method` and
+/// `settings`, writes the whole mesh to `output` (OBJ or PLY) and reports.
+pub fn run(
+    input: &Path,
+    marks: &[Mark],
+    method: Method,
+    settings: Settings,
+    output: &Path,
+) -> Result<Report, BatchError> {
+    settings.check(method).map_err(|error| BatchError::Settings(format!("--k/--eps: {error}")))?;
+    mesh_io::Format::of(output).map_err(located(output))?;
+    fn located(path: &Path) -> impl Fn(MeshError) -> BatchError + '_ {
+        move |error| BatchError::Mesh { path: path.display().to_string(), error }
+    }
+    let (mesh, read) = mesh_io::read(input).map_err(located(input))?;
+    let whole = Surface::new(mesh.positions.clone(), mesh.triangles.clone(), vec![true; mesh.positions.len()])?;
+    let region = select(&whole, marks, POINT_TOLERANCE_M)?;
+    let started = Instant::now();
+    let done = deform(&region.surface, method, settings);
+    let time_ms = started.elapsed().as_secs_f64() * 1e3;
+    let facts = Facts::of(&region.surface, &done.positions, settings.k);
+    let positions = region.put_back(&mesh.positions, &done.positions);
+    mesh_io::write(&TriangleMesh { positions, triangles: mesh.triangles.clone() }, output).map_err(located(output))?;
+    Ok(Report {
+        vertices: mesh.positions.len(),
+        triangles: mesh.triangles.len(),
+        mesh: read,
+        region_vertices: region.surface.movable.iter().filter(|&&m| m).count(),
+        outline_vertices: region.outline.len(),
+        method,
+        k: settings.k,
+        iterations: done.iterations,
+        error: done.error,
+        stop: done.stop,
+        facts,
+        time_ms,
+    })
+}
+
+/// The method named on the command line: `edge`, `edge-sum` or `area`, with `variant`
+/// `projection` or `source` for the last two.
+pub fn method(name: &str, variant: &str) -> Result<Method, BatchError> {
+    let variant = match variant {
+        "projection" => Variant::Projection,
+        "source" => Variant::Source,
+        other => {
+            return Err(BatchError::Settings(format!("--variant: expected projection or source, found `{other}`")));
+        }
+    };
+    match name {
+        "edge" => Ok(Method::EdgeLengths),
+        "edge-sum" => Ok(Method::EdgeSum(variant)),
+        "area" => Ok(Method::Area(variant)),
+        other => Err(BatchError::Settings(format!("--method: expected edge, edge-sum or area, found `{other}`"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::sample;
+    use super::*;
+
+    #[test]
+    fn marks_are_vertex_indices_or_points_and_anything_else_is_named() {
+        assert_eq!(parse_marks("3, 7,12").unwrap(), vec![Mark::Vertex(3), Mark::Vertex(7), Mark::Vertex(12)]);
+        assert_eq!(parse_marks("0.5:0:-1").unwrap(), vec![Mark::Point(Vec3::new(0.5, 0.0, -1.0))]);
+        let error = parse_marks("3,x:1,5").unwrap_err().to_string();
+        assert!(error.contains("point 1, `x:1`"), "{error}");
+        assert!(parse_marks("1:2:3:4").is_err() && parse_marks("nan:0:0").is_err());
+    }
+
+    #[test]
+    fn a_belly_from_a_file_is_shrunk_and_written_with_its_outline_held() {
+        let folder = tempfile::tempdir().unwrap();
+        let belly = sample::belly(25);
+        let (input, output) = (folder.path().join("belly.obj"), folder.path().join("shrunk.ply"));
+        let mesh = TriangleMesh { positions: belly.positions.clone(), triangles: belly.triangles.clone() };
+        mesh_io::write(&mesh, &input).unwrap();
+        // The corners as points: the file's reader numbers vertices its own way.
+        let corner = |(i, j): (u32, u32)| {
+            let p = belly.positions[(j * 25 + i) as usize];
+            format!("{}:{}:{}", p.x, p.y, p.z)
+        };
+        let marks = parse_marks(&[(6, 6), (18, 6), (18, 18), (6, 18)].map(corner).join(",")).unwrap();
+        let settings = Settings { k: 0.95, eps: 1e-5, max_iterations: 2000 };
+        let report = run(&input, &marks, Method::Area(Variant::Projection), settings, &output).unwrap();
+        assert_eq!((report.region_vertices, report.outline_vertices), (11 * 11, 48));
+        assert!(report.facts.fixed_unchanged && (report.facts.area_ratio - 0.95).abs() < 1e-4, "{report:?}");
+        let (written, _) = mesh_io::read(&output).unwrap();
+        assert_eq!(written.triangles.len(), belly.triangles.len());
+        // The reader numbers vertices by first use: compare positions, not indices.
+        let before: std::collections::HashSet<[u32; 3]> =
+            mesh.positions.iter().map(|p| p.to_array().map(f32::to_bits)).collect();
+        let moved = written.positions.iter().filter(|p| !before.contains(&p.to_array().map(f32::to_bits))).count();
+        assert!(moved > 0 && moved <= 11 * 11, "only the region's inside moved: {moved}");
+    }
+
+    #[test]
+    fn bad_settings_and_files_are_errors_that_say_which() {
+        let folder = tempfile::tempdir().unwrap();
+        let missing = folder.path().join("missing.obj");
+        let marks = parse_marks("0,1,2").unwrap();
+        let settings = Settings { k: 0.9, eps: 1e-5, max_iterations: 10 };
+        let out = folder.path().join("out.obj");
+        let error = run(&missing, &marks, Method::EdgeLengths, settings, &out).unwrap_err().to_string();
+        assert!(error.contains("missing.obj"), "{error}");
+        let k = Settings { k: 1.0, ..settings };
+        let error = run(&missing, &marks, Method::Area(Variant::Projection), k, &out).unwrap_err().to_string();
+        assert!(error.contains("--k") && error.contains("below 1"), "{error}");
+        assert!(method("bend", "projection").is_err() && method("area", "guess").is_err());
+        assert_eq!(method("edge-sum", "source").unwrap(), Method::EdgeSum(Variant::Source));
+    }
+}
