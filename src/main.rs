@@ -73,11 +73,43 @@ enum Command {
     },
     /// Shrink a region of a mesh file with a surface deformer and print the report as JSON.
     Deform(DeformArgs),
+    /// Mesh tools.
+    Mesh {
+        #[command(subcommand)]
+        action: MeshCommand,
+    },
     /// Measurements.
     Bench {
         #[command(subcommand)]
         action: BenchCommand,
     },
+}
+
+#[derive(Subcommand, Debug)]
+enum MeshCommand {
+    /// Write one of the project's sample surfaces as an .obj or .ply file.
+    Sample {
+        /// Which surface.
+        #[arg(value_enum)]
+        name: SampleName,
+        /// The file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Vertices along a side (the belly) or around (the cap), 3 to 1000.
+        #[arg(long, default_value_t = 65, value_parser = clap::value_parser!(u32).range(3..=1000))]
+        size: u32,
+        /// Replace `--out` if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum SampleName {
+    /// A patch of body surface 0.4 m a side with a belly 0.12 m high.
+    Belly,
+    /// A cap of a unit sphere, 60 degrees around its pole.
+    Cap,
 }
 
 /// `canopy deform`.
@@ -295,7 +327,34 @@ fn main() -> ExitCode {
         Command::Terrain { action: TerrainCommand::Stats { maps } } => heightmap_stats(&maps),
         Command::Terrain { action: TerrainCommand::Textures { out } } => write_band_textures(&out),
         Command::Deform(args) => deform_mesh(&args),
+        Command::Mesh { action: MeshCommand::Sample { name, out, size, force } } => {
+            write_sample(name, &out, size, force)
+        }
         Command::Bench { action: BenchCommand::Terrain { out, runs, sizes } } => bench_terrain(&out, runs, &sizes),
+    }
+}
+
+/// `canopy mesh sample`: exit 0 with the file written, 1 if it could not be.
+fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCode {
+    use canopy::soft_body::{mesh_io, sample};
+    if out.exists() && !force {
+        eprintln!("{}: already exists; choose another --out, or add --force to replace it", out.display());
+        return ExitCode::from(1);
+    }
+    let surface = match name {
+        SampleName::Belly => sample::belly(size),
+        SampleName::Cap => sample::sphere_cap(1.0, 60.0, size.div_ceil(2), size),
+    };
+    let mesh = mesh_io::TriangleMesh { positions: surface.positions, triangles: surface.triangles };
+    match mesh_io::write(&mesh, out) {
+        Ok(()) => {
+            println!("{}: {} vertices, {} triangles", out.display(), mesh.positions.len(), mesh.triangles.len());
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("canopy mesh sample: {}: {error}", out.display());
+            ExitCode::from(1)
+        }
     }
 }
 

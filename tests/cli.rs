@@ -180,8 +180,9 @@ fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     let folder = tempfile::tempdir().unwrap();
     let belly = sample::belly(25);
     let input = folder.path().join("belly.obj");
-    let mesh = mesh_io::TriangleMesh { positions: belly.positions.clone(), triangles: belly.triangles.clone() };
-    mesh_io::write(&mesh, &input).unwrap();
+    let written = canopy(&["mesh", "sample", "belly", "--size", "25", "--out", input.to_str().unwrap()]);
+    assert!(written.status.success(), "{}", stderr(&written));
+    assert_eq!(mesh_io::read(&input).unwrap().0.triangles.len(), belly.triangles.len());
     let corner = |i: u32, j: u32| {
         let p = belly.positions[(j * 25 + i) as usize];
         format!("{}:{}:{}", p.x, p.y, p.z)

@@ -128,6 +128,7 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
     // The positions with the least error so far: a solver that stalls, or whose steps run
     // away (the source's edge-sum step can), returns those.
     let (mut best, mut best_error, mut since_best) = (positions.clone(), f64::INFINITY, 0);
+    let patience = PATIENCE.max((surface.positions.len() as f64).sqrt() as u32);
     for iteration in 1..=settings.max_iterations {
         let error = stepper(&mut positions);
         let finite = error.is_finite() && positions.iter().all(|p| p.is_finite());
@@ -139,7 +140,7 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
         }
         let stop = if finite && error < settings.eps {
             Some(Stop::Converged)
-        } else if !finite || since_best >= PATIENCE {
+        } else if !finite || since_best >= patience {
             Some(Stop::Stalled)
         } else {
             None
@@ -151,8 +152,10 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
     Deformed { positions: best, iterations: settings.max_iterations, error: best_error, stop: Stop::Cap }
 }
 
-/// Iterations without a new least error after which a deformer has stalled: the per-edge
-/// projections' error does not fall every iteration on its way down.
+/// Iterations without a new least error after which a deformer has stalled, at least: the
+/// per-edge projections' error does not fall every iteration on its way down, and rises for a
+/// while as corrections cross the surface, which takes about as many iterations as it is edges
+/// across (the square root of its vertex count, when that is more).
 const PATIENCE: u32 = 32;
 
 /// The inverse masses: 1 for a vertex that may move, 0 for a fixed one.

@@ -1,0 +1,56 @@
+//! The surface deformers on regions of a thousand, ten thousand and a hundred thousand
+//! vertices (the belly patch, its border fixed), one core: iterations and time to converge,
+//! why each stopped, and for the per-edge constraints, edge projections a second (the hot
+//! loop the dynamic soft bodies will share).
+//!
+//! Run with `cargo bench --bench deformers`.
+
+use canopy::soft_body::deform::{Method, Settings, Variant, deform};
+use canopy::soft_body::sample;
+use canopy::soft_body::surface::Facts;
+use std::time::Instant;
+
+/// Iterations at most, so that the largest regions finish in seconds.
+const CAP: u32 = 2_000;
+
+fn main() {
+    let methods = [
+        ("edge", Method::EdgeLengths),
+        ("edge-sum, projection", Method::EdgeSum(Variant::Projection)),
+        ("edge-sum, source", Method::EdgeSum(Variant::Source)),
+        ("area, projection", Method::Area(Variant::Projection)),
+        ("area, source", Method::Area(Variant::Source)),
+    ];
+    println!("the belly patch, its border fixed, k = 0.97, eps = 1e-5, at most {CAP} iterations, one core");
+    println!("| vertices | method | iterations | stop | ms | ms / iteration | result | edge projections / s |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for n in [33, 101, 317] {
+        let surface = sample::belly(n);
+        let edges = surface.edges().len();
+        for (name, method) in methods {
+            let settings = Settings { k: 0.97, eps: 1e-5, max_iterations: CAP };
+            let started = Instant::now();
+            let done = deform(&surface, method, settings);
+            let seconds = started.elapsed().as_secs_f64();
+            let facts = Facts::of(&surface, &done.positions, settings.k);
+            let result = match method {
+                Method::EdgeLengths => format!("mean edge error {:.4}", facts.mean_edge_error),
+                Method::EdgeSum(_) => format!("edge sum ratio {:.4}", facts.edge_sum_ratio),
+                Method::Area(_) => format!("area ratio {:.4}", facts.area_ratio),
+            };
+            let throughput = match method {
+                Method::EdgeLengths => format!("{:.0} M", edges as f64 * f64::from(done.iterations) / seconds / 1e6),
+                _ => "-".into(),
+            };
+            println!(
+                "| {} | {name} | {} | {:?} | {:.1} | {:.3} | {result}, {} inverted | {throughput} |",
+                n * n,
+                done.iterations,
+                done.stop,
+                seconds * 1e3,
+                seconds * 1e3 / f64::from(done.iterations.max(1)),
+                facts.inverted
+            );
+        }
+    }
+}
