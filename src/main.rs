@@ -334,12 +334,20 @@ fn main() -> ExitCode {
     }
 }
 
+/// Exit 1, saying why, if `out` exists and `force` does not say to replace it: nothing the
+/// user made is replaced unasked.
+fn refuse_to_replace(out: &Path, force: bool) -> Option<ExitCode> {
+    (out.exists() && !force).then(|| {
+        eprintln!("{}: already exists; choose another --out, or add --force to replace it", out.display());
+        ExitCode::from(1)
+    })
+}
+
 /// `canopy mesh sample`: exit 0 with the file written, 1 if it could not be.
 fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCode {
     use canopy::soft_body::{mesh_io, sample};
-    if out.exists() && !force {
-        eprintln!("{}: already exists; choose another --out, or add --force to replace it", out.display());
-        return ExitCode::from(1);
+    if let Some(refused) = refuse_to_replace(out, force) {
+        return refused;
     }
     let surface = match name {
         SampleName::Belly => sample::belly(size),
@@ -362,9 +370,8 @@ fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCod
 fn deform_mesh(args: &DeformArgs) -> ExitCode {
     use canopy::soft_body::batch::{self, BatchError};
     use canopy::soft_body::deform::Settings;
-    if args.out.exists() && !args.force {
-        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
-        return ExitCode::from(1);
+    if let Some(refused) = refuse_to_replace(&args.out, args.force) {
+        return refused;
     }
     let settings = Settings { k: args.k, eps: args.eps, max_iterations: args.max_iterations };
     let result = batch::method(&args.method, &args.variant)
@@ -480,9 +487,8 @@ fn generate_trees(args: &GenerateArgs) -> ExitCode {
         eprintln!("canopy tree generate: {error}");
         return ExitCode::from(2);
     }
-    if args.out.exists() && !args.force {
-        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
-        return ExitCode::from(1);
+    if let Some(refused) = refuse_to_replace(&args.out, args.force) {
+        return refused;
     }
     let trees = generate(&settings);
     let supports: usize = trees.iter().map(Vec::len).sum();
@@ -529,9 +535,8 @@ fn generate_heightmap(args: &TerrainGenerateArgs) -> ExitCode {
         eprintln!("canopy terrain generate: {error}");
         return ExitCode::from(2);
     }
-    if args.out.exists() && !args.force {
-        eprintln!("{}: already exists; choose another --out, or add --force to replace it", args.out.display());
-        return ExitCode::from(1);
+    if let Some(refused) = refuse_to_replace(&args.out, args.force) {
+        return refused;
     }
     let seed = recipe.seed_used(draw_seed);
     let map = match recipe.generate(seed) {
