@@ -95,7 +95,7 @@ enum MeshCommand {
         /// The file to write.
         #[arg(long)]
         out: PathBuf,
-        /// Vertices along a side (the belly) or around (the cap), 3 to 1000.
+        /// Vertices along a side (the belly) or around (the cap and the sphere), 3 to 1000.
         #[arg(long, default_value_t = 65, value_parser = clap::value_parser!(u32).range(3..=1000))]
         size: u32,
         /// Replace `--out` if it exists.
@@ -110,6 +110,8 @@ enum SampleName {
     Belly,
     /// A cap of a unit sphere, 60 degrees around its pole.
     Cap,
+    /// A closed unit sphere.
+    Sphere,
 }
 
 /// `canopy deform`.
@@ -352,6 +354,7 @@ fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCod
     let surface = match name {
         SampleName::Belly => sample::belly(size),
         SampleName::Cap => sample::sphere_cap(1.0, 60.0, size.div_ceil(2), size),
+        SampleName::Sphere => sample::sphere(1.0, size.div_ceil(2), size),
     };
     let mesh = mesh_io::TriangleMesh { positions: surface.positions, triangles: surface.triangles };
     match mesh_io::write(&mesh, out) {

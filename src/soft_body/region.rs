@@ -363,4 +363,36 @@ mod tests {
         assert!(!moved.is_empty() && moved.iter().all(|&v| region.source.contains(&(v as u32))));
         assert!(region.outline.iter().all(|&v| whole[v as usize] == belly.positions[v as usize]), "the outline held");
     }
+
+    #[test]
+    fn points_around_a_sphere_outline_the_cap_around_its_pole_in_any_order() {
+        let sphere = sample::sphere(1.0, 23, 48);
+        // Four vertices of the ring 40 degrees from the north pole, a quarter of the way round
+        // from each other.
+        let ring = 5;
+        let at = |s: u32| 1 + (ring - 1) * 48 + s;
+        let polar = |v: u32| sphere.positions[v as usize].y.clamp(-1.0, 1.0).acos().to_degrees();
+        let ring_deg = polar(at(0));
+        let marks = [at(0), at(12), at(24), at(36)];
+        let mut regions = Vec::new();
+        for start in 0..4 {
+            for reversed in [false, true] {
+                let mut order: Vec<Mark> = (0..4).map(|k| Mark::Vertex(marks[(start + k) % 4])).collect();
+                if reversed {
+                    order.reverse();
+                }
+                let region = select(&sphere, &order, 1e-3).unwrap();
+                let mut inside: Vec<u32> =
+                    region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect();
+                inside.sort();
+                regions.push(inside);
+            }
+        }
+        assert!(regions.windows(2).all(|w| w[0] == w[1]), "the same region whatever the order");
+        let inside = &regions[0];
+        assert!(inside.contains(&0), "the north pole is inside");
+        assert!(inside.iter().all(|&v| polar(v) < ring_deg), "nothing beyond the marks' ring");
+        // The loop bends towards the pole between the marks, but the first ring is whole.
+        assert!((0..48).map(|s| 1 + s).all(|v| inside.contains(&v)));
+    }
 }

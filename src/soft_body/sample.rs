@@ -39,6 +39,27 @@ pub fn sphere_cap(radius: f32, angle_deg: f32, rings: u32, segments: u32) -> Sur
     Surface::new(positions, triangles, movable).expect("a cap of finite positions and valid indices")
 }
 
+/// A closed sphere of `radius` metres: a vertex at each pole (+y first, -y last) and `rings`
+/// rings of `segments` vertices between them; every vertex may move. Triangles face out.
+pub fn sphere(radius: f32, rings: u32, segments: u32) -> Surface {
+    let (rings, segments) = (rings.max(2), segments.max(3));
+    let mut surface = sphere_cap(radius, 180.0 * rings as f32 / (rings + 1) as f32, rings, segments);
+    let south = surface.positions.len() as u32;
+    let mut positions = std::mem::take(&mut surface.positions);
+    let mut triangles = std::mem::take(&mut surface.triangles);
+    positions.push(Vec3::NEG_Y * radius);
+    let last = 1 + (rings - 1) * segments;
+    for s in 0..segments {
+        // Outward (down) seen from below: the order the cap's winding rule gives.
+        let (a, b) = (last + s, last + (s + 1) % segments);
+        let t = [south, a, b];
+        let centre = t.iter().map(|&v| positions[v as usize]).sum::<Vec3>();
+        triangles.push(if triangle_cross(&positions, t).dot(centre) < 0.0 { [south, b, a] } else { t });
+    }
+    let movable = vec![true; positions.len()];
+    Surface::new(positions, triangles, movable).expect("a sphere of finite positions and valid indices")
+}
+
 /// A patch of body surface with a belly: [`patch`] with a bump 0.12 m high.
 pub fn belly(n: u32) -> Surface {
     patch(n, 0.12)
@@ -74,6 +95,23 @@ pub fn patch(n: u32, height_m: f32) -> Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sphere_is_closed_and_faces_out() {
+        let sphere = sphere(1.0, 15, 32);
+        assert_eq!(sphere.positions.len(), 2 + 15 * 32);
+        // Closed: every edge has two triangles; Euler's V - E + F = 2.
+        let (v, e, f) = (sphere.positions.len(), sphere.edges().len(), sphere.triangles.len());
+        assert_eq!(v + f, e + 2);
+        assert!(sphere.triangles.iter().all(|&t| {
+            let centre: Vec3 = t.iter().map(|&v| sphere.positions[v as usize]).sum();
+            triangle_cross(&sphere.positions, t).dot(centre) > 0.0
+        }));
+        let area = sphere.area(&sphere.positions);
+        // A polyhedron inside the sphere: a little less than its area.
+        let sphere_area = 4.0 * std::f64::consts::PI;
+        assert!(area < sphere_area && area > 0.98 * sphere_area, "{area}");
+    }
 
     #[test]
     fn samples_face_out_and_fix_their_border_alone() {
