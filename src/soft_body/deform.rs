@@ -163,34 +163,52 @@ fn weights(surface: &Surface) -> Vec<f32> {
     surface.movable.iter().map(|&movable| f32::from(u8::from(movable))).collect()
 }
 
+/// An edge's length constraint, ready for the inner loop: its ends, rest length and each
+/// end's share of a correction (its weight over the two weights).
+#[derive(Debug, Clone, Copy)]
+struct EdgeConstraint {
+    a: u32,
+    b: u32,
+    rest: f32,
+    share: [f32; 2],
+}
+
 /// One iteration of the per-edge constraints: every edge projected onto its rest length in
-/// turn; returns the sum of the shifts' lengths.
+/// turn (in the edges' sorted order, so that neighbouring constraints touch neighbouring
+/// memory); returns the sum of the shifts' lengths.
 fn edge_lengths(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
-    let rest: Vec<f32> = surface
+    // Edges with both ends fixed can do nothing: they are left out.
+    let constraints: Vec<EdgeConstraint> = surface
         .edges()
         .iter()
-        .map(|&[a, b]| k * surface.positions[a as usize].distance(surface.positions[b as usize]))
+        .filter(|&&[a, b]| w[a as usize] + w[b as usize] > 0.0)
+        .map(|&[a, b]| {
+            let (wa, wb) = (w[a as usize], w[b as usize]);
+            let rest = k * surface.positions[a as usize].distance(surface.positions[b as usize]);
+            EdgeConstraint { a, b, rest, share: [wa / (wa + wb), wb / (wa + wb)] }
+        })
         .collect();
     move |positions| {
         let mut shifted = 0.0;
-        for (&[a, b], &rest) in surface.edges().iter().zip(&rest) {
-            let (a, b) = (a as usize, b as usize);
-            let total = w[a] + w[b];
+        for edge in &constraints {
+            let (a, b) = (edge.a as usize, edge.b as usize);
             let delta = positions[a] - positions[b];
             let length = delta.length();
-            if total == 0.0 || length == 0.0 {
+            if length == 0.0 {
                 continue;
             }
-            let correction = delta * ((length - rest) / (length * total));
-            // Fixed ends have no weight: they are not written at all, so they keep their bits.
-            if w[a] > 0.0 {
-                positions[a] -= correction * w[a];
+            let c = length - edge.rest;
+            let correction = delta * (c / length);
+            // A fixed end has no share: it is not written at all, so it keeps its bits.
+            if edge.share[0] > 0.0 {
+                positions[a] -= correction * edge.share[0];
             }
-            if w[b] > 0.0 {
-                positions[b] += correction * w[b];
+            if edge.share[1] > 0.0 {
+                positions[b] += correction * edge.share[1];
             }
-            shifted += f64::from(correction.length() * total);
+            // The two shifts' lengths add up to the constraint's error.
+            shifted += f64::from(c.abs());
         }
         shifted
     }
