@@ -105,17 +105,18 @@ pub fn run(
         move |error| BatchError::Mesh { path: path.display().to_string(), error }
     }
     let (mesh, read) = mesh_io::read(input).map_err(located(input))?;
-    let whole = Surface::new(mesh.positions.clone(), mesh.triangles.clone(), vec![true; mesh.positions.len()])?;
+    let movable = vec![true; mesh.positions.len()];
+    let whole = Surface::new(mesh.positions, mesh.triangles, movable)?;
     let region = select(&whole, marks, POINT_TOLERANCE_M)?;
     let started = Instant::now();
     let done = deform(&region.surface, method, settings);
     let time_ms = started.elapsed().as_secs_f64() * 1e3;
     let facts = Facts::of(&region.surface, &done.positions, settings.k);
-    let positions = region.put_back(&mesh.positions, &done.positions);
-    mesh_io::write(&TriangleMesh { positions, triangles: mesh.triangles.clone() }, output).map_err(located(output))?;
+    let positions = region.put_back(&whole.positions, &done.positions);
+    mesh_io::write(&TriangleMesh { positions, triangles: whole.triangles.clone() }, output).map_err(located(output))?;
     Ok(Report {
-        vertices: mesh.positions.len(),
-        triangles: mesh.triangles.len(),
+        vertices: whole.positions.len(),
+        triangles: whole.triangles.len(),
         mesh: read,
         region_vertices: region.surface.movable.iter().filter(|&&m| m).count(),
         outline_vertices: region.outline.len(),

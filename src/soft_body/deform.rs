@@ -228,34 +228,44 @@ fn edge_sum_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
 fn edge_sum(surface: &Surface, k: f32, variant: Variant) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
     let target = f64::from(k) * surface.edge_sum(&surface.positions);
-    let relative =
-        move |positions: &[Vec3]| (surface.edge_sum(positions) - target).abs() / target.max(f64::MIN_POSITIVE);
     move |positions| {
-        let c = surface.edge_sum(positions) - target;
         let gradient = edge_sum_gradient(surface, positions);
         match variant {
-            Variant::Projection => project(positions, &gradient, &w, c, relative),
+            Variant::Projection => project(positions, &gradient, &w, target, |p| surface.edge_sum(p)),
             Variant::Source => {
+                let c = surface.edge_sum(positions) - target;
                 for (v, p) in positions.iter_mut().enumerate() {
                     if w[v] > 0.0 {
                         *p -= gradient[v] * (c / surface.neighbours(v).len().max(1) as f64) as f32;
                     }
                 }
-                relative(positions)
+                relative(surface.edge_sum(positions) - target, target)
             }
         }
     }
 }
 
+/// A constraint's error `difference` (its value less its `target`) over the target.
+fn relative(difference: f64, target: f64) -> f64 {
+    difference.abs() / target.max(f64::MIN_POSITIVE)
+}
+
 /// Step halvings a projection's line search tries before it gives the step up.
 const HALVINGS: u32 = 30;
 
-/// Projects one constraint of value `c` and `gradient` (per vertex) with inverse masses `w`:
-/// every vertex moved by `-w_i c g_i / sum_j w_j |g_j|^2`, the step halved while `relative`
-/// (the constraint's `|C|` over its target) does not fall, as the constraint is not linear.
-/// Returns `relative` at the positions kept.
-fn project(positions: &mut Vec<Vec3>, gradient: &[Vec3], w: &[f32], c: f64, relative: impl Fn(&[Vec3]) -> f64) -> f64 {
-    let before = relative(positions);
+/// Projects the constraint `measure(positions) = target`, of `gradient` (per vertex), with
+/// inverse masses `w`: every vertex moved by `-w_i C g_i / sum_j w_j |g_j|^2`, the step halved
+/// while the constraint's relative error does not fall, as the constraint is not linear.
+/// Returns that error at the positions kept.
+fn project(
+    positions: &mut Vec<Vec3>,
+    gradient: &[Vec3],
+    w: &[f32],
+    target: f64,
+    measure: impl Fn(&[Vec3]) -> f64,
+) -> f64 {
+    let c = measure(positions) - target;
+    let before = relative(c, target);
     let norm: f64 = gradient.iter().zip(w).map(|(g, &w)| f64::from(w * g.length_squared())).sum();
     if norm == 0.0 {
         return before;
@@ -268,7 +278,7 @@ fn project(positions: &mut Vec<Vec3>, gradient: &[Vec3], w: &[f32], c: f64, rela
                 *p = positions[v] - gradient[v] * (step * w[v]);
             }
         }
-        let after = relative(&trial);
+        let after = relative(measure(&trial) - target, target);
         if after < before {
             *positions = trial;
             return after;
@@ -309,7 +319,7 @@ fn area_by_edges(surface: &Surface, k: f32, eps: f64) -> impl FnMut(&mut Vec<Vec
             *positions = trial;
             last = now;
         }
-        last / target.max(f64::MIN_POSITIVE)
+        relative(last, target)
     }
 }
 
@@ -332,11 +342,9 @@ fn area_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
 fn area(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
     let target = f64::from(k) * surface.area(&surface.positions);
-    let relative = move |positions: &[Vec3]| (surface.area(positions) - target).abs() / target.max(f64::MIN_POSITIVE);
     move |positions| {
-        let c = surface.area(positions) - target;
         let gradient = area_gradient(surface, positions);
-        project(positions, &gradient, &w, c, relative)
+        project(positions, &gradient, &w, target, |p| surface.area(p))
     }
 }
 

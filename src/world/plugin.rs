@@ -162,6 +162,11 @@ impl WorldBody {
         counts
     }
 
+    /// The level of each resident chunk.
+    fn resident_levels(&self) -> HashMap<ChunkKey, u8> {
+        self.resident.iter().map(|(&key, chunk)| (key, chunk.level)).collect()
+    }
+
     /// Chunks being made.
     pub fn pending(&self) -> usize {
         self.pending.len()
@@ -243,7 +248,7 @@ fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody
     let (camera, forward) = (eye.xz(), (target - eye).xz());
     for mut body in &mut worlds {
         let body = &mut *body;
-        let resident: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, chunk)| (key, chunk.level)).collect();
+        let resident = body.resident_levels();
         let pending: HashMap<ChunkKey, u8> = body.pending.iter().map(|p| (p.key, p.level)).collect();
         let plan = plan(&body.maker.stream, camera, forward, &resident, &pending);
         for key in plan.unload {
@@ -329,7 +334,7 @@ fn hang_skirts(mut worlds: Query<&mut WorldBody>, mut commands: Commands) {
         if !std::mem::take(&mut body.changed) {
             continue;
         }
-        let levels: HashMap<ChunkKey, u8> = body.resident.iter().map(|(&key, chunk)| (key, chunk.level)).collect();
+        let levels = body.resident_levels();
         for (key, chunk) in &mut body.resident {
             for (side, [dx, dz]) in SIDES.into_iter().enumerate() {
                 let across = levels.get(&ChunkKey { x: key.x + dx, z: key.z + dz });
