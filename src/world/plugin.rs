@@ -103,6 +103,8 @@ struct PendingChunk {
     level: u8,
     task: Task<MadeChunk>,
     frames_left: u32,
+    /// Made in advance and taken ready-made.
+    ready: bool,
 }
 
 /// What a world's chunks are made of, shared with the tasks that make them.
@@ -146,6 +148,8 @@ pub struct WorldBody {
     pending: Vec<PendingChunk>,
     /// Chunks made (or taken ready-made) and spawned since the world was spawned.
     pub made: u64,
+    /// Of those, the chunks that were made in advance.
+    pub taken_ready: u64,
     /// Time spent making them (on the pool's threads; none for those made in advance).
     pub making_time: Duration,
     /// When the chunks of the last second were spawned (wall clock, for the panel's rate).
@@ -233,6 +237,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
             changed: false,
             pending: Vec::new(),
             made: 0,
+            taken_ready: 0,
             making_time: Duration::ZERO,
             recent: VecDeque::new(),
             in_advance: HashMap::new(),
@@ -264,17 +269,17 @@ fn stream_chunks(cameras: Query<&CameraParams>, mut worlds: Query<&mut WorldBody
             // A chunk asked for at another level is asked for again at this one.
             body.pending.retain(|p| p.key != key);
             let pool = AsyncComputeTaskPool::get();
-            let task = match body.in_advance.get(&(key, level)) {
+            let (task, ready) = match body.in_advance.get(&(key, level)) {
                 Some(made) => {
                     let made = MadeChunk { time: Duration::ZERO, ..made.clone() };
-                    pool.spawn(async move { made })
+                    (pool.spawn(async move { made }), true)
                 }
                 None => {
                     let maker = body.maker.clone();
-                    pool.spawn(async move { maker.make(key, level) })
+                    (pool.spawn(async move { maker.make(key, level) }), false)
                 }
             };
-            body.pending.push(PendingChunk { key, level, task, frames_left: CHUNK_FRAMES });
+            body.pending.push(PendingChunk { key, level, task, frames_left: CHUNK_FRAMES, ready });
         }
     }
 }
@@ -292,9 +297,10 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
         let mut spawned = 0;
         while spawned < body.budget {
             let Some(index) = body.pending.iter().position(|p| p.frames_left == 0) else { break };
-            let PendingChunk { key, level, task, .. } = body.pending.remove(index);
+            let PendingChunk { key, level, task, ready, .. } = body.pending.remove(index);
             let made = block_on(task);
             body.made += 1;
+            body.taken_ready += u64::from(ready);
             body.making_time += made.time;
             body.recent.push_back(now);
             let chunk = WorldChunk { key, level, checksum: made.checksum };
