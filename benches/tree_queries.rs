@@ -89,7 +89,8 @@ fn ray_casts(c: &mut Criterion) {
             b.iter(|| {
                 rays.iter()
                     .filter(|(o, d)| {
-                        let first = bvh.segments().iter().filter_map(|s| s.ray_hit(*o, *d, 200.0)).map(|h| h.distance);
+                        let first =
+                            bvh.primitives().iter().filter_map(|s| s.ray_hit(*o, *d, 200.0)).map(|h| h.distance);
                         black_box(first.fold(f32::INFINITY, f32::min)).is_finite()
                     })
                     .count()

@@ -95,7 +95,8 @@ enum MeshCommand {
         /// The file to write.
         #[arg(long)]
         out: PathBuf,
-        /// Vertices along a side (the belly) or around (the cap and the sphere), 3 to 1000.
+        /// Vertices along a side (the belly), around (the cap, the sphere and the torus) or
+        /// rings from hips to chest (the torso), 3 to 1000.
         #[arg(long, default_value_t = 65, value_parser = clap::value_parser!(u32).range(3..=1000))]
         size: u32,
         /// Replace `--out` if it exists.
@@ -112,6 +113,10 @@ enum SampleName {
     Cap,
     /// A closed unit sphere.
     Sphere,
+    /// A closed torus 1 m across its centre line.
+    Torus,
+    /// An open torso 0.6 m high with a belly.
+    Torso,
 }
 
 /// `canopy deform`.
@@ -352,10 +357,13 @@ fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCod
         return refused;
     }
     let surface = match name {
-        SampleName::Belly => sample::belly(size),
-        SampleName::Cap => sample::sphere_cap(1.0, 60.0, size.div_ceil(2), size),
-        SampleName::Sphere => sample::sphere(1.0, size.div_ceil(2), size),
-    };
+        SampleName::Belly => sample::Shape::Belly,
+        SampleName::Cap => sample::Shape::Cap,
+        SampleName::Sphere => sample::Shape::Sphere,
+        SampleName::Torus => sample::Shape::Torus,
+        SampleName::Torso => sample::Shape::Torso,
+    }
+    .make(size);
     let mesh = mesh_io::TriangleMesh { positions: surface.positions, triangles: surface.triangles };
     match mesh_io::write(&mesh, out) {
         Ok(()) => {

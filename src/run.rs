@@ -3,9 +3,8 @@
 //! without a display, and by the system tests.
 
 use crate::app::{entity_kinds, headless_app};
-use crate::controls::timeline::Timeline;
+use crate::controls::timeline::{Timeline, TimelineError};
 use crate::foundation::dump::dump_state;
-use crate::foundation::params::ParamError;
 use crate::foundation::schedule::SimControl;
 use crate::foundation::yaml::FileError;
 use crate::raster::Framebuffer;
@@ -49,13 +48,13 @@ pub enum RunError {
     /// The scene or the timeline file is invalid.
     #[error("{0}")]
     Invalid(#[from] FileError),
-    /// The timeline sets a parameter the scene does not have.
+    /// The timeline sets a parameter, or sends an action, that the scene does not take.
     #[error("{path}: {error}")]
     Parameter {
         /// The timeline file.
         path: PathBuf,
         /// What is wrong.
-        error: ParamError,
+        error: TimelineError,
     },
     /// The scene could not be read or loaded.
     #[error("{0}")]

@@ -5,13 +5,17 @@
 //! - { at: 0.0, set: { "light.azimuth_deg": 45 } }
 //! - { at: 0.5, press: [KeyW] }
 //! - { at: 2.0, release: [KeyW] }
+//! - { at: 3.0, act: { torso: [{ mark_vertex: 120 }, apply] } }
 //! ```
+//!
+//! `act` sends entities the actions of their kind (see [`crate::foundation::actions`]).
 //!
 //! An event fires at the start of the first frame whose time has reached `at`: seconds since
 //! the scene was loaded, counted as frames times the fixed step, so the script keeps time
 //! while the simulation is paused (and can resume it). Keys go through Bevy's input like real
 //! key presses, so scripts and the keyboard drive the same systems.
 
+use crate::foundation::actions::{ActionError, act};
 use crate::foundation::params::{ParamError, ParamValue, check_param, set_param};
 use crate::foundation::schedule::{ControlSystems, SimControl};
 use crate::foundation::values::checked_number;
@@ -64,6 +68,20 @@ pub struct TimelineEvent {
     /// Parameters set, by name (see [`crate::foundation::params`]).
     #[serde(default)]
     pub set: BTreeMap<String, ParamValue>,
+    /// Actions sent, by entity name: one action or a list, done after the parameters are set.
+    #[serde(default)]
+    pub act: BTreeMap<String, serde_yaml::Value>,
+}
+
+/// Why a timeline does not fit the scene it is to play.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TimelineError {
+    /// A parameter setting.
+    #[error(transparent)]
+    Parameter(#[from] ParamError),
+    /// An action.
+    #[error(transparent)]
+    Action(#[from] ActionError),
 }
 
 /// A script of events, ordered by time (events at the same time keep their file order).
@@ -83,11 +101,14 @@ impl Timeline {
         Ok(Self { events, next: 0, frames: 0 })
     }
 
-    /// Checks every parameter setting against the entities of the loaded scene.
-    pub fn check(&self, world: &mut World) -> Result<(), ParamError> {
+    /// Checks every parameter setting and action against the entities of the loaded scene.
+    pub fn check(&self, world: &mut World) -> Result<(), TimelineError> {
         for event in &self.events {
             for (name, value) in &event.set {
                 check_param(world, name, value.clone())?;
+            }
+            for (entity, actions) in &event.act {
+                act(world, entity, actions, false)?;
             }
         }
         Ok(())
@@ -136,6 +157,11 @@ fn play_timeline(world: &mut World) {
         }
         for (name, value) in event.set {
             if let Err(error) = set_param(world, &name, value) {
+                error!("timeline at {}s: {error}", event.at.0);
+            }
+        }
+        for (entity, actions) in &event.act {
+            if let Err(error) = act(world, entity, actions, true) {
                 error!("timeline at {}s: {error}", event.at.0);
             }
         }

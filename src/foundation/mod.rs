@@ -7,6 +7,7 @@
 //! | [`values`] | checked numbers, points, sizes, colours and file paths of scene files |
 //! | [`yaml`] | reading user-written YAML with errors at file, line, column and field |
 //! | [`params`] | named parameters through reflection: timelines, keys and the panel edit them |
+//! | [`actions`] | what entities can be told to do beyond parameters: timelines send them |
 //! | [`dump`] | the JSON state dump each kind contributes to |
 //! | [`random`] | a seeded stream of numbers, the same on every machine |
 //! | [`keys`] | the key help every plugin registers its keys with |
@@ -14,6 +15,7 @@
 //! | [`panel`] | the kinds' sections of the window's panel |
 //! | [`schedule`] | the phases of a frame and the simulated clock |
 
+pub mod actions;
 pub mod dump;
 pub mod entity;
 pub mod keys;
@@ -34,6 +36,7 @@ pub struct FoundationPlugin;
 impl Plugin for FoundationPlugin {
     fn build(&self, app: &mut App) {
         messages::add_messages(app);
+        app.init_resource::<actions::ActionKinds>();
         app.add_plugins(schedule::SchedulePlugin);
     }
 }

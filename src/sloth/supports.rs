@@ -206,7 +206,7 @@ impl Supports {
 
     /// Segment `index` of [`Supports::segments_near`].
     pub fn segment(&self, index: usize) -> TaperedSegment {
-        self.bvh.segments()[index]
+        self.bvh.primitives()[index]
     }
 
     /// The supports other than `except` whose surface comes within `radius` of `p`, in index

@@ -1,16 +1,13 @@
 //! The batch deformation behind `canopy deform`: a mesh file read and welded, a region
 //! outlined on it, shrunk by a deformer, put back and written, with a report of what was done.
 
-use super::deform::{Method, Settings, Stop, Variant, deform};
+use super::deform::{Method, Settings, Variant};
 use super::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
-use super::region::{Mark, RegionError, select};
-use super::surface::{Facts, Surface, SurfaceError};
+use super::region::{Mark, RegionError};
+use super::surface::{Surface, SurfaceError};
+use super::workbench::{ShrinkError, ShrinkReport, shrink};
 use bevy::math::Vec3;
 use std::path::Path;
-use std::time::Instant;
-
-/// How far from the surface a marked point may lie, metres.
-pub const POINT_TOLERANCE_M: f32 = 1e-3;
 
 /// Why a batch deformation failed.
 #[derive(Debug, thiserror::Error)]
@@ -64,29 +61,16 @@ pub fn parse_marks(text: &str) -> Result<Vec<Mark>, BatchError> {
 /// What a batch deformation did, as the command prints it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Report {
-    /// The mesh read: its vertices and triangles after welding, and what welding found.
+    /// Vertices of the mesh as welded.
     pub vertices: usize,
-    /// Triangles.
+    /// Its triangles.
     pub triangles: usize,
-    /// What reading found.
+    /// What reading it found.
     pub mesh: MeshReport,
-    /// Vertices of the region that moved freely, and those of its outline.
-    pub region_vertices: usize,
-    /// Vertices on the outline.
-    pub outline_vertices: usize,
-    /// The method and its variant.
-    pub method: Method,
-    /// The coefficient.
-    pub k: f32,
-    /// Iterations used.
-    pub iterations: u32,
-    /// The least error reached.
-    pub error: f64,
-    /// Why it stopped.
-    pub stop: Stop,
-    /// The facts of the result.
-    pub facts: Facts,
-    /// Wall-clock time of the deformation, milliseconds.
+    /// The region, the deformer and the facts of the result.
+    #[serde(flatten)]
+    pub shrink: ShrinkReport,
+    /// Wall-clock milliseconds the deformer took.
     pub time_ms: f64,
 }
 
@@ -107,27 +91,15 @@ pub fn run(
     let (mesh, read) = mesh_io::read(input).map_err(located(input))?;
     let movable = vec![true; mesh.positions.len()];
     let whole = Surface::new(mesh.positions, mesh.triangles, movable)?;
-    let region = select(&whole, marks, POINT_TOLERANCE_M)?;
-    let started = Instant::now();
-    let done = deform(&region.surface, method, settings);
-    let time_ms = started.elapsed().as_secs_f64() * 1e3;
-    let facts = Facts::of(&region.surface, &done.positions, settings.k);
-    let positions = region.put_back(&whole.positions, &done.positions);
-    mesh_io::write(&TriangleMesh { positions, triangles: whole.triangles.clone() }, output).map_err(located(output))?;
-    Ok(Report {
-        vertices: whole.positions.len(),
-        triangles: whole.triangles.len(),
-        mesh: read,
-        region_vertices: region.surface.movable.iter().filter(|&&m| m).count(),
-        outline_vertices: region.outline.len(),
-        method,
-        k: settings.k,
-        iterations: done.iterations,
-        error: done.error,
-        stop: done.stop,
-        facts,
-        time_ms,
-    })
+    let shrunk = shrink(&whole, marks, method, settings).map_err(|error| match error {
+        ShrinkError::Region(error) => BatchError::Region(error),
+        ShrinkError::Settings(error) => BatchError::Settings(format!("--k/--eps: {error}")),
+    })?;
+    let (vertices, triangles) = (whole.positions.len(), whole.triangles.len());
+    let written = TriangleMesh { positions: shrunk.positions, triangles: whole.triangles };
+    mesh_io::write(&written, output).map_err(located(output))?;
+    let time_ms = shrunk.report.time_ms;
+    Ok(Report { vertices, triangles, mesh: read, shrink: shrunk.report, time_ms })
 }
 
 /// The method named on the command line: `edge`, `edge-sum` or `area`, with `variant`
@@ -177,8 +149,9 @@ mod tests {
         let marks = parse_marks(&[(6, 6), (18, 6), (18, 18), (6, 18)].map(corner).join(",")).unwrap();
         let settings = Settings { k: 0.95, eps: 1e-5, max_iterations: 2000 };
         let report = run(&input, &marks, Method::Area(Variant::Projection), settings, &output).unwrap();
-        assert_eq!((report.region_vertices, report.outline_vertices), (11 * 11, 48));
-        assert!(report.facts.fixed_unchanged && (report.facts.area_ratio - 0.95).abs() < 1e-4, "{report:?}");
+        let shrink = &report.shrink;
+        assert_eq!((shrink.region_vertices, shrink.outline_vertices), (11 * 11, 48));
+        assert!(shrink.facts.fixed_unchanged && (shrink.facts.area_ratio - 0.95).abs() < 1e-4, "{report:?}");
         let (written, _) = mesh_io::read(&output).unwrap();
         assert_eq!(written.triangles.len(), belly.triangles.len());
         // The reader numbers vertices by first use: compare positions, not indices.

@@ -8,11 +8,15 @@
 //! | [`deform`] | the deformers: per-edge lengths, the sum of edge lengths, the area; their stopping rules and reports |
 //! | [`mesh_io`] | OBJ, PLY and STL meshes read and welded, OBJ and PLY written |
 //! | [`region`] | the region outlined by marks on a surface: the loop along the surface, the smaller side, cut out and put back |
-//! | [`sample`] | sample surfaces made by the project |
+//! | [`sample`] | sample surfaces made by the project: a belly patch, a cap, a sphere, a torus, a torso |
+//! | [`pick`] | points picked on a surface by a ray through a hierarchy of its triangles |
+//! | [`workbench`] | the workflow: marks, the region, shrinks kept as a collection of models |
 
 pub mod batch;
 pub mod deform;
 pub mod mesh_io;
+pub mod pick;
 pub mod region;
 pub mod sample;
 pub mod surface;
+pub mod workbench;

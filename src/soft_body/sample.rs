@@ -2,6 +2,41 @@
 
 use super::surface::{Surface, triangle_cross};
 use bevy::math::Vec3;
+use serde::{Deserialize, Serialize};
+use std::f32::consts::TAU;
+
+/// The sample surfaces, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shape {
+    /// [`belly`]: a patch 0.4 m a side with a belly, `size` vertices a side.
+    Belly,
+    /// [`sphere_cap`]: a cap of a unit sphere 60 degrees about its pole, `size` vertices around.
+    Cap,
+    /// [`sphere`]: a closed unit sphere, `size` vertices around.
+    Sphere,
+    /// [`torus`]: a closed ring 1 m across its centre line, `size` vertices around it.
+    Torus,
+    /// [`torso`]: an open torso 0.6 m high with a belly, `size` rings from hips to chest.
+    Torso,
+}
+
+/// Fewest and most vertices along a sample's `size`.
+pub const SIZES: std::ops::RangeInclusive<u32> = 3..=1000;
+
+impl Shape {
+    /// The surface with `size` vertices along its main direction (clamped to [`SIZES`]).
+    pub fn make(self, size: u32) -> Surface {
+        let size = size.clamp(*SIZES.start(), *SIZES.end());
+        match self {
+            Shape::Belly => belly(size),
+            Shape::Cap => sphere_cap(1.0, 60.0, size.div_ceil(2), size),
+            Shape::Sphere => sphere(1.0, size.div_ceil(2), size),
+            Shape::Torus => torus(0.5, 0.18, size, size.div_ceil(3).max(3)),
+            Shape::Torso => torso(size, 2 * size),
+        }
+    }
+}
 
 /// The cap of a sphere of `radius` metres around its north pole (+y), out to `angle_deg`
 /// degrees from it, in `rings` rings of `segments` vertices around a pole vertex; its last
@@ -92,6 +127,75 @@ pub fn patch(n: u32, height_m: f32) -> Surface {
     Surface::new(positions, triangles, movable).expect("a patch of finite positions and valid indices")
 }
 
+/// A closed torus about the y axis: its centre line a circle of `major_m` metres radius, its
+/// tube `minor_m` metres in radius, in `around` rings of `tube` vertices; every vertex may
+/// move. Triangles face out of the tube.
+pub fn torus(major_m: f32, minor_m: f32, around: u32, tube: u32) -> Surface {
+    let (around, tube) = (around.max(3), tube.max(3));
+    let centre = |i: u32| {
+        let a = TAU * i as f32 / around as f32;
+        Vec3::new(a.cos(), 0.0, a.sin()) * major_m
+    };
+    let mut positions = Vec::with_capacity((around * tube) as usize);
+    for i in 0..around {
+        let out = centre(i).normalize();
+        for j in 0..tube {
+            let b = TAU * j as f32 / tube as f32;
+            positions.push(centre(i) + (out * b.cos() + Vec3::Y * b.sin()) * minor_m);
+        }
+    }
+    let at = |i: u32, j: u32| (i % around) * tube + j % tube;
+    let mut triangles = Vec::with_capacity((2 * around * tube) as usize);
+    for i in 0..around {
+        for j in 0..tube {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+            for t in [[a, b, d], [a, d, c]] {
+                let middle = t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0;
+                let axis = centre(i) + (centre(i + 1) - centre(i)) * 0.5;
+                let outward = triangle_cross(&positions, t).dot(middle - axis) > 0.0;
+                triangles.push(if outward { t } else { [t[0], t[2], t[1]] });
+            }
+        }
+    }
+    let movable = vec![true; positions.len()];
+    Surface::new(positions, triangles, movable).expect("a torus of finite positions and valid indices")
+}
+
+/// A torso 0.6 m high from the hips (y = 0) to the chest, `rings` rings of `segments` vertices
+/// around it: an elliptic tube 0.34 m wide and 0.22 m deep with a waist, and a belly rising
+/// 5 cm out of its front (+z) about 0.2 m up. Open at both ends, whose rings are fixed;
+/// triangles face out.
+pub fn torso(rings: u32, segments: u32) -> Surface {
+    let (rings, segments) = (rings.max(3), segments.max(3));
+    let height = 0.6f32;
+    let mut positions = Vec::with_capacity((rings * segments) as usize);
+    for r in 0..rings {
+        let y = height * r as f32 / (rings - 1) as f32;
+        let half_width = 0.17 - 0.025 * (-((y - 0.34) / 0.12).powi(2)).exp();
+        let half_depth = 0.11;
+        let belly = 0.05 * (-((y - 0.2) / 0.09).powi(2)).exp();
+        for s in 0..segments {
+            let a = TAU * s as f32 / segments as f32;
+            let front = a.sin().max(0.0).powi(6);
+            positions.push(Vec3::new(half_width * a.cos(), y, half_depth * a.sin() + belly * front));
+        }
+    }
+    let at = |r: u32, s: u32| r * segments + s % segments;
+    let mut triangles = Vec::with_capacity((2 * (rings - 1) * segments) as usize);
+    for r in 0..rings - 1 {
+        for s in 0..segments {
+            let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s), at(r + 1, s + 1));
+            for t in [[a, c, d], [a, d, b]] {
+                let middle = t.iter().map(|&v| positions[v as usize]).sum::<Vec3>();
+                let outward = triangle_cross(&positions, t).dot(middle * Vec3::new(1.0, 0.0, 1.0)) > 0.0;
+                triangles.push(if outward { t } else { [t[0], t[2], t[1]] });
+            }
+        }
+    }
+    let movable = (0..rings * segments).map(|v| (1..rings - 1).contains(&(v / segments))).collect();
+    Surface::new(positions, triangles, movable).expect("a torso of finite positions and valid indices")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,5 +231,26 @@ mod tests {
         assert!(belly.triangles.iter().all(|&t| triangle_cross(&belly.positions, t).y > 0.0), "facing +y");
         assert_eq!(belly.movable.iter().filter(|&&m| m).count(), 9, "the inner 3 x 3 may move");
         assert!(belly.positions[12].y > belly.positions[0].y + 0.1, "the belly rises in the middle");
+    }
+
+    #[test]
+    fn the_torus_is_closed_and_the_torso_open_at_its_fixed_ends() {
+        let torus = torus(0.5, 0.18, 48, 16);
+        let (v, e, f) = (torus.positions.len(), torus.edges().len(), torus.triangles.len());
+        assert_eq!(v + f, e, "a torus has Euler characteristic 0");
+        let area = torus.area(&torus.positions);
+        let exact = 4.0 * std::f64::consts::PI.powi(2) * 0.5 * 0.18;
+        assert!((area / exact - 1.0).abs() < 0.02, "{area} vs {exact}");
+        let torso = torso(40, 80);
+        assert_eq!(torso.movable.iter().filter(|&&m| !m).count(), 2 * 80, "the hips' and the chest's rings");
+        assert!(torso.triangles.iter().all(|&t| {
+            let middle: Vec3 = t.iter().map(|&v| torso.positions[v as usize]).sum();
+            triangle_cross(&torso.positions, t).dot(middle * Vec3::new(1.0, 0.0, 1.0)) > 0.0
+        }));
+        let front = torso.positions.iter().map(|p| p.z).fold(f32::MIN, f32::max);
+        assert!(front > 0.11 + 0.045, "the belly stands out of the front: {front}");
+        for shape in [Shape::Belly, Shape::Cap, Shape::Sphere, Shape::Torus, Shape::Torso] {
+            assert_eq!(shape.make(1), shape.make(3), "sizes are clamped");
+        }
     }
 }

@@ -90,6 +90,20 @@ impl Surface {
         Ok(Self { positions, triangles, movable, edges, first, neighbours })
     }
 
+    /// The same surface with its vertices at `positions` (one per vertex, finite): a
+    /// deformed copy keeps the topology derived once.
+    pub fn with_positions(&self, positions: Vec<Vec3>) -> Self {
+        assert_eq!(positions.len(), self.positions.len(), "one position per vertex");
+        Self {
+            positions,
+            triangles: self.triangles.clone(),
+            movable: self.movable.clone(),
+            edges: self.edges.clone(),
+            first: self.first.clone(),
+            neighbours: self.neighbours.clone(),
+        }
+    }
+
     /// The unique undirected edges, the lower index first.
     pub fn edges(&self) -> &[[u32; 2]] {
         &self.edges

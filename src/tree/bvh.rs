@@ -1,16 +1,46 @@
-//! A bounding volume hierarchy over tapered segments, so that ray casts, closest-point and
-//! radius queries against a forest visit a few boxes and segments instead of all of them.
+//! A bounding volume hierarchy over primitives that a ray can hit (the tapered segments of a
+//! forest, the triangles of a soft body), so that ray casts, and for segments closest-point and
+//! radius queries, visit a few boxes and primitives instead of all of them.
 //!
-//! Built top-down by splitting each node's segments at the median of their box centres along
-//! the widest axis, down to leaves of at most [`LEAF_SIZE`] segments. Queries walk the tree
+//! Built top-down by splitting each node's primitives at the median of their box centres along
+//! the widest axis, down to leaves of at most [`LEAF_SIZE`] primitives. Queries walk the tree
 //! nearest box first and prune boxes that cannot beat the best answer so far. Every query gives
-//! exactly the answer of a scan over all segments (see the property tests).
+//! exactly the answer of a scan over all primitives (see the property tests).
 
 use super::geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 use bevy::math::Vec3;
 
-/// Most segments in a leaf.
+/// Most primitives in a leaf.
 pub const LEAF_SIZE: usize = 4;
+
+/// Something a [`Bvh`] holds: it has a bounding box and can be hit by a ray.
+pub trait Primitive {
+    /// What a ray's hit tells.
+    type Hit: Copy;
+    /// The axis-aligned box holding the primitive, metres: (min, max).
+    fn bounds(&self) -> (Vec3, Vec3);
+    /// The first hit of the ray from `origin` along the unit `direction` within
+    /// `max_distance` metres.
+    fn ray_hit(&self, origin: Vec3, direction: Vec3, max_distance: f32) -> Option<Self::Hit>;
+    /// How far along the ray a hit lies, metres.
+    fn hit_distance(hit: &Self::Hit) -> f32;
+}
+
+impl Primitive for TaperedSegment {
+    type Hit = SegmentHit;
+
+    fn bounds(&self) -> (Vec3, Vec3) {
+        TaperedSegment::bounds(self)
+    }
+
+    fn ray_hit(&self, origin: Vec3, direction: Vec3, max_distance: f32) -> Option<SegmentHit> {
+        TaperedSegment::ray_hit(self, origin, direction, max_distance)
+    }
+
+    fn hit_distance(hit: &SegmentHit) -> f32 {
+        hit.distance
+    }
+}
 
 /// A node: its box, and either two children (`count == 0`: at `first` and `first + 1`) or a
 /// leaf's segments (`order[first..first + count]`).
@@ -22,21 +52,30 @@ struct Node {
     count: u32,
 }
 
-/// The segments of a scene and the hierarchy over them.
-#[derive(Debug, Clone, Default)]
-pub struct SegmentBvh {
-    segments: Vec<TaperedSegment>,
+/// Primitives and the hierarchy over them.
+#[derive(Debug, Clone)]
+pub struct Bvh<P> {
+    primitives: Vec<P>,
     nodes: Vec<Node>,
     order: Vec<u32>,
 }
 
-/// A ray's first hit among all segments.
+impl<P> Default for Bvh<P> {
+    fn default() -> Self {
+        Self { primitives: Vec::new(), nodes: Vec::new(), order: Vec::new() }
+    }
+}
+
+/// The segments of a scene and the hierarchy over them.
+pub type SegmentBvh = Bvh<TaperedSegment>;
+
+/// A ray's first hit among all primitives.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RayHit {
-    /// Index of the segment hit.
-    pub segment: usize,
+pub struct RayHit<H> {
+    /// Index of the primitive hit.
+    pub index: usize,
     /// Where and how it was hit.
-    pub hit: SegmentHit,
+    pub hit: H,
 }
 
 /// The nearest segment surface to a point.
@@ -48,29 +87,29 @@ pub struct Nearest {
     pub surface: SurfacePoint,
 }
 
-impl SegmentBvh {
-    /// Builds the hierarchy over `segments` (their indices are kept in query answers).
-    pub fn new(segments: Vec<TaperedSegment>) -> Self {
-        let mut bvh = Self { order: (0..segments.len() as u32).collect(), segments, nodes: Vec::new() };
-        if !bvh.segments.is_empty() {
-            let boxes: Vec<(Vec3, Vec3)> = bvh.segments.iter().map(TaperedSegment::bounds).collect();
+impl<P: Primitive> Bvh<P> {
+    /// Builds the hierarchy over `primitives` (their indices are kept in query answers).
+    pub fn new(primitives: Vec<P>) -> Self {
+        let mut bvh = Self { order: (0..primitives.len() as u32).collect(), primitives, nodes: Vec::new() };
+        if !bvh.primitives.is_empty() {
+            let boxes: Vec<(Vec3, Vec3)> = bvh.primitives.iter().map(P::bounds).collect();
             bvh.nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
-            bvh.split(0, 0, bvh.segments.len(), &boxes);
+            bvh.split(0, 0, bvh.primitives.len(), &boxes);
         }
         bvh
     }
 
-    /// The segment indices of a leaf node.
+    /// The primitive indices of a leaf node.
     fn leaf(&self, node: &Node) -> &[u32] {
         &self.order[node.first as usize..(node.first + node.count) as usize]
     }
 
-    /// The segments, in their original order.
-    pub fn segments(&self) -> &[TaperedSegment] {
-        &self.segments
+    /// The primitives, in their original order.
+    pub fn primitives(&self) -> &[P] {
+        &self.primitives
     }
 
-    /// Fills node `index` with the segments `order[start..end]`, splitting when there are many.
+    /// Fills node `index` with the primitives `order[start..end]`, splitting when there are many.
     fn split(&mut self, index: usize, start: usize, end: usize, boxes: &[(Vec3, Vec3)]) {
         let members = &mut self.order[start..end];
         let (min, max) = members
@@ -106,11 +145,11 @@ impl SegmentBvh {
         self.split(children + 1, start + middle, end, boxes);
     }
 
-    /// The first segment the ray from `origin` along the unit `direction` meets within
+    /// The first primitive the ray from `origin` along the unit `direction` meets within
     /// `max_distance`.
-    pub fn ray_cast(&self, origin: Vec3, direction: Vec3, max_distance: f32) -> Option<RayHit> {
+    pub fn ray_cast(&self, origin: Vec3, direction: Vec3, max_distance: f32) -> Option<RayHit<P::Hit>> {
         let inverse = direction.recip();
-        let mut best: Option<RayHit> = None;
+        let mut best: Option<RayHit<P::Hit>> = None;
         let mut limit = max_distance;
         let mut stack = Stack::default();
         if let Some(root) = self.nodes.first()
@@ -121,12 +160,12 @@ impl SegmentBvh {
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             if node.count > 0 {
-                for &segment in self.leaf(&node) {
-                    if let Some(hit) = self.segments[segment as usize].ray_hit(origin, direction, limit)
-                        && hit.distance <= limit
+                for &index in self.leaf(&node) {
+                    if let Some(hit) = self.primitives[index as usize].ray_hit(origin, direction, limit)
+                        && P::hit_distance(&hit) <= limit
                     {
-                        limit = hit.distance;
-                        best = Some(RayHit { segment: segment as usize, hit });
+                        limit = P::hit_distance(&hit);
+                        best = Some(RayHit { index: index as usize, hit });
                     }
                 }
                 continue;
@@ -144,7 +183,9 @@ impl SegmentBvh {
         }
         best
     }
+}
 
+impl SegmentBvh {
     /// The segment whose surface is nearest to `p` (signed: a point inside a segment is nearest
     /// to the one it is deepest in), if any lies within `max_distance`.
     pub fn nearest(&self, p: Vec3, max_distance: f32) -> Option<Nearest> {
@@ -163,7 +204,7 @@ impl SegmentBvh {
             }
             if node.count > 0 {
                 for &segment in self.leaf(&node) {
-                    let surface = self.segments[segment as usize].closest(p);
+                    let surface = self.primitives[segment as usize].closest(p);
                     if surface.distance <= limit && best.is_none_or(|b| surface.distance < b.surface.distance) {
                         limit = surface.distance;
                         best = Some(Nearest { segment: segment as usize, surface });
@@ -196,7 +237,7 @@ impl SegmentBvh {
                     self.leaf(&node)
                         .iter()
                         .map(|&i| i as usize)
-                        .filter(|&i| self.segments[i].closest(p).distance <= radius),
+                        .filter(|&i| self.primitives[i].closest(p).distance <= radius),
                 );
             } else {
                 stack.extend([node.first, node.first + 1]);

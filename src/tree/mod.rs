@@ -8,7 +8,7 @@
 //! | [`panel`] | the window's tree section: counts, the picked support and its editor |
 //! | [`model`] | supports from their descriptions (polylines or forks), trunk or branch |
 //! | [`geometry`] | one tapered segment: signed distance, closest surface point, ray hit |
-//! | [`bvh`] | a bounding volume hierarchy over all segments: ray cast, nearest, within a radius |
+//! | [`bvh`] | a bounding volume hierarchy over segments (ray cast, nearest, within a radius) or any primitive a ray hits |
 //! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
 //! | [`generate`] | the seeded tree and forest generator |
 //! | [`edit`] | checked edits of a written-out tree |
@@ -27,7 +27,7 @@ pub mod model;
 pub mod panel;
 pub mod plugin;
 
-pub use bvh::{Nearest, RayHit, SegmentBvh};
+pub use bvh::{Bvh, Nearest, Primitive, RayHit, SegmentBvh};
 pub use def::{SupportDef, TreeDef, TreeKind};
 pub use generate::GeneratorSettings;
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};

@@ -94,11 +94,11 @@ pub fn pick<'a>(
             let hit = body.bvh.ray_cast(origin, direction, f32::MAX)?;
             Some(Pick {
                 entity,
-                support: body.segment_supports[hit.segment],
+                support: body.segment_supports[hit.index],
                 distance: hit.hit.distance,
                 point: hit.hit.surface.point,
                 normal: hit.hit.surface.normal,
-                fraction: body.fraction_along(hit.segment, hit.hit.surface.along),
+                fraction: body.fraction_along(hit.index, hit.hit.surface.along),
             })
         })
         .min_by(|a, b| a.distance.total_cmp(&b.distance))
