@@ -9,6 +9,7 @@ use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
+use crate::soft_body::SoftBodyKind;
 use crate::terrain::TerrainKind;
 use crate::tree::TreeKind;
 use crate::ui::pacing::FramePacing;
@@ -33,6 +34,7 @@ pub fn entity_kinds() -> KindRegistry {
         .with::<SlothKind>()
         .with::<TerrainKind>()
         .with::<WorldKind>()
+        .with::<SoftBodyKind>()
         .build()
 }
 

@@ -66,7 +66,9 @@ impl RegisterActions for App {
         perform: fn(&mut World, Entity, A),
     ) -> &mut Self {
         let read: ActionFn = Box::new(move |world, entity, value, run| {
-            let action = serde_yaml::from_value::<A>(value.clone()).map_err(|error| error.to_string())?;
+            // Enums as the one-entry mappings people write (`{ mark: .. }`), not YAML tags.
+            let action: A = serde_yaml::with::singleton_map_recursive::deserialize(value.clone())
+                .map_err(|error| error.to_string())?;
             if run {
                 perform(world, entity, action);
             }

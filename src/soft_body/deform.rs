@@ -38,7 +38,7 @@ pub enum Method {
 }
 
 /// How a single global constraint is stepped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, bevy::reflect::Reflect)]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
     /// The projection of the constraint.

@@ -3,6 +3,9 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`def`] | the `soft_body:` entry of a scene file: a mesh file or a sample, where it stands, the deformer |
+//! | [`plugin`] | [`SoftBodyPlugin`]: marks picked in the view, actions and keys, the write-back, the dump; the panel section |
+//! | [`draw`] | the meshes shown: the surface tinted by region or by shift, the marks as balls |
 //! | [`batch`] | the batch deformation of `canopy deform`: a mesh file, a region, a deformer, a report |
 //! | [`surface`] | a triangle surface with its derived edges and adjacency, and the facts a deformation is judged by |
 //! | [`deform`] | the deformers: per-edge lengths, the sum of edge lengths, the area; their stopping rules and reports |
@@ -13,10 +16,17 @@
 //! | [`workbench`] | the workflow: marks, the region, shrinks kept as a collection of models |
 
 pub mod batch;
+pub mod def;
 pub mod deform;
+pub mod draw;
 pub mod mesh_io;
+mod panel;
 pub mod pick;
+pub mod plugin;
 pub mod region;
 pub mod sample;
 pub mod surface;
 pub mod workbench;
+
+pub use def::{SoftBodyDef, SoftBodyKind};
+pub use plugin::{ShrinkParams, SoftBody, SoftBodyAction, SoftBodyPlugin, SoftBodySystems};

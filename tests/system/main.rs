@@ -8,6 +8,7 @@ mod muscle;
 mod scene;
 mod shape;
 mod sloth;
+mod soft_body;
 mod terrain;
 mod tree;
 mod view;

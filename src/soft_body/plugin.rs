@@ -1,0 +1,468 @@
+//! The soft body kind's plugin: marks picked on the surface in the view, the deformer settings
+//! as parameters, actions and keys that mark, apply and switch models, the write-back of the
+//! surface, its marks and the original beside it, and the dump.
+
+use super::def::{SoftBodyBuilt, SoftBodyDef};
+use super::deform::{Method, Settings, Variant};
+use super::draw::{marker_mesh, region_tints, shift_tints, surface_mesh};
+use super::mesh_io::{self, MeshReport};
+use super::panel;
+use super::pick::SurfaceBvh;
+use super::region::{Mark, RegionError};
+use super::workbench::Workbench;
+use crate::foundation::actions::RegisterActions;
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::entity::SceneEntity;
+use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
+use crate::foundation::messages::{SelectEntity, ViewClicked};
+use crate::foundation::panel::RegisterPanel;
+use crate::foundation::params::RegisterParams;
+use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
+use crate::foundation::values::{Point, first_free_path, srgb_channels};
+use crate::raster::{MeshData, RasterMesh};
+use crate::view::CameraParams;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
+use bevy::prelude::*;
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value, json};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Which deformer shrinks a region, as a parameter (`torso.method: area`).
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Deformer {
+    /// A length constraint per edge.
+    EdgeLengths,
+    /// One constraint on the sum of edge lengths.
+    EdgeSum,
+    /// One constraint on the area.
+    Area,
+}
+
+impl Deformer {
+    /// Every deformer, in the panel's order.
+    pub const ALL: [Deformer; 3] = [Deformer::EdgeLengths, Deformer::EdgeSum, Deformer::Area];
+
+    /// The deformer stepped as `variant` (which the per-edge constraint does not take).
+    pub fn method(self, variant: Variant) -> Method {
+        match self {
+            Deformer::EdgeLengths => Method::EdgeLengths,
+            Deformer::EdgeSum => Method::EdgeSum(variant),
+            Deformer::Area => Method::Area(variant),
+        }
+    }
+
+    /// Its name in the panel.
+    pub fn label(self) -> &'static str {
+        match self {
+            Deformer::EdgeLengths => "edge lengths",
+            Deformer::EdgeSum => "edge sum",
+            Deformer::Area => "area",
+        }
+    }
+}
+
+/// How the model shown is set against the original.
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Compare {
+    /// The model alone, its region tinted.
+    #[default]
+    Alone,
+    /// The model over the original: each vertex tinted by how far it moved from it.
+    Overlay,
+    /// The original beside the model, to its left.
+    SideBySide,
+}
+
+impl Compare {
+    /// Every way, in the panel's order, with its label.
+    pub const ALL: [(Compare, &'static str); 3] =
+        [(Compare::Alone, "alone"), (Compare::Overlay, "overlay"), (Compare::SideBySide, "side by side")];
+}
+
+/// The deformer, its settings and the comparison, as parameters (`torso.k`, ...).
+#[derive(Component, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Component)]
+pub struct ShrinkParams {
+    /// The deformer.
+    pub method: Deformer,
+    /// How the edge sum and the area are stepped.
+    pub variant: Variant,
+    /// The coefficient, in `(0, 1]` (below 1 for the area).
+    pub k: f32,
+    /// The convergence threshold.
+    pub eps: f64,
+    /// The iteration cap (rounded, at least 1).
+    pub max_iterations: f64,
+    /// How the model shown is set against the original.
+    pub compare: Compare,
+}
+
+/// Most iterations a shrink may be given.
+const MAX_ITERATIONS: f64 = 1e6;
+
+impl ShrinkParams {
+    /// The method and settings these parameters describe.
+    pub fn deformer(&self) -> (Method, Settings) {
+        let max_iterations = self.max_iterations.round().clamp(1.0, MAX_ITERATIONS) as u32;
+        (self.method.method(self.variant), Settings { k: self.k, eps: self.eps, max_iterations })
+    }
+}
+
+/// The region the marks outline on the surface shown, by the whole surface's vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionShown {
+    /// The vertices that move.
+    pub inside: Vec<u32>,
+    /// The outline, held.
+    pub outline: Vec<u32>,
+}
+
+/// A live soft body: the workflow's state on its surface, the region of its marks, and the
+/// hierarchy clicks are cast against.
+#[derive(Component, Debug, Clone)]
+pub struct SoftBody {
+    /// The original, the collection, the marks.
+    pub bench: Workbench,
+    /// What welding its mesh file found.
+    pub read: MeshReport,
+    /// The region of the marks on the surface shown, or why there is none.
+    pub region: Result<RegionShown, RegionError>,
+    /// What the last action said: why it was refused, or where a model was saved.
+    pub message: Option<String>,
+    /// The triangles of a surface for picking, and which surface (0 the original).
+    picking: (SurfaceBvh, usize),
+}
+
+impl SoftBody {
+    /// A soft body on `built`'s surface.
+    pub fn new(built: &SoftBodyBuilt) -> Self {
+        let bench = Workbench::new(built.surface.clone());
+        let picking = (SurfaceBvh::new(bench.shown_positions(), &bench.original().triangles), bench.shown());
+        Self { region: Err(RegionError::TooFewMarks(0)), bench, read: built.read, message: None, picking }
+    }
+
+    /// The region again, after the marks or the surface shown changed.
+    fn refresh_region(&mut self) {
+        self.region = self.bench.region().map(|region| RegionShown {
+            inside: region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect(),
+            outline: region.outline,
+        });
+    }
+
+    /// The surface point shown under the ray from `origin` along the unit `direction`, both
+    /// in the body's own coordinates.
+    pub fn pick(&self, origin: Vec3, direction: Vec3) -> Option<super::pick::SurfacePick> {
+        self.picking.0.pick(origin, direction)
+    }
+
+    /// Does `action` with the deformer `params` name.
+    pub fn perform(&mut self, action: SoftBodyAction, params: &ShrinkParams) {
+        self.message = None;
+        match action {
+            SoftBodyAction::Mark(point) => self.bench.mark(Mark::Point(point.0)),
+            SoftBodyAction::MarkVertex(vertex) => self.bench.mark(Mark::Vertex(vertex)),
+            SoftBodyAction::UndoMark => {
+                self.bench.undo_mark();
+            }
+            SoftBodyAction::ClearMarks => self.bench.clear_marks(),
+            SoftBodyAction::Apply => {
+                let (method, settings) = params.deformer();
+                if let Err(error) = self.bench.apply(method, settings) {
+                    self.message = Some(format!("not applied: {error}"));
+                }
+            }
+            SoftBodyAction::Show(which) => {
+                if !self.bench.show(which) {
+                    let count = self.bench.models().len();
+                    self.message =
+                        Some(format!("there is no model {which}: 0 is the original, 1 to {count} the collection"));
+                }
+            }
+        }
+        // Models never change once made: the hierarchy is stale only when another is shown.
+        if self.picking.1 != self.bench.shown() {
+            let bvh = SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles);
+            self.picking = (bvh, self.bench.shown());
+        }
+        self.refresh_region();
+    }
+
+    /// Writes surface `which` (0 the original) of the soft body named `entity` as OBJ or PLY
+    /// (by `extension`) in `folder` (made if needed), never over an earlier file; returns
+    /// where, or why not.
+    pub fn save(&self, folder: &Path, entity: &str, which: usize, extension: &str) -> Result<PathBuf, String> {
+        let mesh = self.bench.mesh(which).ok_or_else(|| format!("there is no model {which}"))?;
+        std::fs::create_dir_all(folder).map_err(|error| format!("{}: {error}", folder.display()))?;
+        let stem = if which == 0 { format!("{entity}-original") } else { format!("{entity}-model{which}") };
+        let path = first_free_path(|n| folder.join(format!("{stem}-{n:03}.{extension}")));
+        mesh_io::write(&mesh, &path).map_err(|error| format!("{}: {error}", path.display()))?;
+        Ok(path)
+    }
+}
+
+/// What a soft body can be told to do, by a timeline's `act` (see
+/// [`crate::foundation::actions`]):
+///
+/// ```yaml
+/// - { at: 0.1, act: { torso: [{ mark: [0.0, 0.2, 0.16] }, { mark_vertex: 1203 }, { mark_vertex: 1250 }] } }
+/// - { at: 0.2, set: { torso.method: edge_sum, torso.k: 0.85 } }
+/// - { at: 0.3, act: { torso: apply } }
+/// - { at: 0.4, act: { torso: { show: 0 } } }
+/// ```
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum SoftBodyAction {
+    /// Marks a point on the surface, metres in the body's own coordinates.
+    Mark(Point),
+    /// Marks a vertex, by its index in the surface.
+    MarkVertex(u32),
+    /// Takes back the last mark.
+    UndoMark,
+    /// Takes back every mark.
+    ClearMarks,
+    /// Shrinks the marked region of the surface shown into a new model of the collection.
+    Apply,
+    /// Shows the original (0) or the collection's `n`-th model.
+    Show(usize),
+}
+
+/// Performs a timeline's action on a soft body.
+fn perform_action(world: &mut World, entity: Entity, action: SoftBodyAction) {
+    let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
+    let Some(params) = entity_mut.get::<ShrinkParams>().cloned() else { return };
+    if let Some(mut body) = entity_mut.get_mut::<SoftBody>() {
+        body.perform(action, &params);
+        if let Some(message) = &body.message {
+            warn!("soft body: {message}");
+        }
+    }
+}
+
+impl DumpState for SoftBody {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let original = self.bench.original();
+        out.insert("vertices".into(), json!(original.positions.len()));
+        out.insert("triangles".into(), json!(original.triangles.len()));
+        out.insert("mesh".into(), json!(self.read));
+        let marks: Vec<Value> = self
+            .bench
+            .marks()
+            .iter()
+            .map(|mark| match mark {
+                Mark::Vertex(v) => json!({ "vertex": v }),
+                Mark::Point(p) => json!({ "point": p.to_array() }),
+            })
+            .collect();
+        out.insert("marks".into(), json!(marks));
+        let region = match &self.region {
+            Ok(region) => json!({ "inside": region.inside.len(), "outline": region.outline.len() }),
+            Err(error) => json!({ "error": error.to_string() }),
+        };
+        out.insert("region".into(), region);
+        let models: Vec<Value> = self
+            .bench
+            .models()
+            .iter()
+            .map(|model| json!({ "name": model.name, "base": model.base, "report": model.report }))
+            .collect();
+        out.insert("models".into(), json!(models));
+        out.insert("shown".into(), json!(self.bench.shown()));
+        out.insert("message".into(), json!(self.message));
+    }
+}
+
+/// Marks the child entity drawing the marks.
+#[derive(Component)]
+struct Markers;
+
+/// Marks the child entity drawing the original beside the model.
+#[derive(Component)]
+struct OriginalBeside;
+
+/// Spawns a soft body entity of `def` on `built`'s surface, with its drawn parts.
+pub(super) fn spawn_soft_body(entity: &mut EntityWorldMut, def: &SoftBodyDef, built: &SoftBodyBuilt) {
+    let color = srgb_channels(def.color.0);
+    let params = ShrinkParams {
+        method: def.method,
+        variant: def.variant,
+        k: def.k.0,
+        eps: def.eps.0,
+        max_iterations: def.max_iterations.0 as f64,
+        compare: Compare::Alone,
+    };
+    entity
+        .insert((
+            Transform::from_translation(def.position.0),
+            RasterMesh::colored(Arc::default(), color),
+            SoftBody::new(built),
+            params,
+        ))
+        .with_children(|children| {
+            children.spawn((Markers, RasterMesh::colored(Arc::default(), Vec3::new(0.9, 0.1, 0.1))));
+            children.spawn((OriginalBeside, Transform::IDENTITY, RasterMesh::colored(Arc::default(), color)));
+        });
+}
+
+/// Brings the definition's deformer settings up to date with the live parameters.
+pub(super) fn save_live(def: &mut SoftBodyDef, entity: EntityRef) {
+    use super::def::{Coefficient, IterationCap, Threshold};
+    let Some(params) = entity.get::<ShrinkParams>() else { return };
+    let (method, settings) = params.deformer();
+    // Only settings a scene file may hold are kept: the file's own stay otherwise.
+    if settings.check(method).is_ok() && settings.eps <= 1.0 {
+        def.method = params.method;
+        def.variant = params.variant;
+        def.k = Coefficient(settings.k);
+        def.eps = Threshold(settings.eps);
+        def.max_iterations = IterationCap(settings.max_iterations);
+    }
+}
+
+/// Every system of the soft body kind, in whichever phase it runs: a handle for ordering
+/// other plugins' systems before or after the soft bodies'.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SoftBodySystems;
+
+/// Soft body keys: (key, action).
+const SOFT_BODY_KEYS: [(KeyCode, &str); 6] = [
+    (KeyCode::Backspace, "take back the last mark on the soft body"),
+    (KeyCode::Delete, "take back every mark"),
+    (KeyCode::Enter, "shrink the marked region into a new model"),
+    (KeyCode::BracketLeft, "show the previous model (the original before the first)"),
+    (KeyCode::BracketRight, "show the next model"),
+    (KeyCode::KeyC, "compare: alone, overlay, side by side"),
+];
+
+/// Runs soft bodies: parameters, actions, keys, picking marks in the view, the write-back of
+/// their meshes, the dump and the panel section.
+#[derive(Default)]
+pub struct SoftBodyPlugin;
+
+impl Plugin for SoftBodyPlugin {
+    fn build(&self, app: &mut App) {
+        let help = |(key, action)| KeyHelp { key, action, scope: KeyScope::Kind("soft_body") };
+        app.register_params::<ShrinkParams>()
+            .register_dump::<SoftBody>()
+            .register_actions::<SoftBodyAction>("soft_body", perform_action)
+            .register_keys(&SOFT_BODY_KEYS.map(help))
+            .register_panel_section("soft_body", panel::soft_body_section)
+            .add_systems(
+                RunFixedMainLoop,
+                (mark_clicked_points, act_on_keys).in_set(ControlSystems::Input).in_set(SoftBodySystems),
+            )
+            .add_systems(PostUpdate, write_back_soft_bodies.in_set(WriteBackSystems).in_set(SoftBodySystems));
+    }
+}
+
+/// Marks the surface point under a click in the view (its nearest vertex stands for it) and
+/// selects the soft body in the panel.
+fn mark_clicked_points(
+    mut clicks: MessageReader<ViewClicked>,
+    cameras: Query<&CameraParams>,
+    mut bodies: Query<(&mut SoftBody, &ShrinkParams, &GlobalTransform, &SceneEntity)>,
+    mut selections: MessageWriter<SelectEntity>,
+) {
+    let Some(camera) = cameras.iter().next().map(CameraParams::camera) else { return };
+    for click in clicks.read() {
+        let (origin, direction) = camera.ray(click.ndc, click.aspect);
+        let nearest = bodies
+            .iter()
+            .enumerate()
+            .filter_map(|(index, (body, _, placed, _))| {
+                let to_local = placed.affine().inverse();
+                let local_direction = to_local.transform_vector3(direction).try_normalize()?;
+                let hit = body.pick(to_local.transform_point3(origin), local_direction)?;
+                Some((index, hit.vertex, placed.transform_point(hit.point).distance(origin)))
+            })
+            .min_by(|a, b| a.2.total_cmp(&b.2));
+        let Some((index, vertex, _)) = nearest else { continue };
+        if let Some((mut body, params, _, scene)) = bodies.iter_mut().nth(index) {
+            body.perform(SoftBodyAction::MarkVertex(vertex), params);
+            selections.write(SelectEntity(scene.name.clone()));
+        }
+    }
+}
+
+/// The soft body keys, acting on every soft body.
+fn act_on_keys(keys: Res<ButtonInput<KeyCode>>, mut bodies: Query<(&mut SoftBody, &mut ShrinkParams)>) {
+    for (mut body, mut params) in &mut bodies {
+        let shown = body.bench.shown();
+        let count = body.bench.models().len();
+        let action = if keys.just_pressed(KeyCode::Backspace) {
+            Some(SoftBodyAction::UndoMark)
+        } else if keys.just_pressed(KeyCode::Delete) {
+            Some(SoftBodyAction::ClearMarks)
+        } else if keys.just_pressed(KeyCode::Enter) {
+            Some(SoftBodyAction::Apply)
+        } else if keys.just_pressed(KeyCode::BracketLeft) {
+            Some(SoftBodyAction::Show(shown.saturating_sub(1)))
+        } else if keys.just_pressed(KeyCode::BracketRight) {
+            Some(SoftBodyAction::Show((shown + 1).min(count)))
+        } else {
+            None
+        };
+        if let Some(action) = action {
+            body.perform(action, &params);
+        }
+        if keys.just_pressed(KeyCode::KeyC) {
+            let next = Compare::ALL.iter().position(|(c, _)| *c == params.compare).map_or(0, |i| (i + 1) % 3);
+            params.compare = Compare::ALL[next].0;
+        }
+    }
+}
+
+/// The drawn parts of a soft body.
+type Parts<'w, 's> = Query<
+    'w,
+    's,
+    (&'static mut RasterMesh, &'static mut Transform, Has<Markers>),
+    (Or<(With<Markers>, With<OriginalBeside>)>, Without<SoftBody>),
+>;
+
+/// Meshes soft bodies whose surface, marks or comparison changed: the surface shown (its
+/// region tinted, or its shift from the original), the marks as balls, the original beside.
+fn write_back_soft_bodies(
+    mut bodies: Query<
+        (&SoftBody, &ShrinkParams, &mut RasterMesh, &Children),
+        (Or<(Changed<SoftBody>, Changed<ShrinkParams>)>, Without<Markers>, Without<OriginalBeside>),
+    >,
+    mut parts: Parts,
+) {
+    for (body, params, mut raster, children) in &mut bodies {
+        let bench = &body.bench;
+        let (shown, original) = (bench.shown_positions(), &bench.original().positions);
+        let triangles = &bench.original().triangles;
+        let tints = match (params.compare, &body.region) {
+            (Compare::Overlay, _) => shift_tints(original, shown).0,
+            (_, Ok(region)) => region_tints(shown.len(), &region.inside, &region.outline),
+            (_, Err(_)) => Vec::new(),
+        };
+        raster.mesh = Arc::new(surface_mesh(shown, triangles, tints));
+        let (low, high) = bounds(original);
+        let marks: Vec<Vec3> = bench.marks().iter().filter_map(|&mark| bench.mark_position(mark)).collect();
+        for &child in children {
+            let Ok((mut part, mut transform, markers)) = parts.get_mut(child) else { continue };
+            part.mesh = Arc::new(if markers {
+                marker_mesh(&marks, MARKER_SHARE * (high - low).length())
+            } else if params.compare == Compare::SideBySide {
+                // The original to the model's left, a fifth of its width apart.
+                transform.translation = Vec3::X * -(high.x - low.x) * 1.2;
+                surface_mesh(original, triangles, Vec::new())
+            } else {
+                MeshData::default()
+            });
+        }
+    }
+}
+
+/// A mark's ball radius as a share of the surface's bounding diagonal.
+const MARKER_SHARE: f32 = 0.006;
+
+/// The box holding `positions`: (min, max), metres.
+fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
+    positions
+        .iter()
+        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(low, high), &p| (low.min(p), high.max(p)))
+}
