@@ -13,6 +13,12 @@ done
 cargo run --quiet -- run scenes/terrain.yaml --input timelines/terrain_demonstrations.yaml --seconds 4.5 \
     --size 640x360 --screenshot docs/images/terrain_turned.png
 echo "docs/images/terrain_turned.png"
+# The torso with its belly outlined, and shrunk with the shift shown over the original.
+cargo run --quiet -- run scenes/torso.yaml --input timelines/torso_shrink.yaml --seconds 0.04 \
+    --size 640x360 --screenshot docs/images/torso_marked.png
+cargo run --quiet -- run scenes/torso.yaml --input timelines/torso_shrink.yaml --seconds 0.2 \
+    --size 640x360 --screenshot docs/images/torso_shrunk.png
+echo "docs/images/torso_marked.png docs/images/torso_shrunk.png"
 
 # The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then

@@ -91,6 +91,53 @@ fn pixel(image: &image::RgbImage, (x, y): (u32, u32)) -> [u8; 3] {
     image.get_pixel(x, y).0
 }
 
+/// Starts `canopy play scene` on the display, saving the window to `window.png` and the state
+/// to `state.json` in `dir` after `frames` frames; returns the app and its window once the
+/// scene has had time to load.
+fn play(x: &Xvfb, scene: &Path, dir: &Path, frames: u32) -> (Child, String) {
+    let app = Command::new(env!("CARGO_BIN_EXE_canopy"))
+        .arg("play")
+        .arg(scene)
+        .arg("--screenshot")
+        .arg(dir.join("window.png"))
+        .args(["--frames", &frames.to_string(), "--dump"])
+        .arg(dir.join("state.json"))
+        .current_dir(dir)
+        .env("DISPLAY", &x.display)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let window = x.xdotool(&["search", "--sync", "--name", "^Canopy"]).lines().next().unwrap().to_string();
+    x.xdotool(&["windowfocus", "--sync", &window]);
+    // Let the scene load and a few frames pass.
+    sleep(Duration::from_secs(2));
+    (app, window)
+}
+
+/// Waits for the app to exit after its capture, and checks that it succeeded.
+fn wait_for_exit(mut app: Child) {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let status = loop {
+        if let Some(status) = app.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "the app did not exit after its capture");
+        sleep(Duration::from_millis(100));
+    };
+    assert!(status.success(), "the app failed: {status}");
+}
+
+/// A JSON file.
+fn read(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The dump of the entity named `name`.
+fn entity(state: &serde_json::Value, name: &str) -> serde_json::Value {
+    state["entities"].as_array().unwrap().iter().find(|e| e["name"] == name).unwrap().clone()
+}
+
 #[test]
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
@@ -103,24 +150,8 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     run.arg("run").arg(&scene).args(["--frames", "1", "--dump"]).arg(&initial);
     assert!(run.status().unwrap().success());
     let x = Xvfb::start();
-    let mut app = Command::new(env!("CARGO_BIN_EXE_canopy"))
-        .arg("play")
-        .arg(&scene)
-        .arg("--screenshot")
-        .arg(&shot)
-        .args(["--frames", &FRAMES.to_string(), "--dump"])
-        .arg(&dump)
-        .current_dir(dir.path())
-        .env("DISPLAY", &x.display)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let (app, window) = play(&x, &scene, dir.path(), FRAMES);
     let started = Instant::now();
-    let window = x.xdotool(&["search", "--sync", "--name", "^Canopy"]).lines().next().unwrap().to_string();
-    x.xdotool(&["windowfocus", "--sync", &window]);
-    // Let the scene load and a few frames pass.
-    sleep(Duration::from_secs(2));
 
     press(&x, "v"); // shading: gouraud -> phong
     press(&x, "h"); // shadows off
@@ -159,22 +190,9 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     sleep(Duration::from_millis(500));
     let acted = started.elapsed();
 
-    let deadline = Instant::now() + Duration::from_secs(120);
-    let status = loop {
-        if let Some(status) = app.try_wait().unwrap() {
-            break status;
-        }
-        assert!(Instant::now() < deadline, "the app did not exit after its capture");
-        sleep(Duration::from_millis(100));
-    };
-    assert!(status.success(), "the app failed: {status}");
+    wait_for_exit(app);
 
-    let read =
-        |path: &Path| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap() };
     let (state, initial) = (read(&dump), read(&initial));
-    let entity = |state: &serde_json::Value, name: &str| {
-        state["entities"].as_array().unwrap().iter().find(|e| e["name"] == name).unwrap().clone()
-    };
     let render = entity(&initial, "render");
     assert_eq!((&render["shading"], &render["shadows"]), (&"gouraud".into(), &true.into()));
     let render = entity(&state, "render");
@@ -209,4 +227,37 @@ fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     let view = image::open(&pictures[0]).unwrap();
     assert_eq!((view.width(), view.height()), (980, 720), "F12 saves the 3D view alone");
     assert!(acted < Duration::from_secs(12), "the actions took {acted:?}: the capture may have come first");
+}
+
+/// Where the belly's outline is clicked in the torso scene's 980 x 720 view, and the middle of
+/// the belly.
+const BELLY: [(u32, u32); 4] = [(380, 385), (570, 390), (580, 555), (375, 540)];
+const BELLY_MIDDLE: (u32, u32) = (470, 465);
+
+#[test]
+#[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
+fn a_region_clicked_on_the_torso_is_shrunk_and_compared_in_the_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/torso.yaml");
+    let x = Xvfb::start();
+    let (app, window) = play(&x, &scene, dir.path(), 600);
+    for point in BELLY {
+        click(&x, &window, point);
+    }
+    press(&x, "Return");
+    press(&x, "c"); // the model over the original, tinted by its shift
+    wait_for_exit(app);
+
+    let torso = entity(&read(&dir.path().join("state.json")), "torso");
+    assert_eq!(torso["marks"].as_array().unwrap().len(), 4, "each click marks a point: {torso}");
+    let region = &torso["region"];
+    assert!(region["inside"].as_u64().unwrap() > 200, "the clicks outline the belly: {region}");
+    let models = torso["models"].as_array().unwrap();
+    assert_eq!((models.len(), &torso["shown"]), (1, &1.into()), "Enter shrinks the region: {torso}");
+    let report = &models[0]["report"];
+    assert!((report["facts"]["area_ratio"].as_f64().unwrap() - 0.9).abs() < 1e-3, "{report}");
+    assert_eq!(report["facts"]["fixed_unchanged"], true);
+    let shot = image::open(dir.path().join("window.png")).unwrap().to_rgb8();
+    let [r, g, b] = pixel(&shot, BELLY_MIDDLE);
+    assert!(r > 2 * g && r > 2 * b, "the overlay tints the belly's middle, which moved most: {:?}", [r, g, b]);
 }

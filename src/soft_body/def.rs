@@ -171,10 +171,14 @@ impl EntityKind for SoftBodyKind {
             (Some(_), Some(_)) => {
                 Err(cx.field_error("sample", 0, "sample", "a surface from a mesh or a sample, not both"))
             }
-            (None, None) => Err(cx.whole_file(format!(
-                "{}: expected `mesh: FILE` (an .obj, .ply or .stl file) or `sample: {{ shape: torso }}`",
-                cx.field("mesh")
-            ))),
+            (None, None) => Err(cx.locate(
+                Self::KEY,
+                cx.kind_index,
+                format!(
+                    "{}: expected `mesh: FILE` (an .obj, .ply or .stl file) or `sample: {{ shape: torso }}`",
+                    cx.field("mesh")
+                ),
+            )),
             _ => {
                 let (method, settings) = def.deformer();
                 settings.check(method).map_err(|error| cx.field_error("k", 0, "k", error))

@@ -5,7 +5,7 @@ use crate::raster::MeshData;
 use bevy::math::Vec3;
 
 /// The tint of the region's inside (multiplies the surface colour).
-pub const REGION_TINT: Vec3 = Vec3::new(0.55, 0.8, 1.0);
+pub const REGION_TINT: Vec3 = Vec3::new(0.5, 0.8, 1.25);
 /// The tint of the region's outline.
 pub const OUTLINE_TINT: Vec3 = Vec3::new(1.0, 0.35, 0.25);
 /// The tint of the vertex that moved farthest from the original, in the overlay.

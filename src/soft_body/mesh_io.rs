@@ -64,7 +64,7 @@ pub enum MeshError {
         count: usize,
     },
     /// A position that is not a finite number.
-    #[error("vertex {0} has a position that is not a finite number")]
+    #[error("vertex {0} (counting from 0) has a position that is not a finite number")]
     NotFinite(usize),
     /// A face names a vertex that does not exist.
     #[error("face {face} names vertex {vertex}, but there are {count} vertices")]

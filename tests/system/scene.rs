@@ -116,6 +116,17 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
         Some(6),
         &["entities[0].world.level_distances_m", "levels at 50 m and 80 m lie 30 m apart", "need 69.3 m"],
     ),
+    ("soft_body_mesh_and_sample.yaml", Some(4), &["entities[0].soft_body.sample", "a mesh or a sample, not both"]),
+    ("soft_body_no_surface.yaml", Some(4), &["entities[1].soft_body.mesh", "expected `mesh: FILE`", "or `sample:"]),
+    ("soft_body_area_k.yaml", Some(5), &["entities[0].soft_body.k", "below 1 for the area method", "found 1"]),
+    ("soft_body_nan_mesh.yaml", Some(3), &["entities[0].soft_body.mesh", "nan.obj", "vertex 1", "not a finite number"]),
+    (
+        "soft_body_index_out_of_range.yaml",
+        Some(3),
+        &["entities[0].soft_body.mesh", "out_of_range.ply", "face 0 names vertex 7", "3 vertices"],
+    ),
+    ("soft_body_mesh_outside.yaml", Some(3), &["entities[0].soft_body.mesh", "inside the scene's folder"]),
+    ("soft_body_sample_size.yaml", Some(5), &["entities[0].soft_body.sample.size", "from 3 to 1000", "found 2"]),
 ];
 
 #[test]
