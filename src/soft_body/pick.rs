@@ -104,7 +104,7 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
         #[test]
-        fn a_ray_at_the_sphere_hits_its_first_triangle(azimuth in 0.0f32..6.28, elevation in -1.4f32..1.4, aim in -0.5f32..0.5) {
+        fn a_ray_at_the_sphere_hits_its_first_triangle(azimuth in 0.0f32..std::f32::consts::TAU, elevation in -1.4f32..1.4, aim in -0.5f32..0.5) {
             let sphere = sample::sphere(1.0, 24, 48);
             let bvh = SurfaceBvh::new(&sphere.positions, &sphere.triangles);
             let origin = Vec3::new(elevation.cos() * azimuth.cos(), elevation.sin(), elevation.cos() * azimuth.sin()) * 4.0;

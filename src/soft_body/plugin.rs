@@ -421,15 +421,17 @@ type Parts<'w, 's> = Query<
     (Or<(With<Markers>, With<OriginalBeside>)>, Without<SoftBody>),
 >;
 
+/// Soft bodies whose state or parameters changed, with their drawn parts.
+type ChangedBodies<'w, 's> = Query<
+    'w,
+    's,
+    (&'static SoftBody, &'static ShrinkParams, &'static mut RasterMesh, &'static Children),
+    (Or<(Changed<SoftBody>, Changed<ShrinkParams>)>, Without<Markers>, Without<OriginalBeside>),
+>;
+
 /// Meshes soft bodies whose surface, marks or comparison changed: the surface shown (its
 /// region tinted, or its shift from the original), the marks as balls, the original beside.
-fn write_back_soft_bodies(
-    mut bodies: Query<
-        (&SoftBody, &ShrinkParams, &mut RasterMesh, &Children),
-        (Or<(Changed<SoftBody>, Changed<ShrinkParams>)>, Without<Markers>, Without<OriginalBeside>),
-    >,
-    mut parts: Parts,
-) {
+fn write_back_soft_bodies(mut bodies: ChangedBodies, mut parts: Parts) {
     for (body, params, mut raster, children) in &mut bodies {
         let bench = &body.bench;
         let (shown, original) = (bench.shown_positions(), &bench.original().positions);

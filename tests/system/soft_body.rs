@@ -62,9 +62,9 @@ fn a_timeline_shrinks_the_torso_belly_with_every_deformer_and_the_dump_holds_the
     assert_eq!(models.len(), 6, "{}", torso["message"]);
     assert_eq!(torso["shown"], 6);
     let report = |n: usize| &models[n]["report"];
-    for n in 0..6 {
-        let r = report(n);
-        assert_eq!(models[n]["base"], 0, "each shrinks the original");
+    for model in models {
+        let r = &model["report"];
+        assert_eq!(model["base"], 0, "each shrinks the original");
         assert_eq!(r["facts"]["fixed_unchanged"], true, "{r}");
         assert_eq!(r["facts"]["has_nan"], false, "{r}");
         assert!(r["region_vertices"].as_u64().unwrap() > 500 && r["outline_vertices"].as_u64().unwrap() > 50, "{r}");
