@@ -54,6 +54,12 @@ checked_number!(
     |v| v.fract() == 0.0 && (1.0..=1e6).contains(&v)
 );
 checked_number!(
+    /// How many times its file's size a surface is shown: from 0.001 to 1000.
+    Scale(f32),
+    "a scale from 0.001 to 1000",
+    |v| (1e-3..=1e3).contains(&v)
+);
+checked_number!(
     /// Vertices along a sample's main direction: a whole number from 3 to 1000.
     SampleSize(u32),
     "a whole number from 3 to 1000",
@@ -89,6 +95,10 @@ pub struct SoftBodyDef {
     /// Where the surface's origin stands, metres; the origin by default.
     #[serde(default = "origin")]
     pub position: Point,
+    /// How many times its own size it is shown (marks and the dump stay in its own metres);
+    /// 1 by default.
+    #[serde(default = "unit_scale")]
+    pub scale: Scale,
     /// Its colour; a skin tone by default.
     #[serde(default = "skin")]
     pub color: Color,
@@ -114,6 +124,10 @@ pub struct SoftBodyDef {
 
 fn origin() -> Point {
     Point(Vec3::ZERO)
+}
+
+fn unit_scale() -> Scale {
+    Scale(1.0)
 }
 
 fn skin() -> Color {

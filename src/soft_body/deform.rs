@@ -173,30 +173,17 @@ struct EdgeConstraint {
     share: [f32; 2],
 }
 
-/// Sorted edges cut into this many runs, projected interleaved.
-const RUNS: usize = 4;
-
-/// The edges (sorted) in the order the per-edge constraints are projected: cut into
-/// [`RUNS`] runs of neighbouring edges, taken one edge from each run in turn. In sorted order
-/// alone, consecutive edges share their first vertex and each projection waits for the one
-/// before (a chain of square roots and divisions); edges from distant runs share none, and the
-/// processor overlaps them. Within a run the order stays sorted, so a sweep still carries a
-/// correction across the run in one iteration, as Gauss-Seidel in sorted order does.
-pub fn projection_order(edges: &[[u32; 2]]) -> Vec<[u32; 2]> {
-    let run = edges.len().div_ceil(RUNS).max(1);
-    (0..run).flat_map(|i| (0..RUNS).filter_map(move |r| edges.get(r * run + i).copied())).collect()
-}
-
 /// One iteration of the per-edge constraints: every edge projected onto its rest length in
-/// turn, in [`projection_order`]; returns the sum of the shifts' lengths.
+/// turn (in the edges' sorted order, so that neighbouring constraints touch neighbouring
+/// memory); returns the sum of the shifts' lengths.
 fn edge_lengths(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
     // Edges with both ends fixed can do nothing: they are left out.
-    let movable: Vec<[u32; 2]> =
-        surface.edges().iter().copied().filter(|&[a, b]| w[a as usize] + w[b as usize] > 0.0).collect();
-    let constraints: Vec<EdgeConstraint> = projection_order(&movable)
-        .into_iter()
-        .map(|[a, b]| {
+    let constraints: Vec<EdgeConstraint> = surface
+        .edges()
+        .iter()
+        .filter(|&&[a, b]| w[a as usize] + w[b as usize] > 0.0)
+        .map(|&[a, b]| {
             let (wa, wb) = (w[a as usize], w[b as usize]);
             let rest = k * surface.positions[a as usize].distance(surface.positions[b as usize]);
             EdgeConstraint { a, b, rest, share: [wa / (wa + wb), wb / (wa + wb)] }

@@ -294,7 +294,7 @@ pub(super) fn spawn_soft_body(entity: &mut EntityWorldMut, def: &SoftBodyDef, bu
     };
     entity
         .insert((
-            Transform::from_translation(def.position.0),
+            Transform::from_translation(def.position.0).with_scale(Vec3::splat(def.scale.0)),
             RasterMesh::colored(Arc::default(), color),
             SoftBody::new(built),
             params,

@@ -223,3 +223,25 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
     let dump: Value = canopy::foundation::dump::dump_state(world);
     assert_eq!(entity(&dump, "torso")["marks"].as_array().unwrap().len(), 3);
 }
+
+#[test]
+fn a_click_marks_the_nearest_of_several_placed_and_scaled_surfaces() {
+    let mut app = small_app(&path("scenes/soft_bodies.yaml"));
+    let world = app.world_mut();
+    let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
+    let aspect = SMALL.x as f32 / SMALL.y as f32;
+    let mut bodies = world.query::<(&canopy::foundation::entity::SceneEntity, &SoftBody, &GlobalTransform)>();
+    let (_, belly, placed) = bodies.iter(world).find(|(scene, ..)| scene.name == "belly").unwrap();
+    // The belly patch's top, 225 x 225 vertices: the middle one.
+    let top = 112 * 225 + 112;
+    let point = placed.transform_point(belly.bench.original().positions[top]);
+    let ndc = camera.view_projection(aspect).project_point3(point).truncate();
+    world.write_message(ViewClicked { ndc, aspect });
+    app.update();
+    let world = app.world_mut();
+    let mut bodies = world.query::<(&canopy::foundation::entity::SceneEntity, &SoftBody)>();
+    for (scene, body) in bodies.iter(world) {
+        let expected: &[Mark] = if scene.name == "belly" { &[Mark::Vertex(top as u32)] } else { &[] };
+        assert_eq!(body.bench.marks(), expected, "{}", scene.name);
+    }
+}
