@@ -3,6 +3,7 @@
 
 use crate::controls::ControlsPlugin;
 use crate::foundation::FoundationPlugin;
+use crate::foundation::schedule::LongWorkArrival;
 use crate::muscle::MuscleKind;
 use crate::raster::{RasterPlugin, RenderSettingsPlugin};
 use crate::scene::kinds::{KindRegistry, Kinds};
@@ -165,7 +166,8 @@ pub fn window_app(scene: &Path, capture: Option<WindowCapture>, pacing: FramePac
     // are paced by `FramePacing` alone, so a scene keeps its rate behind other windows too.
     .insert_resource(bevy::winit::WinitSettings::continuous())
     .insert_resource(pacing)
-    .add_plugins(CanopyPlugins { scene: scene.to_path_buf(), display: Display::Window });
+    .add_plugins(CanopyPlugins { scene: scene.to_path_buf(), display: Display::Window })
+    .insert_resource(LongWorkArrival::WhenReady);
     if let Some(capture) = capture {
         app.insert_resource(capture);
     }

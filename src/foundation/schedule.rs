@@ -97,6 +97,19 @@ pub struct FixedStepTime {
     started: Option<Instant>,
 }
 
+/// When the results of long work done off the main thread (a surface shrunk, say) are taken
+/// in: headless runs take them a fixed number of frames after they were asked for, waiting if
+/// need be, so that the same input gives the same dump; the window takes them once done, so
+/// that no frame waits for work of seconds.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum LongWorkArrival {
+    /// A fixed number of frames after they were asked for.
+    #[default]
+    FixedFrames,
+    /// In the first frame that finds them done.
+    WhenReady,
+}
+
 /// Configures every phase and the simulation clock.
 pub struct SchedulePlugin;
 
@@ -104,6 +117,7 @@ impl Plugin for SchedulePlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<SimClock>()
             .init_resource::<SimControl>()
+            .init_resource::<LongWorkArrival>()
             .configure_sets(PreUpdate, ControlSystems::Script.before(InputSystems))
             .configure_sets(
                 FixedUpdate,

@@ -3,7 +3,7 @@
 //! each model's report, the comparison, and saving a model.
 
 use super::deform::Variant;
-use super::plugin::{Compare, Deformer, ShrinkParams, SoftBody, SoftBodyAction};
+use super::plugin::{Compare, Deformer, ShrinkParams, SoftBody, SoftBodyAction, start_shrink};
 use super::workbench::ShrinkReport;
 use crate::foundation::entity::SceneEntity;
 use bevy::prelude::*;
@@ -44,10 +44,16 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
     });
     ui.separator();
     settings(ui, &mut params);
-    let apply = ui.add_enabled(body.region.is_ok(), egui::Button::new("Apply"));
-    if apply.on_hover_text("shrink the region of the surface shown into a new model").clicked() {
-        action = Some(SoftBodyAction::Apply);
-    }
+    ui.horizontal(|ui| {
+        let apply = ui.add_enabled(body.region.is_ok() && !body.shrinking, egui::Button::new("Apply"));
+        if apply.on_hover_text("shrink the region of the surface shown into a new model").clicked() {
+            action = Some(SoftBodyAction::Apply);
+        }
+        if body.shrinking {
+            ui.spinner();
+            ui.label("shrinking...");
+        }
+    });
     if let Some(message) = &body.message {
         ui.colored_label(egui::Color32::LIGHT_RED, message);
     }
@@ -86,13 +92,14 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
         entity_mut.insert(params.clone());
     }
     let Some(mut body) = entity_mut.get_mut::<SoftBody>() else { return };
-    if let Some(action) = action {
-        body.perform(action, &params);
-    }
+    let job = action.and_then(|action| body.perform(action, &params));
     match saved {
         Some(Ok(path)) => body.message = Some(format!("saved {}", path.display())),
         Some(Err(error)) => body.message = Some(format!("not saved: {error}")),
         None => {}
+    }
+    if let Some(job) = job {
+        entity_mut.insert(start_shrink(job));
     }
 }
 

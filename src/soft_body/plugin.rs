@@ -9,7 +9,7 @@ use super::mesh_io::{self, MeshReport};
 use super::panel;
 use super::pick::SurfaceBvh;
 use super::region::{Mark, RegionError};
-use super::workbench::Workbench;
+use super::workbench::{ShrinkError, ShrinkJob, Shrunk, Workbench};
 use crate::foundation::actions::RegisterActions;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
@@ -17,12 +17,13 @@ use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::messages::{SelectEntity, ViewClicked};
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
-use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
+use crate::foundation::schedule::{ControlSystems, LongWorkArrival, WriteBackSystems};
 use crate::foundation::values::{Point, first_free_path, srgb_channels};
 use crate::raster::{MeshData, RasterMesh};
 use crate::view::CameraParams;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
+use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 use std::path::{Path, PathBuf};
@@ -131,6 +132,8 @@ pub struct SoftBody {
     pub region: Result<RegionShown, RegionError>,
     /// What the last action said: why it was refused, or where a model was saved.
     pub message: Option<String>,
+    /// A shrink is under way off the main thread.
+    pub shrinking: bool,
     /// The triangles of a surface for picking, and which surface (0 the original).
     picking: (SurfaceBvh, usize),
 }
@@ -140,7 +143,14 @@ impl SoftBody {
     pub fn new(built: &SoftBodyBuilt) -> Self {
         let bench = Workbench::new(built.surface.clone());
         let picking = (SurfaceBvh::new(bench.shown_positions(), &bench.original().triangles), bench.shown());
-        Self { region: Err(RegionError::TooFewMarks(0)), bench, read: built.read, message: None, picking }
+        Self {
+            region: Err(RegionError::TooFewMarks(0)),
+            bench,
+            read: built.read,
+            message: None,
+            shrinking: false,
+            picking,
+        }
     }
 
     /// The region again, after the marks or the surface shown changed.
@@ -157,9 +167,12 @@ impl SoftBody {
         self.picking.0.pick(origin, direction)
     }
 
-    /// Does `action` with the deformer `params` name.
-    pub fn perform(&mut self, action: SoftBodyAction, params: &ShrinkParams) {
+    /// Does `action` with the deformer `params` name; for [`SoftBodyAction::Apply`], returns
+    /// the shrink to start (see [`start_shrink`]).
+    #[must_use = "a shrink to apply is to be started"]
+    pub fn perform(&mut self, action: SoftBodyAction, params: &ShrinkParams) -> Option<ShrinkJob> {
         self.message = None;
+        let mut job = None;
         match action {
             SoftBodyAction::Mark(point) => self.bench.mark(Mark::Point(point.0)),
             SoftBodyAction::MarkVertex(vertex) => self.bench.mark(Mark::Vertex(vertex)),
@@ -167,10 +180,17 @@ impl SoftBody {
                 self.bench.undo_mark();
             }
             SoftBodyAction::ClearMarks => self.bench.clear_marks(),
+            SoftBodyAction::Apply if self.shrinking => {
+                self.message = Some("not applied: a shrink is under way".into());
+            }
             SoftBodyAction::Apply => {
                 let (method, settings) = params.deformer();
-                if let Err(error) = self.bench.apply(method, settings) {
-                    self.message = Some(format!("not applied: {error}"));
+                match self.bench.job(method, settings) {
+                    Ok(started) => {
+                        self.shrinking = true;
+                        job = Some(started);
+                    }
+                    Err(error) => self.message = Some(format!("not applied: {error}")),
                 }
             }
             SoftBodyAction::Show(which) => {
@@ -187,6 +207,23 @@ impl SoftBody {
             self.picking = (bvh, self.bench.shown());
         }
         self.refresh_region();
+        job
+    }
+
+    /// Takes in the result of `job`: a new model, shown, or why there is none.
+    fn finish(&mut self, job: &ShrinkJob, result: Result<Shrunk, ShrinkError>) {
+        self.shrinking = false;
+        match result {
+            Ok(shrunk) => {
+                self.bench.add(job, shrunk);
+                self.picking = (
+                    SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles),
+                    self.bench.shown(),
+                );
+                self.refresh_region();
+            }
+            Err(error) => self.message = Some(format!("not applied: {error}")),
+        }
     }
 
     /// Writes surface `which` (0 the original) of the soft body named `entity` as OBJ or PLY
@@ -228,15 +265,63 @@ pub enum SoftBodyAction {
     Show(usize),
 }
 
+/// A shrink under way off the main thread.
+#[derive(Component)]
+pub struct PendingShrink {
+    job: ShrinkJob,
+    task: Option<Task<Result<Shrunk, ShrinkError>>>,
+    /// Frames until a headless run takes the result in (see [`LongWorkArrival`]).
+    frames_left: u32,
+}
+
+/// Frames after Apply at which a headless run takes the shrink in.
+const SHRINK_FRAMES: u32 = 2;
+
+/// Starts `job` on the async compute pool.
+pub fn start_shrink(job: ShrinkJob) -> PendingShrink {
+    let work = job.clone();
+    let task = AsyncComputeTaskPool::get().spawn(async move { work.run() });
+    PendingShrink { job, task: Some(task), frames_left: SHRINK_FRAMES }
+}
+
 /// Performs a timeline's action on a soft body.
 fn perform_action(world: &mut World, entity: Entity, action: SoftBodyAction) {
     let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
     let Some(params) = entity_mut.get::<ShrinkParams>().cloned() else { return };
-    if let Some(mut body) = entity_mut.get_mut::<SoftBody>() {
-        body.perform(action, &params);
-        if let Some(message) = &body.message {
-            warn!("soft body: {message}");
+    let Some(mut body) = entity_mut.get_mut::<SoftBody>() else { return };
+    let job = body.perform(action, &params);
+    if let Some(message) = &body.message {
+        warn!("soft body: {message}");
+    }
+    if let Some(job) = job {
+        entity_mut.insert(start_shrink(job));
+    }
+}
+
+/// Takes finished shrinks in, when [`LongWorkArrival`] says.
+fn take_shrinks(
+    arrival: Res<LongWorkArrival>,
+    mut bodies: Query<(Entity, &mut SoftBody, &mut PendingShrink)>,
+    mut commands: Commands,
+) {
+    for (entity, mut body, mut pending) in &mut bodies {
+        pending.frames_left = pending.frames_left.saturating_sub(1);
+        let done = pending.task.as_ref().is_none_or(Task::is_finished);
+        let due = match *arrival {
+            LongWorkArrival::FixedFrames => pending.frames_left == 0,
+            LongWorkArrival::WhenReady => done,
+        };
+        if !due {
+            continue;
         }
+        if let Some(task) = pending.task.take() {
+            let result = block_on(task);
+            body.finish(&pending.job, result);
+            if let Some(message) = &body.message {
+                warn!("soft body: {message}");
+            }
+        }
+        commands.entity(entity).remove::<PendingShrink>();
     }
 }
 
@@ -270,6 +355,7 @@ impl DumpState for SoftBody {
         out.insert("models".into(), json!(models));
         out.insert("shown".into(), json!(self.bench.shown()));
         out.insert("message".into(), json!(self.message));
+        out.insert("shrinking".into(), json!(self.shrinking));
     }
 }
 
@@ -352,6 +438,7 @@ impl Plugin for SoftBodyPlugin {
                 RunFixedMainLoop,
                 (mark_clicked_points, act_on_keys).in_set(ControlSystems::Input).in_set(SoftBodySystems),
             )
+            .add_systems(RunFixedMainLoop, take_shrinks.in_set(ControlSystems::Apply).in_set(SoftBodySystems))
             .add_systems(PostUpdate, write_back_soft_bodies.in_set(WriteBackSystems).in_set(SoftBodySystems));
     }
 }
@@ -379,15 +466,20 @@ fn mark_clicked_points(
             .min_by(|a, b| a.2.total_cmp(&b.2));
         let Some((index, vertex, _)) = nearest else { continue };
         if let Some((mut body, params, _, scene)) = bodies.iter_mut().nth(index) {
-            body.perform(SoftBodyAction::MarkVertex(vertex), params);
+            // A mark starts no shrink.
+            let _ = body.perform(SoftBodyAction::MarkVertex(vertex), params);
             selections.write(SelectEntity(scene.name.clone()));
         }
     }
 }
 
 /// The soft body keys, acting on every soft body.
-fn act_on_keys(keys: Res<ButtonInput<KeyCode>>, mut bodies: Query<(&mut SoftBody, &mut ShrinkParams)>) {
-    for (mut body, mut params) in &mut bodies {
+fn act_on_keys(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut bodies: Query<(Entity, &mut SoftBody, &mut ShrinkParams)>,
+    mut commands: Commands,
+) {
+    for (entity, mut body, mut params) in &mut bodies {
         let shown = body.bench.shown();
         let count = body.bench.models().len();
         let action = if keys.just_pressed(KeyCode::Backspace) {
@@ -403,8 +495,8 @@ fn act_on_keys(keys: Res<ButtonInput<KeyCode>>, mut bodies: Query<(&mut SoftBody
         } else {
             None
         };
-        if let Some(action) = action {
-            body.perform(action, &params);
+        if let Some(job) = action.and_then(|action| body.perform(action, &params)) {
+            commands.entity(entity).insert(start_shrink(job));
         }
         if keys.just_pressed(KeyCode::KeyC) {
             let next = Compare::ALL.iter().position(|(c, _)| *c == params.compare).map_or(0, |i| (i + 1) % 3);

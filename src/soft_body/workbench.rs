@@ -113,6 +113,24 @@ pub struct Model {
     pub report: ShrinkReport,
 }
 
+/// A shrink to be done: the surface it starts from, the marks, the deformer, and which
+/// surface of the collection it shrinks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShrinkJob {
+    surface: Surface,
+    marks: Vec<Mark>,
+    method: Method,
+    settings: Settings,
+    base: usize,
+}
+
+impl ShrinkJob {
+    /// Does the shrink.
+    pub fn run(&self) -> Result<Shrunk, ShrinkError> {
+        shrink(&self.surface, &self.marks, self.method, self.settings)
+    }
+}
+
 /// The state of the workflow on one surface: the original, the collection, which of them is
 /// shown, and the marks on it.
 #[derive(Debug, Clone, PartialEq)]
@@ -212,20 +230,38 @@ impl Workbench {
         select(&self.shown_surface(), &self.marks, POINT_TOLERANCE_M)
     }
 
-    /// Shrinks the region the marks outline on the surface shown with `method` and
-    /// `settings`, adds the result to the collection and shows it; returns its number.
-    pub fn apply(&mut self, method: Method, settings: Settings) -> Result<usize, ShrinkError> {
-        let shrunk = shrink(&self.shown_surface(), &self.marks, method, settings)?;
+    /// The work of shrinking the region the marks outline on the surface shown with `method`
+    /// and `settings`, to be done anywhere (see [`ShrinkJob::run`]) and added with
+    /// [`Workbench::add`]; what is wrong with the settings or the marks' count is found at once.
+    pub fn job(&self, method: Method, settings: Settings) -> Result<ShrinkJob, ShrinkError> {
+        settings.check(method)?;
+        if self.marks.len() < 3 {
+            return Err(RegionError::TooFewMarks(self.marks.len()).into());
+        }
+        Ok(ShrinkJob { surface: self.shown_surface(), marks: self.marks.clone(), method, settings, base: self.shown })
+    }
+
+    /// Adds the result of `job` to the collection and shows it; returns its number.
+    pub fn add(&mut self, job: &ShrinkJob, shrunk: Shrunk) -> usize {
         let number = self.models.len() + 1;
         self.models.push(Model {
-            name: format!("{number}: {} k {}", method_name(method), settings.k),
-            base: self.shown,
-            marks: self.marks.clone(),
+            name: format!("{number}: {} k {}", method_name(job.method), job.settings.k),
+            base: job.base,
+            marks: job.marks.clone(),
             positions: shrunk.positions,
             report: shrunk.report,
         });
         self.shown = number;
-        Ok(number)
+        number
+    }
+
+    /// Shrinks the region the marks outline on the surface shown with `method` and
+    /// `settings` here and now, adds the result to the collection and shows it; returns its
+    /// number.
+    pub fn apply(&mut self, method: Method, settings: Settings) -> Result<usize, ShrinkError> {
+        let job = self.job(method, settings)?;
+        let shrunk = job.run()?;
+        Ok(self.add(&job, shrunk))
     }
 
     /// Surface `which` (0 the original) as a mesh to save, if it exists.

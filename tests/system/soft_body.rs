@@ -105,7 +105,8 @@ fn bad_marks_and_settings_are_refused_with_a_reason_and_change_nothing() {
     assert!(torso["region"]["error"].as_str().unwrap().contains("found 2"), "{}", torso["region"]);
 
     let off = format!("{two}- {{ at: 0.02, act: {{ torso: [{{ mark: [0.0, 0.3, 2.0] }}, apply] }} }}\n");
-    let dump = run("scenes/torso.yaml", 3, Some(&off), SMALL).dump;
+    // The region is found with the shrink, off the main thread: its refusal arrives with it.
+    let dump = run("scenes/torso.yaml", 6, Some(&off), SMALL).dump;
     let message = entity(&dump, "torso")["message"].as_str().unwrap().to_string();
     assert!(message.contains("point 2 lies") && message.contains("from the surface"), "{message}");
 
@@ -244,4 +245,26 @@ fn a_click_marks_the_nearest_of_several_placed_and_scaled_surfaces() {
         let expected: &[Mark] = if scene.name == "belly" { &[Mark::Vertex(top as u32)] } else { &[] };
         assert_eq!(body.bench.marks(), expected, "{}", scene.name);
     }
+}
+
+#[test]
+fn a_shrink_runs_off_the_main_thread_and_a_second_waits_for_it() {
+    use canopy::foundation::schedule::LongWorkArrival;
+    let mut app = small_app(&path("scenes/torso.yaml"));
+    // As in the window: the result is taken in once it is done.
+    app.insert_resource(LongWorkArrival::WhenReady);
+    let world = app.world_mut();
+    let marks: Vec<String> = belly_points().iter().map(|p| format!("{{ mark: {p:?} }}")).collect();
+    let actions: serde_yaml::Value = serde_yaml::from_str(&format!("[{}, apply, apply]", marks.join(", "))).unwrap();
+    act(world, "torso", &actions, true).unwrap();
+    let (_, body) = torso(world);
+    assert!(body.shrinking && body.bench.models().is_empty());
+    assert_eq!(body.message.as_deref(), Some("not applied: a shrink is under way"));
+    let started = std::time::Instant::now();
+    while torso(app.world_mut()).1.shrinking {
+        assert!(started.elapsed() < std::time::Duration::from_secs(30), "the shrink never arrived");
+        app.update();
+    }
+    let (_, body) = torso(app.world_mut());
+    assert_eq!((body.bench.models().len(), body.bench.shown()), (1, 1));
 }
