@@ -76,6 +76,7 @@ pub use app::CanopyPlugins;
 /// The types most users of the library need.
 pub mod prelude {
     pub use crate::app::{CanopyPlugins, Display, entity_kinds};
+    pub use crate::foundation::actions::RegisterActions;
     pub use crate::foundation::dump::{DumpState, RegisterDump};
     pub use crate::foundation::entity::SceneEntity;
     pub use crate::foundation::kind::EntityKind;
