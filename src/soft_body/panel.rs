@@ -135,12 +135,13 @@ fn settings(ui: &mut egui::Ui, params: &mut ShrinkParams) {
             ui.radio_value(&mut params.variant, Variant::Source, "source's step");
         });
     }
-    // The area needs k below 1.
-    let top = if params.method == Deformer::Area { 0.999 } else { 1.0 };
-    params.k = params.k.min(top);
-    ui.add(egui::Slider::new(&mut params.k, 0.5..=top).text("k"));
-    ui.add(egui::Slider::new(&mut params.eps, 1e-10..=1e-2).logarithmic(true).text("threshold"));
-    ui.add(egui::Slider::new(&mut params.max_iterations, 1.0..=100_000.0).logarithmic(true).integer().text("cap"));
+    // Values from the file or a timeline outside a slider's range stay as they are until the
+    // slider is moved; the area's k must stay below 1, and Apply says so when it is not.
+    let edits = egui::SliderClamping::Edits;
+    ui.add(egui::Slider::new(&mut params.k, 0.05..=1.0).clamping(edits).text("k"));
+    ui.add(egui::Slider::new(&mut params.eps, 1e-10..=1e-2).logarithmic(true).clamping(edits).text("threshold"));
+    let cap = egui::Slider::new(&mut params.max_iterations, 1.0..=100_000.0).logarithmic(true).integer();
+    ui.add(cap.clamping(edits).text("cap"));
 }
 
 /// A model's report.

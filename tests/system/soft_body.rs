@@ -268,3 +268,22 @@ fn a_shrink_runs_off_the_main_thread_and_a_second_waits_for_it() {
     let (_, body) = torso(app.world_mut());
     assert_eq!((body.bench.models().len(), body.bench.shown()), (1, 1));
 }
+
+#[test]
+fn a_saved_scene_keeps_the_deformer_set_in_the_window() {
+    use canopy::foundation::params::{ParamValue, set_param};
+    use canopy::soft_body::SoftBodyDef;
+    use canopy::soft_body::plugin::Deformer;
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("patch.yaml");
+    std::fs::write(&scene, "entities:\n  - name: patch\n    soft_body:\n      sample: { shape: belly, size: 17 }\n").unwrap();
+    let mut app = small_app(&scene);
+    let world = app.world_mut();
+    set_param(world, "patch.method", ParamValue::Choice("edge_sum".into())).unwrap();
+    set_param(world, "patch.k", ParamValue::Number(0.8)).unwrap();
+    canopy::scene::save_live_scene(world).unwrap();
+    let reread = canopy::app::entity_kinds().load(&scene).unwrap().def;
+    let def = reread.entities[0].def::<SoftBodyDef>().expect("a soft body");
+    assert_eq!((def.method, def.k.0), (Deformer::EdgeSum, 0.8));
+    assert_eq!(def.sample.map(|s| s.size.0), Some(17), "the rest as written");
+}
