@@ -77,6 +77,24 @@ impl Region {
     }
 }
 
+/// The vertex of `surface` that mark number `index` stands for: the vertex it names, or for a
+/// point within `tolerance_m` metres of the surface the nearest corner of the triangle it
+/// lies on.
+pub fn vertex_of(surface: &Surface, mark: Mark, index: usize, tolerance_m: f32) -> Result<u32, RegionError> {
+    let count = surface.positions.len();
+    match mark {
+        Mark::Vertex(vertex) if (vertex as usize) < count => Ok(vertex),
+        Mark::Vertex(vertex) => Err(RegionError::NoVertex { mark: index, vertex, count }),
+        Mark::Point(point) => {
+            let (distance_m, vertex) = nearest_on_surface(surface, point);
+            match distance_m <= tolerance_m {
+                true => Ok(vertex),
+                false => Err(RegionError::OffSurface { mark: index, distance_m, tolerance_m }),
+            }
+        }
+    }
+}
+
 /// The region of `whole` outlined by `marks`, points on the surface taken within
 /// `tolerance_m` metres of it.
 pub fn select(whole: &Surface, marks: &[Mark], tolerance_m: f32) -> Result<Region, RegionError> {
@@ -87,17 +105,7 @@ pub fn select(whole: &Surface, marks: &[Mark], tolerance_m: f32) -> Result<Regio
     let vertices = marks
         .iter()
         .enumerate()
-        .map(|(mark, &m)| match m {
-            Mark::Vertex(vertex) if (vertex as usize) < count => Ok(vertex),
-            Mark::Vertex(vertex) => Err(RegionError::NoVertex { mark, vertex, count }),
-            Mark::Point(point) => {
-                let (distance_m, vertex) = nearest_on_surface(whole, point);
-                match distance_m <= tolerance_m {
-                    true => Ok(vertex),
-                    false => Err(RegionError::OffSurface { mark, distance_m, tolerance_m }),
-                }
-            }
-        })
+        .map(|(index, &mark)| vertex_of(whole, mark, index, tolerance_m))
         .collect::<Result<Vec<u32>, RegionError>>()?;
     // The loop: the shortest paths along the edges from each mark to the next, and back.
     let mut outline: Vec<u32> = Vec::new();

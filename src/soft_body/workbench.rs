@@ -4,7 +4,7 @@
 
 use super::deform::{Method, Settings, SettingsError, Stop, Variant, deform};
 use super::mesh_io::TriangleMesh;
-use super::region::{Mark, Region, RegionError, select};
+use super::region::{Mark, Region, RegionError, select, vertex_of};
 use super::surface::{Facts, Surface};
 use bevy::math::Vec3;
 use serde::Serialize;
@@ -66,6 +66,12 @@ pub struct Shrunk {
 pub fn shrink(whole: &Surface, marks: &[Mark], method: Method, settings: Settings) -> Result<Shrunk, ShrinkError> {
     settings.check(method)?;
     let region = select(whole, marks, POINT_TOLERANCE_M)?;
+    Ok(shrink_region(&region, &whole.positions, method, settings))
+}
+
+/// Shrinks `region` of a surface whose vertices are at `whole` with `method` and `settings`
+/// (checked).
+fn shrink_region(region: &Region, whole: &[Vec3], method: Method, settings: Settings) -> Shrunk {
     let started = Instant::now();
     let done = deform(&region.surface, method, settings);
     let time_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -82,7 +88,23 @@ pub fn shrink(whole: &Surface, marks: &[Mark], method: Method, settings: Setting
         facts: Facts::of(&region.surface, &done.positions, settings.k),
         time_ms,
     };
-    Ok(Shrunk { positions: region.put_back(&whole.positions, &done.positions), report })
+    Shrunk { positions: region.put_back(whole, &done.positions), report }
+}
+
+/// The region `marks` outline on a model at `positions` of the surface `original`: the marks'
+/// vertices found on the model, the loop joining them and its smaller side found on the
+/// original, so that a model shrunk from a region keeps that region whatever its shape; the
+/// cut surface at the model's positions.
+fn region_on(original: &Surface, positions: &[Vec3], marks: &[Mark]) -> Result<Region, RegionError> {
+    let model = original.with_positions(positions.to_vec());
+    let vertices = marks
+        .iter()
+        .enumerate()
+        .map(|(index, &mark)| vertex_of(&model, mark, index, POINT_TOLERANCE_M).map(Mark::Vertex))
+        .collect::<Result<Vec<Mark>, RegionError>>()?;
+    let region = select(original, &vertices, POINT_TOLERANCE_M)?;
+    let cut = region.surface.with_positions(region.source.iter().map(|&v| positions[v as usize]).collect());
+    Ok(Region { surface: cut, ..region })
 }
 
 /// The name of a deformer as people read it: `edge lengths`, `area (source)`.
@@ -117,7 +139,8 @@ pub struct Model {
 /// surface of the collection it shrinks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShrinkJob {
-    surface: Surface,
+    original: Surface,
+    positions: Vec<Vec3>,
     marks: Vec<Mark>,
     method: Method,
     settings: Settings,
@@ -127,7 +150,8 @@ pub struct ShrinkJob {
 impl ShrinkJob {
     /// Does the shrink.
     pub fn run(&self) -> Result<Shrunk, ShrinkError> {
-        shrink(&self.surface, &self.marks, self.method, self.settings)
+        let region = region_on(&self.original, &self.positions, &self.marks)?;
+        Ok(shrink_region(&region, &self.positions, self.method, self.settings))
     }
 }
 
@@ -188,22 +212,18 @@ impl Workbench {
         self.positions(self.shown).unwrap_or(&self.original.positions)
     }
 
-    /// The surface shown, with its topology.
-    fn shown_surface(&self) -> Surface {
-        match self.shown {
-            0 => self.original.clone(),
-            _ => self.original.with_positions(self.shown_positions().to_vec()),
-        }
-    }
-
     /// The marks, in the order they were made.
     pub fn marks(&self) -> &[Mark] {
         &self.marks
     }
 
-    /// Adds a mark to the outline.
+    /// Adds a mark to the outline. A point on the surface shown becomes the vertex that stands
+    /// for it there, so that the mark stays on every model; a point off it stays a point, and
+    /// the region says why there is none.
     pub fn mark(&mut self, mark: Mark) {
-        self.marks.push(mark);
+        let shown = self.original.with_positions(self.shown_positions().to_vec());
+        let snapped = vertex_of(&shown, mark, self.marks.len(), POINT_TOLERANCE_M).map_or(mark, Mark::Vertex);
+        self.marks.push(snapped);
     }
 
     /// Takes back the last mark, if any.
@@ -225,9 +245,10 @@ impl Workbench {
         }
     }
 
-    /// The region the marks outline on the surface shown.
+    /// The region the marks outline on the surface shown (see [`region_on`]: the same
+    /// vertices on every model).
     pub fn region(&self) -> Result<Region, RegionError> {
-        select(&self.shown_surface(), &self.marks, POINT_TOLERANCE_M)
+        region_on(&self.original, self.shown_positions(), &self.marks)
     }
 
     /// The work of shrinking the region the marks outline on the surface shown with `method`
@@ -238,7 +259,14 @@ impl Workbench {
         if self.marks.len() < 3 {
             return Err(RegionError::TooFewMarks(self.marks.len()).into());
         }
-        Ok(ShrinkJob { surface: self.shown_surface(), marks: self.marks.clone(), method, settings, base: self.shown })
+        Ok(ShrinkJob {
+            original: self.original.clone(),
+            positions: self.shown_positions().to_vec(),
+            marks: self.marks.clone(),
+            method,
+            settings,
+            base: self.shown,
+        })
     }
 
     /// Adds the result of `job` to the collection and shows it; returns its number.
@@ -354,7 +382,11 @@ mod tests {
         bench.mark(Mark::Vertex(5));
         assert_eq!(bench.undo_mark(), Some(Mark::Vertex(5)));
         assert!(matches!(bench.apply(Method::Area(Variant::Projection), settings(1.0)), Err(ShrinkError::Settings(_))));
+        let before = bench.region().unwrap();
         bench.apply(Method::Area(Variant::Projection), settings(0.95)).unwrap();
+        let after = bench.region().unwrap();
+        assert_eq!((&after.source, &after.outline), (&before.source, &before.outline), "the model keeps its region");
+        assert_eq!(after.surface.positions[0], bench.positions(1).unwrap()[after.source[0] as usize]);
         bench.apply(Method::Area(Variant::Projection), settings(0.95)).unwrap();
         assert_eq!(bench.models()[1].base, 1, "the second shrinks the first");
         let first = bench.positions(1).unwrap();

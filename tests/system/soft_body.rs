@@ -276,7 +276,8 @@ fn a_saved_scene_keeps_the_deformer_set_in_the_window() {
     use canopy::soft_body::plugin::Deformer;
     let folder = tempfile::tempdir().unwrap();
     let scene = folder.path().join("patch.yaml");
-    std::fs::write(&scene, "entities:\n  - name: patch\n    soft_body:\n      sample: { shape: belly, size: 17 }\n").unwrap();
+    std::fs::write(&scene, "entities:\n  - name: patch\n    soft_body:\n      sample: { shape: belly, size: 17 }\n")
+        .unwrap();
     let mut app = small_app(&scene);
     let world = app.world_mut();
     set_param(world, "patch.method", ParamValue::Choice("edge_sum".into())).unwrap();
