@@ -156,6 +156,13 @@ fn tap(app: &mut App, key_code: KeyCode) {
     }
 }
 
+/// The click in the small view on a point of the scene, as the scene's camera sees it.
+fn clicker(world: &mut World) -> impl Fn(Vec3) -> ViewClicked + use<> {
+    let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
+    let aspect = SMALL.x as f32 / SMALL.y as f32;
+    move |point| ViewClicked { ndc: camera.view_projection(aspect).project_point3(point).truncate(), aspect }
+}
+
 /// The soft body's entity and its body.
 fn torso(world: &mut World) -> (Entity, SoftBody) {
     let mut bodies = world.query::<(Entity, &SoftBody)>();
@@ -167,17 +174,15 @@ fn torso(world: &mut World) -> (Entity, SoftBody) {
 fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_saved() {
     let mut app = small_app(&path("scenes/torso.yaml"));
     let world = app.world_mut();
-    let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
-    let aspect = SMALL.x as f32 / SMALL.y as f32;
+    let click_at = clicker(world);
     let (torso_entity, body) = torso(world);
     let outline = belly_outline(&body);
     for &vertex in &outline {
         let point = body.bench.original().positions[vertex as usize];
-        let ndc = camera.view_projection(aspect).project_point3(point).truncate();
-        world.write_message(ViewClicked { ndc, aspect });
+        world.write_message(click_at(point));
     }
     // A click beside the torso marks nothing.
-    world.write_message(ViewClicked { ndc: Vec2::new(0.95, 0.95), aspect });
+    world.write_message(ViewClicked { ndc: Vec2::new(0.95, 0.95), aspect: click_at(Vec3::ZERO).aspect });
     app.update();
     let world = app.world_mut();
     let (_, body) = torso(world);
@@ -229,15 +234,13 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
 fn a_click_marks_the_nearest_of_several_placed_and_scaled_surfaces() {
     let mut app = small_app(&path("scenes/soft_bodies.yaml"));
     let world = app.world_mut();
-    let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
-    let aspect = SMALL.x as f32 / SMALL.y as f32;
+    let click_at = clicker(world);
     let mut bodies = world.query::<(&canopy::foundation::entity::SceneEntity, &SoftBody, &GlobalTransform)>();
     let (_, belly, placed) = bodies.iter(world).find(|(scene, ..)| scene.name == "belly").unwrap();
     // The belly patch's top, 225 x 225 vertices: the middle one.
     let top = 112 * 225 + 112;
     let point = placed.transform_point(belly.bench.original().positions[top]);
-    let ndc = camera.view_projection(aspect).project_point3(point).truncate();
-    world.write_message(ViewClicked { ndc, aspect });
+    world.write_message(click_at(point));
     app.update();
     let world = app.world_mut();
     let mut bodies = world.query::<(&canopy::foundation::entity::SceneEntity, &SoftBody)>();
