@@ -403,4 +403,34 @@ mod tests {
         // The loop bends towards the pole between the marks, but the first ring is whole.
         assert!((0..48).map(|s| 1 + s).all(|v| inside.contains(&v)));
     }
+
+    #[test]
+    fn four_marks_on_the_torso_outline_its_belly_in_any_order() {
+        let (rings, segments) = (64u32, 128u32);
+        let torso = sample::torso(rings, segments);
+        let whole =
+            Surface::new(torso.positions.clone(), torso.triangles.clone(), vec![true; torso.positions.len()]).unwrap();
+        let at = |r: u32, s: u32| r * segments + s;
+        let corners = [at(8, 16), at(8, 48), at(28, 48), at(28, 16)];
+        let inside = |region: &Region| -> HashSet<u32> {
+            region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect()
+        };
+        let marks = |order: [usize; 4]| order.map(|i| Mark::Vertex(corners[i]));
+        let region = select(&whole, &marks([0, 1, 2, 3]), 1e-3).unwrap();
+        let found = inside(&region);
+        // The loop follows the rings and columns between the corners, a ring or column astray
+        // at most where the belly bulges; everything well inside it is in the region.
+        for &v in &found {
+            let (r, s) = (v / segments, v % segments);
+            assert!((7..=29).contains(&r) && (15..=49).contains(&s), "vertex {v} at ring {r}, segment {s}");
+        }
+        for r in 10..=26 {
+            for s in 18..=46 {
+                assert!(found.contains(&at(r, s)), "ring {r}, segment {s} is inside");
+            }
+        }
+        for order in [[3, 2, 1, 0], [2, 3, 0, 1], [1, 0, 3, 2]] {
+            assert_eq!(inside(&select(&whole, &marks(order), 1e-3).unwrap()), found, "{order:?}");
+        }
+    }
 }
