@@ -357,7 +357,6 @@ mod tests {
     }
 
     #[test]
-    #[test]
     fn a_hanging_body_sags_alike_with_five_and_twenty_substeps() {
         let (five, _) = sag(5, 4.0);
         let (twenty, body) = sag(20, 4.0);
