@@ -282,13 +282,76 @@ pub struct Material {
     pub damping_per_s: f32,
 }
 
+/// A static solid particles cannot enter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Collider {
+    /// The half space below a plane through `point` facing `normal` (unit).
+    Plane {
+        /// A point of the plane, metres.
+        point: Vec3,
+        /// Its unit normal, out of the solid.
+        normal: Vec3,
+    },
+    /// A ball.
+    Sphere {
+        /// Its centre, metres.
+        centre: Vec3,
+        /// Its radius, metres.
+        radius_m: f32,
+    },
+    /// A box along the axes.
+    Box {
+        /// Its centre, metres.
+        centre: Vec3,
+        /// Half its size along x, y and z, metres.
+        half_m: Vec3,
+    },
+}
+
+impl Collider {
+    /// How deep `p` lies inside, metres, and the unit direction out, if it is inside.
+    pub fn penetration(&self, p: Vec3) -> Option<(f32, Vec3)> {
+        match *self {
+            Collider::Plane { point, normal } => {
+                let depth = -(p - point).dot(normal);
+                (depth > 0.0).then_some((depth, normal))
+            }
+            Collider::Sphere { centre, radius_m } => {
+                let offset = p - centre;
+                let depth = radius_m - offset.length();
+                (depth > 0.0).then(|| (depth, offset.try_normalize().unwrap_or(Vec3::Y)))
+            }
+            Collider::Box { centre, half_m } => {
+                let local = p - centre;
+                let room = half_m - local.abs();
+                if room.min_element() <= 0.0 {
+                    return None;
+                }
+                // Out through the nearest face.
+                let axis = if room.x <= room.y && room.x <= room.z {
+                    Vec3::X
+                } else if room.y <= room.z {
+                    Vec3::Y
+                } else {
+                    Vec3::Z
+                };
+                let sign = if local.dot(axis) < 0.0 { -1.0 } else { 1.0 };
+                Some((room.min_element(), axis * sign))
+            }
+        }
+    }
+}
+
 /// The world a body moves in.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct World {
+pub struct World<'a> {
     /// Gravity, metres per second squared.
     pub gravity: Vec3,
-    /// Height of the ground plane, metres (particles stay above it).
-    pub ground_y: f32,
+    /// The solids particles stay out of.
+    pub colliders: &'a [Collider],
+    /// The friction of a contact: a particle slides when its sideways move in a substep is
+    /// more than this many times the depth it was pushed out by, and is held otherwise.
+    pub friction: f32,
     /// Substeps a step (each one iteration of every constraint).
     pub substeps: u32,
 }
@@ -358,7 +421,7 @@ impl Body {
     }
 
     /// Advances the body by `dt` seconds in `world`'s substeps.
-    pub fn step(&mut self, dt: f32, world: World) {
+    pub fn step(&mut self, dt: f32, world: World<'_>) {
         let substeps = world.substeps.max(1);
         let h = dt / substeps as f32;
         for _ in 0..substeps {
@@ -368,7 +431,7 @@ impl Body {
 
     /// One substep of `h` seconds: predict, project every constraint once, keep above the
     /// ground, take the velocities from the move.
-    fn substep(&mut self, h: f32, world: World) {
+    fn substep(&mut self, h: f32, world: World<'_>) {
         let damping = (1.0 - self.material.damping_per_s * h).max(0.0);
         for p in 0..self.positions.len() {
             if self.inverse_mass[p] == 0.0 {
@@ -380,12 +443,30 @@ impl Body {
         }
         self.project_edges(self.material.edge_compliance / (h * h));
         self.project_volumes(self.material.volume_compliance / (h * h));
-        for p in &mut self.positions {
-            p.y = p.y.max(world.ground_y);
-        }
+        self.collide(world.colliders, world.friction);
         for p in 0..self.positions.len() {
             if self.inverse_mass[p] > 0.0 {
                 self.velocities[p] = (self.positions[p] - self.previous[p]) / h;
+            }
+        }
+    }
+
+    /// Pushes every particle out of every collider along the way out, and holds back its
+    /// sideways move in the substep by the friction (positional friction: a move shorter than
+    /// `friction` times the depth is undone, a longer one shortened by that much).
+    fn collide(&mut self, colliders: &[Collider], friction: f32) {
+        for p in 0..self.positions.len() {
+            if self.inverse_mass[p] == 0.0 {
+                continue;
+            }
+            for collider in colliders {
+                let Some((depth, out)) = collider.penetration(self.positions[p]) else { continue };
+                self.positions[p] += out * depth;
+                let moved = self.positions[p] - self.previous[p];
+                let sideways = moved - out * moved.dot(out);
+                let length = sideways.length();
+                let hold = friction * depth;
+                self.positions[p] -= if length <= hold { sideways } else { sideways * (hold / length) };
             }
         }
     }
@@ -469,13 +550,41 @@ mod tests {
     const JELLY: Material =
         Material { density_kg_m3: 1000.0, edge_compliance: 1e-4, volume_compliance: 0.0, damping_per_s: 0.0 };
 
-    fn world(substeps: u32) -> World {
-        World { gravity: Vec3::new(0.0, -9.81, 0.0), ground_y: f32::NEG_INFINITY, substeps }
+    fn world(substeps: u32) -> World<'static> {
+        World { gravity: Vec3::new(0.0, -9.81, 0.0), colliders: &[], friction: 0.5, substeps }
     }
+
+    /// The ground: the plane y = 0.
+    const GROUND: Collider = Collider::Plane { point: Vec3::ZERO, normal: Vec3::Y };
 
     /// A cube of 4 x 4 x 4 cells 5 cm a side, its lowest corner at `min`.
     fn cube(min: Vec3) -> TetMesh {
         TetMesh::lattice_box(min, [4, 4, 4], 0.05)
+    }
+
+    #[test]
+    fn a_body_dropped_on_a_box_rests_on_it_without_sinking_or_jitter() {
+        let solids = [GROUND, Collider::Box { centre: Vec3::new(0.1, 0.1, 0.1), half_m: Vec3::splat(0.1) }];
+        let world = World { colliders: &solids, ..world(10) };
+        let material = Material { edge_compliance: 1e-4, volume_compliance: 1e-6, damping_per_s: 1.0, ..JELLY };
+        let mut body = Body::new(TetMesh::lattice_box(Vec3::new(0.05, 0.4, 0.05), [2, 2, 2], 0.05), material);
+        let mut heights = Vec::new();
+        for frame in 0..600 {
+            body.step(1.0 / 60.0, world);
+            for p in &body.positions {
+                assert!(
+                    solids.iter().all(|s| s.penetration(*p).is_none_or(|(depth, _)| depth < 1e-6)),
+                    "inside at {p}"
+                );
+            }
+            if frame >= 300 {
+                heights.push(body.lowest());
+            }
+        }
+        let (low, high) = heights.iter().fold((f32::MAX, f32::MIN), |(l, h), &y| (l.min(y), h.max(y)));
+        assert!((low - 0.2).abs() < 1e-3, "it rests on the box's top: {low}");
+        assert!(high - low < 1e-4, "no jitter over the last five seconds: {low} to {high}");
+        assert!(body.centre_of_mass().x > 0.05 && body.centre_of_mass().x < 0.15, "it stays on the box");
     }
 
     #[test]
@@ -557,7 +666,8 @@ mod tests {
     #[test]
     fn a_dropped_body_rests_on_the_ground_keeping_its_volume() {
         let mut body = Body::new(cube(Vec3::new(0.0, 0.3, 0.0)), Material { damping_per_s: 2.0, ..JELLY });
-        let world = World { ground_y: 0.0, ..world(10) };
+        let ground = [GROUND];
+        let world = World { colliders: &ground, ..world(10) };
         let mut energies = Vec::new();
         for _ in 0..180 {
             body.step(1.0 / 60.0, world);
