@@ -367,8 +367,15 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
                 ui.label(&entry.path);
                 let edited = match &entry.value {
                     &ParamValue::Number(mut v) => {
-                        let speed = (v.abs() * 0.01).max(0.01);
-                        ui.add(egui::DragValue::new(&mut v).speed(speed)).changed().then_some(ParamValue::Number(v))
+                        // A tiny value (a convergence threshold) is shown in exponent form and
+                        // dragged in steps of its own size, not rounded to 0 and thrown far.
+                        let tiny = v != 0.0 && v.abs() < 1e-3;
+                        let speed = if tiny { v.abs() * 0.01 } else { (v.abs() * 0.01).max(0.01) };
+                        let mut drag = egui::DragValue::new(&mut v).speed(speed);
+                        if tiny {
+                            drag = drag.custom_formatter(|v, _| format!("{v:.3e}"));
+                        }
+                        ui.add(drag).changed().then_some(ParamValue::Number(v))
                     }
                     &ParamValue::Bool(mut v) => ui.checkbox(&mut v, "").changed().then_some(ParamValue::Bool(v)),
                     ParamValue::Choice(current) => choice_box(ui, &entry.path, current, &entry.choices),
