@@ -420,6 +420,12 @@ impl Body {
         self.velocities[p] = Vec3::ZERO;
     }
 
+    /// Releases particle `p`: it moves with its mass again.
+    pub fn release(&mut self, p: usize) {
+        let mass = self.mass[p];
+        self.inverse_mass[p] = if mass > 0.0 { 1.0 / mass } else { 0.0 };
+    }
+
     /// Advances the body by `dt` seconds in `world`'s substeps.
     pub fn step(&mut self, dt: f32, world: World<'_>) {
         let substeps = world.substeps.max(1);
@@ -585,6 +591,36 @@ mod tests {
         assert!((low - 0.2).abs() < 1e-3, "it rests on the box's top: {low}");
         assert!(high - low < 1e-4, "no jitter over the last five seconds: {low} to {high}");
         assert!(body.centre_of_mass().x > 0.05 && body.centre_of_mass().x < 0.15, "it stays on the box");
+    }
+
+    #[test]
+    fn a_body_pinned_at_one_corner_swings_below_it_and_drops_when_released() {
+        let material = Material { edge_compliance: 1e-4, volume_compliance: 1e-6, damping_per_s: 0.5, ..JELLY };
+        let mut body = Body::new(TetMesh::lattice_box(Vec3::ZERO, [2, 2, 2], 0.05), material);
+        // The stem: the top corner farthest along x, so that the body hangs off to one side.
+        let stem = (0..body.positions.len()).max_by(|&a, &b| {
+            let key = |p: Vec3| p.x + p.y;
+            key(body.positions[a]).total_cmp(&key(body.positions[b]))
+        });
+        let stem = stem.unwrap();
+        body.pin(stem);
+        let held = body.positions[stem];
+        let mut xs = Vec::new();
+        for _ in 0..240 {
+            body.step(1.0 / 60.0, world(10));
+            xs.push(body.centre_of_mass().x);
+        }
+        assert_eq!(body.positions[stem], held, "the stem holds");
+        let centre = body.centre_of_mass();
+        assert!(centre.y < held.y - 0.05, "it hangs below its stem: {centre} under {held}");
+        let (low, high) = xs.iter().fold((f32::MAX, f32::MIN), |(l, h), &x| (l.min(x), h.max(x)));
+        assert!(high - low > 0.02, "it swings: x from {low} to {high}");
+        body.release(stem);
+        let before = body.centre_of_mass().y;
+        for _ in 0..30 {
+            body.step(1.0 / 60.0, world(10));
+        }
+        assert!(body.centre_of_mass().y < before - 0.5 * 9.81 * 0.25 * 0.9, "released, it falls");
     }
 
     #[test]
