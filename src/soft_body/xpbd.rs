@@ -543,6 +543,15 @@ impl Body {
         self.rest.volume(&self.positions) / self.rest.volume(&self.rest.positions)
     }
 
+    /// The largest strain of an edge: how far its length is from its rest length, as a share
+    /// of the rest length.
+    pub fn max_strain(&self) -> f32 {
+        self.edges
+            .iter()
+            .map(|&([a, b], rest)| (self.positions[a as usize].distance(self.positions[b as usize]) / rest - 1.0).abs())
+            .fold(0.0, f32::max)
+    }
+
     /// The lowest particle's height, metres.
     pub fn lowest(&self) -> f32 {
         self.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min)
@@ -697,6 +706,9 @@ mod tests {
         assert!((sag5 - sag20).abs() < 0.05 * sag20, "sags of {sag5} and {sag20} m");
         assert!(body.kinetic_energy() < 1e-4, "it has come to rest: {} J", body.kinetic_energy());
         assert!(body.positions.iter().all(|p| p.y <= 0.2 + 1e-6), "it hangs below its pinned top");
+        let strain = body.max_strain();
+        assert!(strain > 1e-3 && strain < 0.5, "stretched, not torn: {strain}");
+        assert_eq!(Body::new(cube(Vec3::ZERO), JELLY).max_strain(), 0.0, "at rest nothing is strained");
     }
 
     #[test]
