@@ -19,7 +19,7 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, LongWorkArrival, WriteBackSystems};
 use crate::foundation::values::{Point, first_free_path, srgb_channels};
-use crate::raster::{MeshData, RasterMesh};
+use crate::raster::RasterMesh;
 use crate::view::CameraParams;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
@@ -153,14 +153,6 @@ impl SoftBody {
         }
     }
 
-    /// The region again, after the marks or the surface shown changed.
-    fn refresh_region(&mut self) {
-        self.region = self.bench.region().map(|region| RegionShown {
-            inside: region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect(),
-            outline: region.outline,
-        });
-    }
-
     /// The surface point shown under the ray from `origin` along the unit `direction`, both
     /// in the body's own coordinates.
     pub fn pick(&self, origin: Vec3, direction: Vec3) -> Option<super::pick::SurfacePick> {
@@ -201,13 +193,22 @@ impl SoftBody {
                 }
             }
         }
-        // Models never change once made: the hierarchy is stale only when another is shown.
+        self.follow_shown();
+        job
+    }
+
+    /// The picking hierarchy and the region again for the surface shown, after the marks or
+    /// the surface shown changed. Models never change once made: the hierarchy is stale only
+    /// when another is shown.
+    fn follow_shown(&mut self) {
         if self.picking.1 != self.bench.shown() {
             let bvh = SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles);
             self.picking = (bvh, self.bench.shown());
         }
-        self.refresh_region();
-        job
+        self.region = self.bench.region().map(|region| RegionShown {
+            inside: region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect(),
+            outline: region.outline,
+        });
     }
 
     /// Takes in the result of `job`: a new model, shown, or why there is none.
@@ -216,11 +217,7 @@ impl SoftBody {
         match result {
             Ok(shrunk) => {
                 self.bench.add(job, shrunk);
-                self.picking = (
-                    SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles),
-                    self.bench.shown(),
-                );
-                self.refresh_region();
+                self.follow_shown();
             }
             Err(error) => self.message = Some(format!("not applied: {error}")),
         }
@@ -534,29 +531,25 @@ fn write_back_soft_bodies(mut bodies: ChangedBodies, mut parts: Parts) {
             (_, Err(_)) => Vec::new(),
         };
         raster.mesh = Arc::new(surface_mesh(shown, triangles, tints));
-        let (low, high) = bounds(original);
+        let (low, high) = bench.original().bounds();
         let marks: Vec<Vec3> = bench.marks().iter().filter_map(|&mark| bench.mark_position(mark)).collect();
         for &child in children {
             let Ok((mut part, mut transform, markers)) = parts.get_mut(child) else { continue };
-            part.mesh = Arc::new(if markers {
-                marker_mesh(&marks, MARKER_SHARE * (high - low).length())
+            if markers {
+                part.mesh = Arc::new(marker_mesh(&marks, MARKER_SHARE * (high - low).length()));
             } else if params.compare == Compare::SideBySide {
-                // The original to the model's left, a fifth of its width apart.
+                // The original to the model's left, a fifth of its width apart. It never
+                // changes: it is meshed when it is first shown, not with every mark.
                 transform.translation = Vec3::X * -(high.x - low.x) * 1.2;
-                surface_mesh(original, triangles, Vec::new())
-            } else {
-                MeshData::default()
-            });
+                if part.mesh.positions.is_empty() {
+                    part.mesh = Arc::new(surface_mesh(original, triangles, Vec::new()));
+                }
+            } else if !part.mesh.positions.is_empty() {
+                part.mesh = Arc::default();
+            }
         }
     }
 }
 
 /// A mark's ball radius as a share of the surface's bounding diagonal.
 const MARKER_SHARE: f32 = 0.006;
-
-/// The box holding `positions`: (min, max), metres.
-fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
-    positions
-        .iter()
-        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(low, high), &p| (low.min(p), high.max(p)))
-}

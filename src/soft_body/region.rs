@@ -77,16 +77,23 @@ impl Region {
     }
 }
 
-/// The vertex of `surface` that mark number `index` stands for: the vertex it names, or for a
-/// point within `tolerance_m` metres of the surface the nearest corner of the triangle it
-/// lies on.
-pub fn vertex_of(surface: &Surface, mark: Mark, index: usize, tolerance_m: f32) -> Result<u32, RegionError> {
-    let count = surface.positions.len();
+/// The vertex that mark number `index` stands for on the triangles `triangles` of vertices at
+/// `positions`: the vertex it names, or for a point within `tolerance_m` metres of the surface
+/// the nearest corner of the triangle it lies on. Only the geometry is read, so a model of a
+/// surface needs no surface of its own.
+pub fn vertex_of(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    mark: Mark,
+    index: usize,
+    tolerance_m: f32,
+) -> Result<u32, RegionError> {
+    let count = positions.len();
     match mark {
         Mark::Vertex(vertex) if (vertex as usize) < count => Ok(vertex),
         Mark::Vertex(vertex) => Err(RegionError::NoVertex { mark: index, vertex, count }),
         Mark::Point(point) => {
-            let (distance_m, vertex) = nearest_on_surface(surface, point);
+            let (distance_m, vertex) = nearest_on_surface(positions, triangles, point);
             match distance_m <= tolerance_m {
                 true => Ok(vertex),
                 false => Err(RegionError::OffSurface { mark: index, distance_m, tolerance_m }),
@@ -105,7 +112,7 @@ pub fn select(whole: &Surface, marks: &[Mark], tolerance_m: f32) -> Result<Regio
     let vertices = marks
         .iter()
         .enumerate()
-        .map(|(index, &mark)| vertex_of(whole, mark, index, tolerance_m))
+        .map(|(index, &mark)| vertex_of(&whole.positions, &whole.triangles, mark, index, tolerance_m))
         .collect::<Result<Vec<u32>, RegionError>>()?;
     // The loop: the shortest paths along the edges from each mark to the next, and back.
     let mut outline: Vec<u32> = Vec::new();
@@ -184,13 +191,13 @@ pub fn select(whole: &Surface, marks: &[Mark], tolerance_m: f32) -> Result<Regio
 
 /// The distance from `point` to the surface, and the corner nearest it of the triangle
 /// nearest it.
-fn nearest_on_surface(surface: &Surface, point: Vec3) -> (f32, u32) {
+fn nearest_on_surface(positions: &[Vec3], triangles: &[[u32; 3]], point: Vec3) -> (f32, u32) {
     let mut best = (f32::INFINITY, 0);
-    for &t in &surface.triangles {
-        let [a, b, c] = t.map(|v| surface.positions[v as usize]);
+    for &t in triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
         let distance = closest_on_triangle(point, a, b, c).distance(point);
         if distance < best.0 {
-            let near = |v: u32| surface.positions[v as usize].distance_squared(point);
+            let near = |v: u32| positions[v as usize].distance_squared(point);
             let corner = t.into_iter().min_by(|&u, &v| near(u).total_cmp(&near(v))).unwrap_or(t[0]);
             best = (distance, corner);
         }

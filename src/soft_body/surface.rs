@@ -104,6 +104,12 @@ impl Surface {
         }
     }
 
+    /// The box holding every vertex: (min, max), metres.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        self.positions.iter().fold(far, |(low, high), &p| (low.min(p), high.max(p)))
+    }
+
     /// The unique undirected edges, the lower index first.
     pub fn edges(&self) -> &[[u32; 2]] {
         &self.edges

@@ -96,11 +96,12 @@ fn shrink_region(region: &Region, whole: &[Vec3], method: Method, settings: Sett
 /// original, so that a model shrunk from a region keeps that region whatever its shape; the
 /// cut surface at the model's positions.
 fn region_on(original: &Surface, positions: &[Vec3], marks: &[Mark]) -> Result<Region, RegionError> {
-    let model = original.with_positions(positions.to_vec());
     let vertices = marks
         .iter()
         .enumerate()
-        .map(|(index, &mark)| vertex_of(&model, mark, index, POINT_TOLERANCE_M).map(Mark::Vertex))
+        .map(|(index, &mark)| {
+            vertex_of(positions, &original.triangles, mark, index, POINT_TOLERANCE_M).map(Mark::Vertex)
+        })
         .collect::<Result<Vec<Mark>, RegionError>>()?;
     let region = select(original, &vertices, POINT_TOLERANCE_M)?;
     let cut = region.surface.with_positions(region.source.iter().map(|&v| positions[v as usize]).collect());
@@ -221,8 +222,9 @@ impl Workbench {
     /// for it there, so that the mark stays on every model; a point off it stays a point, and
     /// the region says why there is none.
     pub fn mark(&mut self, mark: Mark) {
-        let shown = self.original.with_positions(self.shown_positions().to_vec());
-        let snapped = vertex_of(&shown, mark, self.marks.len(), POINT_TOLERANCE_M).map_or(mark, Mark::Vertex);
+        let (positions, triangles) = (self.shown_positions(), &self.original.triangles);
+        let snapped =
+            vertex_of(positions, triangles, mark, self.marks.len(), POINT_TOLERANCE_M).map_or(mark, Mark::Vertex);
         self.marks.push(snapped);
     }
 

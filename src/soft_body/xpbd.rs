@@ -181,10 +181,7 @@ impl TetMesh {
     /// embedded in them (a vertex outside every kept cube in the nearest kept cube's
     /// tetrahedron that holds it best, its weights reaching out of it).
     pub fn fill(surface: &Surface, cell_m: f32) -> Result<(Self, Embedding), TetError> {
-        let (low, high) = surface
-            .positions
-            .iter()
-            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), &p| (l.min(p), h.max(p)));
+        let (low, high) = surface.bounds();
         let extent = ((high - low) / cell_m).ceil();
         let cells = extent.x.max(1.0) as f64 * extent.y.max(1.0) as f64 * extent.z.max(1.0) as f64;
         if !(cell_m > 0.0 && cells.is_finite() && cells <= MAX_CELLS as f64) {
