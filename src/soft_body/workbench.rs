@@ -65,7 +65,7 @@ pub struct Shrunk {
 /// Shrinks the region of `whole` outlined by `marks` with `method` and `settings`.
 pub fn shrink(whole: &Surface, marks: &[Mark], method: Method, settings: Settings) -> Result<Shrunk, ShrinkError> {
     settings.check(method)?;
-    let region = select(whole, marks, POINT_TOLERANCE_M)?;
+    let region = region_on(whole, &whole.positions, marks)?;
     Ok(shrink_region(&region, &whole.positions, method, settings))
 }
 
