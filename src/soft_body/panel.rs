@@ -3,7 +3,7 @@
 //! each model's report, the comparison, and saving a model.
 
 use super::deform::Variant;
-use super::plugin::{Compare, Deformer, ShrinkParams, SoftBody, SoftBodyAction, start_shrink};
+use super::plugin::{Compare, Deformer, ShrinkParams, SoftBody, SoftBodyAction, perform_on};
 use super::workbench::ShrinkReport;
 use crate::foundation::entity::SceneEntity;
 use bevy::prelude::*;
@@ -91,15 +91,16 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
     if entity_mut.get::<ShrinkParams>() != Some(&params) {
         entity_mut.insert(params.clone());
     }
-    let Some(mut body) = entity_mut.get_mut::<SoftBody>() else { return };
-    let job = action.and_then(|action| body.perform(action, &params));
-    match saved {
-        Some(Ok(path)) => body.message = Some(format!("saved {}", path.display())),
-        Some(Err(error)) => body.message = Some(format!("not saved: {error}")),
-        None => {}
+    if let Some(action) = action {
+        perform_on(&mut entity_mut, action);
     }
-    if let Some(job) = job {
-        entity_mut.insert(start_shrink(job));
+    let message = match saved {
+        Some(Ok(path)) => format!("saved {}", path.display()),
+        Some(Err(error)) => format!("not saved: {error}"),
+        None => return,
+    };
+    if let Some(mut body) = entity_mut.get_mut::<SoftBody>() {
+        body.message = Some(message);
     }
 }
 

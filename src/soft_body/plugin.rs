@@ -160,7 +160,7 @@ impl SoftBody {
     }
 
     /// Does `action` with the deformer `params` name; for [`SoftBodyAction::Apply`], returns
-    /// the shrink to start (see [`start_shrink`]).
+    /// the shrink to start (the plugin starts it on the async compute pool).
     #[must_use = "a shrink to apply is to be started"]
     pub fn perform(&mut self, action: SoftBodyAction, params: &ShrinkParams) -> Option<ShrinkJob> {
         self.message = None;
@@ -275,7 +275,7 @@ pub struct PendingShrink {
 const SHRINK_FRAMES: u32 = 2;
 
 /// Starts `job` on the async compute pool.
-pub fn start_shrink(job: ShrinkJob) -> PendingShrink {
+fn start_shrink(job: ShrinkJob) -> PendingShrink {
     let work = job.clone();
     let task = AsyncComputeTaskPool::get().spawn(async move { work.run() });
     PendingShrink { job, task: Some(task), frames_left: SHRINK_FRAMES }
@@ -283,15 +283,22 @@ pub fn start_shrink(job: ShrinkJob) -> PendingShrink {
 
 /// Performs a timeline's action on a soft body.
 fn perform_action(world: &mut World, entity: Entity, action: SoftBodyAction) {
-    let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
-    let Some(params) = entity_mut.get::<ShrinkParams>().cloned() else { return };
-    let Some(mut body) = entity_mut.get_mut::<SoftBody>() else { return };
+    if let Ok(mut entity_mut) = world.get_entity_mut(entity) {
+        perform_on(&mut entity_mut, action);
+    }
+}
+
+/// Performs `action` on the soft body `entity` with its parameters, starting the shrink it
+/// asks for; a refusal is logged and kept in the body's message.
+pub(super) fn perform_on(entity: &mut EntityWorldMut, action: SoftBodyAction) {
+    let Some(params) = entity.get::<ShrinkParams>().cloned() else { return };
+    let Some(mut body) = entity.get_mut::<SoftBody>() else { return };
     let job = body.perform(action, &params);
     if let Some(message) = &body.message {
         warn!("soft body: {message}");
     }
     if let Some(job) = job {
-        entity_mut.insert(start_shrink(job));
+        entity.insert(start_shrink(job));
     }
 }
 
