@@ -57,6 +57,7 @@
 
 pub mod app;
 pub mod controls;
+pub mod elastic;
 pub mod foundation;
 pub mod muscle;
 pub mod raster;

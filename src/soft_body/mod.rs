@@ -13,7 +13,6 @@
 //! | [`region`] | the region outlined by marks on a surface: the loop along the surface, the smaller side, cut out and put back |
 //! | [`sample`] | sample surfaces made by the project: a belly patch, a cap, a sphere, a torus, a torso |
 //! | [`pick`] | points picked on a surface by a ray through a hierarchy of its triangles |
-//! | [`xpbd`] | dynamic bodies: tetrahedral meshes, edge and volume constraints with compliance in small steps, gravity, the ground |
 //! | [`workbench`] | the workflow: marks, the region, shrinks kept as a collection of models |
 
 pub mod batch;
@@ -28,7 +27,6 @@ pub mod region;
 pub mod sample;
 pub mod surface;
 pub mod workbench;
-pub mod xpbd;
 
 pub use def::{SoftBodyDef, SoftBodyKind};
 pub use plugin::{ShrinkParams, SoftBody, SoftBodyAction, SoftBodyPlugin, SoftBodySystems};

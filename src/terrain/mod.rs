@@ -11,6 +11,7 @@
 //! | [`generate`] | the generators (fBm, diamond-square, hills) and the layered recipe |
 //! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
 //! | [`section`] | the visible section and its mesh, split by band |
+//! | [`ground`] | the visible section as a solid: height and normal under a point, on the triangles drawn |
 //! | [`chunk`] | chunks of an unbounded world: heights at world positions and levels of detail, edges shared bit for bit |
 //! | [`stream`] | which chunks to have around a camera: nearest and ahead first, unloaded beyond a larger radius |
 //! | [`bands`] | the height bands, their rule and the project's band textures |
@@ -27,6 +28,7 @@ pub mod chunk;
 pub mod def;
 pub mod experiment;
 pub mod generate;
+pub mod ground;
 pub mod heightmap;
 pub mod image_io;
 pub mod noise;
