@@ -10,6 +10,7 @@ use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
+use crate::elastic::ElasticBodyKind;
 use crate::soft_body::SoftBodyKind;
 use crate::terrain::TerrainKind;
 use crate::tree::TreeKind;
@@ -36,6 +37,7 @@ pub fn entity_kinds() -> KindRegistry {
         .with::<TerrainKind>()
         .with::<WorldKind>()
         .with::<SoftBodyKind>()
+        .with::<ElasticBodyKind>()
         .build()
 }
 

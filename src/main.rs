@@ -113,6 +113,8 @@ enum SampleName {
     Cap,
     /// A closed unit sphere.
     Sphere,
+    /// A closed cube 2 m a side with rounded edges.
+    Cushion,
     /// A closed torus 1 m across its centre line.
     Torus,
     /// An open torso 0.6 m high with a belly.
@@ -360,6 +362,7 @@ fn write_sample(name: SampleName, out: &Path, size: u32, force: bool) -> ExitCod
         SampleName::Belly => sample::Shape::Belly,
         SampleName::Cap => sample::Shape::Cap,
         SampleName::Sphere => sample::Shape::Sphere,
+        SampleName::Cushion => sample::Shape::Cushion,
         SampleName::Torus => sample::Shape::Torus,
         SampleName::Torso => sample::Shape::Torso,
     }

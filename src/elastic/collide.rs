@@ -64,11 +64,11 @@ impl Collider {
                 (depth > 0.0).then_some((depth, normal))
             }
             &Collider::Sphere { centre, radius_m } => ball(p - centre, radius_m),
-            &Collider::Box { centre, half_m } => cuboid(p - centre, half_m),
+            &Collider::Box { centre, half_m } => cuboid(p - centre, previous - centre, half_m),
             Collider::Shape { primitive, to_world, to_local } => {
                 let local = to_local.transform_point3(p);
                 let (depth, out) = match primitive {
-                    Primitive::Box => cuboid(local, Vec3::splat(0.5)),
+                    Primitive::Box => cuboid(local, to_local.transform_point3(previous), Vec3::splat(0.5)),
                     Primitive::Sphere => ball(local, 0.5),
                     Primitive::Cylinder => cylinder(local),
                     Primitive::Plane => {
@@ -98,11 +98,26 @@ fn ball(offset: Vec3, radius: f32) -> Option<(f32, Vec3)> {
     (depth > 0.0).then(|| (depth, offset.try_normalize().unwrap_or(Vec3::Y)))
 }
 
-/// Inside a box of half size `half` about the origin: out through the nearest face.
-fn cuboid(local: Vec3, half: Vec3) -> Option<(f32, Vec3)> {
+/// Inside a box of half size `half` about the origin: out through the face `previous` came
+/// in by, the one it lay farthest outside of (so that a body pressed deep into a box's top is
+/// not sent out of its side), or through the nearest face for a point that was inside already.
+fn cuboid(local: Vec3, previous: Vec3, half: Vec3) -> Option<(f32, Vec3)> {
     let room = half - local.abs();
     if room.min_element() <= 0.0 {
         return None;
+    }
+    let outside = previous.abs() - half;
+    if outside.max_element() > 0.0 {
+        let axis = if outside.x >= outside.y && outside.x >= outside.z {
+            0
+        } else if outside.y >= outside.z {
+            1
+        } else {
+            2
+        };
+        let mut out = Vec3::ZERO;
+        out[axis] = previous[axis].signum();
+        return Some((room[axis], out));
     }
     let axis = if room.x <= room.y && room.x <= room.z {
         Vec3::X

@@ -142,8 +142,10 @@ impl TetMesh {
     }
 
     /// A box of `cells` cubes of `cell_m` metres along x, y and z from `min`, each cut into six
-    /// tetrahedra around its diagonal from its lowest to its highest corner (Kuhn's split, so
-    /// that neighbouring cubes' faces match).
+    /// tetrahedra around one of its diagonals (Kuhn's split), mirrored from one cube to the
+    /// next along each axis: neighbouring cubes' faces match, and the diagonals alternate, so
+    /// that the lattice leans no way (one diagonal everywhere makes a squeezed body creep
+    /// sideways).
     pub fn lattice_box(min: Vec3, cells: [u32; 3], cell_m: f32) -> Self {
         let [nx, ny, nz] = cells.map(|n| n.max(1));
         let at = |i: u32, j: u32, k: u32| (k * (ny + 1) + j) * (nx + 1) + i;
@@ -159,7 +161,9 @@ impl TetMesh {
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
-                    let corner = |[di, dj, dk]: [u32; 3]| at(i + di, j + dj, k + dk);
+                    // Mirrored along the axes where the cube's index is odd.
+                    let flip = |d: u32, n: u32| if n % 2 == 1 { 1 - d } else { d };
+                    let corner = |[di, dj, dk]: [u32; 3]| at(i + flip(di, i), j + flip(dj, j), k + flip(dk, k));
                     // The six paths from corner 000 to 111 along one axis at a time.
                     for axes in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
                         let mut step = [0u32; 3];
@@ -334,6 +338,8 @@ pub struct World<'a> {
 struct Edge {
     ends: [u32; 2],
     rest_m: f32,
+    /// Its share of the body's volume, cubic metres.
+    share_m3: f32,
     compliance: f32,
 }
 
@@ -402,14 +408,15 @@ impl Body {
         let mut edges: Vec<Edge> = Vec::new();
         for (ends, volume) in shares {
             match edges.last_mut() {
-                Some(last) if last.ends == ends => last.compliance += volume,
-                _ => edges.push(Edge { ends, rest_m: 0.0, compliance: volume }),
+                Some(last) if last.ends == ends => last.share_m3 += volume,
+                _ => {
+                    let [a, b] = ends.map(|p| mesh.positions[p as usize]);
+                    edges.push(Edge { ends, rest_m: a.distance(b), share_m3: volume, compliance: 0.0 });
+                }
             }
         }
         for edge in &mut edges {
-            let [a, b] = edge.ends.map(|p| mesh.positions[p as usize]);
-            edge.rest_m = a.distance(b);
-            edge.compliance = material.edge_compliance(edge.rest_m, edge.compliance);
+            edge.compliance = material.edge_compliance(edge.rest_m, edge.share_m3);
         }
         let inverse_mass = mass.iter().map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 }).collect();
         Self {
@@ -426,6 +433,23 @@ impl Body {
             contacts: Vec::new(),
             recoveries: 0,
             rest: mesh,
+        }
+    }
+
+    /// The material it is made of.
+    pub fn material(&self) -> Material {
+        self.material
+    }
+
+    /// Makes the body of `material` from now on, its mass kept: the stiffness and damping
+    /// change, the density does not.
+    pub fn set_material(&mut self, material: Material) {
+        self.material = Material { density_kg_m3: self.material.density_kg_m3, ..material };
+        for edge in &mut self.edges {
+            edge.compliance = self.material.edge_compliance(edge.rest_m, edge.share_m3);
+        }
+        for cell in &mut self.cells {
+            cell.compliance = self.material.volume_compliance(cell.rest_m3);
         }
     }
 
@@ -740,15 +764,27 @@ mod tests {
         assert!(high - low > 0.02, "it swings: x from {low} to {high}");
         body.release(stem);
         let before = body.centre_of_mass().y;
-        for _ in 0..30 {
+        for _ in 0..60 {
             body.step(1.0 / 60.0, world(10));
         }
-        assert!(body.centre_of_mass().y < before - 0.5 * 9.81 * 0.25 * 0.9, "released, it falls");
+        let fell = before - body.centre_of_mass().y;
+        assert!(fell > 0.8 * 0.5 * 9.81, "released, it falls: {fell} m in a second");
     }
 
     #[test]
     fn the_lattice_fills_its_box_with_positive_tetrahedra() {
         let mesh = cube(Vec3::ZERO);
+        // Conforming: every inner triangle is shared by two tetrahedra, and the boundary's
+        // triangles are those of the box's six faces, two per cell face.
+        let mut faces: HashMap<[u32; 3], u32> = HashMap::new();
+        for &[a, b, c, d] in &mesh.tets {
+            for mut face in [[a, b, c], [a, b, d], [a, c, d], [b, c, d]] {
+                face.sort_unstable();
+                *faces.entry(face).or_default() += 1;
+            }
+        }
+        assert!(faces.values().all(|&n| n <= 2));
+        assert_eq!(faces.values().filter(|&&n| n == 1).count(), 6 * 16 * 2);
         assert_eq!((mesh.positions.len(), mesh.tets.len()), (125, 6 * 64));
         assert!((mesh.volume(&mesh.positions) - 0.2f64.powi(3)).abs() < 1e-9);
         let checked = TetMesh::new(mesh.positions.clone(), mesh.tets.clone()).expect("every tetrahedron positive");
@@ -855,10 +891,14 @@ mod tests {
         let total = |body: &Body| body.kinetic_energy() + body.elastic_energy();
         let mut energy = total(&body);
         let first = energy;
-        for _ in 0..120 {
-            body.step(1.0 / 60.0, still);
+        // Each sixth of a second holds less energy than the one before (within a step, XPBD
+        // trades kinetic and stored energy without keeping their sum exactly).
+        for _ in 0..12 {
+            for _ in 0..10 {
+                body.step(1.0 / 60.0, still);
+            }
             let now = total(&body);
-            assert!(now <= energy * 1.0001 + 1e-9, "energy rose from {energy} to {now}");
+            assert!(now < energy, "energy rose from {energy} to {now}");
             energy = now;
         }
         assert!(energy < 0.01 * first, "it settles: {energy} of {first} J");

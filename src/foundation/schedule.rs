@@ -4,7 +4,7 @@
 //! |---|---|---|
 //! | `PreUpdate` | [`ControlSystems::Script`] (before Bevy's input) | scripted timelines |
 //! | `RunFixedMainLoop` | [`ControlSystems::Input`] -> [`ControlSystems::Apply`] (before the fixed steps) | keys and mouse edit parameters; parameters are applied to components |
-//! | `FixedUpdate` | [`SimSystems::Deform`] -> [`SimSystems::Locomotion`] -> [`SimSystems::Streaming`] -> [`SimSystems::Clock`] | the simulations, one fixed step; only while a scene is live and not paused |
+//! | `FixedUpdate` | [`SimSystems::Deform`] -> [`SimSystems::Locomotion`] -> [`SimSystems::Dynamics`] -> [`SimSystems::Streaming`] -> [`SimSystems::Clock`] | the simulations, one fixed step; only while a scene is live and not paused |
 //! | `Update` | [`ControlSystems::Load`] | the scene is (re)spawned after a (re)load |
 //! | `PostUpdate` | [`WriteBackSystems`] (after the panel, before transform propagation) | each kind updates its `RasterMesh` when its shape changed, and nowhere else |
 //! | `PostUpdate` | [`RenderSystems::Collect`] -> [`RenderSystems::Raster`] -> [`RenderSystems::Present`] (after transform propagation) | meshes and transforms gathered; shadow map and frame drawn; the frame handed on |
@@ -40,6 +40,8 @@ pub enum SimSystems {
     Deform,
     /// Animals move: gait, footholds, inverse kinematics, body.
     Locomotion,
+    /// Bodies move under forces: elastic bodies sag, fall and rest on what is there.
+    Dynamics,
     /// Content that arrives over time is requested and taken in.
     Streaming,
     /// Advances [`SimClock`].
@@ -121,7 +123,7 @@ impl Plugin for SchedulePlugin {
             .configure_sets(PreUpdate, ControlSystems::Script.before(InputSystems))
             .configure_sets(
                 FixedUpdate,
-                (SimSystems::Deform, SimSystems::Locomotion, SimSystems::Streaming, SimSystems::Clock)
+                (SimSystems::Deform, SimSystems::Locomotion, SimSystems::Dynamics, SimSystems::Streaming, SimSystems::Clock)
                     .chain()
                     .run_if(SimControl::runs),
             )

@@ -171,6 +171,53 @@ pub struct SoftBodyBuilt {
     pub read: MeshReport,
 }
 
+/// Checks that an entry of kind `key` names a surface by exactly one of `mesh` and `sample`.
+pub fn check_source<F>(key: &str, mesh: &Option<F>, sample: &Option<SampleDef>, cx: &EntityContext) -> Result<(), FileError> {
+    match (mesh, sample) {
+        (Some(_), Some(_)) => Err(cx.field_error("sample", 0, "sample", "a surface from a mesh or a sample, not both")),
+        (None, None) => Err(cx.locate(
+            key,
+            cx.kind_index,
+            format!(
+                "{}: expected `mesh: FILE` (an .obj, .ply or .stl file) or `sample: {{ shape: torso }}`",
+                cx.field("mesh")
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Reads and welds the mesh file of an entry's `mesh` field, once for every entry naming it.
+pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<(TriangleMesh, MeshReport)>, FileError> {
+    let located = |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
+    let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
+    file.decoded(|_, bytes| mesh_io::parse(bytes, format).map_err(|error| error.to_string())).map_err(located)
+}
+
+/// The surface an entry names, from its mesh as read or its sample, with what welding the
+/// file found (nothing for a sample); an error is located at `mesh`.
+pub fn source_surface(
+    decoded: &Option<Arc<(TriangleMesh, MeshReport)>>,
+    sample: Option<SampleDef>,
+    cx: &BuildContext,
+) -> Result<(Surface, MeshReport), FileError> {
+    let (surface, read) = match (decoded, sample) {
+        (Some(decoded), _) => {
+            let (mesh, read) = &**decoded;
+            let movable = vec![true; mesh.positions.len()];
+            let surface = Surface::new(mesh.positions.clone(), mesh.triangles.clone(), movable)
+                .map_err(|error| cx.entity.field_error("mesh", 0, "mesh", error))?;
+            (surface, *read)
+        }
+        (None, Some(sample)) => (sample.shape.make(sample.size.0), MeshReport::default()),
+        (None, None) => return Err(cx.entity.field_error("mesh", 0, "mesh", "the mesh was not read")),
+    };
+    if surface.triangles.is_empty() {
+        return Err(cx.entity.field_error("mesh", 0, "mesh", "the mesh has no triangles"));
+    }
+    Ok((surface, read))
+}
+
 /// The `soft_body` kind.
 pub struct SoftBodyKind;
 
@@ -181,23 +228,9 @@ impl EntityKind for SoftBodyKind {
     type Plugin = SoftBodyPlugin;
 
     fn validate(def: &SoftBodyDef, cx: &EntityContext) -> Result<(), FileError> {
-        match (&def.mesh, &def.sample) {
-            (Some(_), Some(_)) => {
-                Err(cx.field_error("sample", 0, "sample", "a surface from a mesh or a sample, not both"))
-            }
-            (None, None) => Err(cx.locate(
-                Self::KEY,
-                cx.kind_index,
-                format!(
-                    "{}: expected `mesh: FILE` (an .obj, .ply or .stl file) or `sample: {{ shape: torso }}`",
-                    cx.field("mesh")
-                ),
-            )),
-            _ => {
-                let (method, settings) = def.deformer();
-                settings.check(method).map_err(|error| cx.field_error("k", 0, "k", error))
-            }
-        }
+        check_source(Self::KEY, &def.mesh, &def.sample, cx)?;
+        let (method, settings) = def.deformer();
+        settings.check(method).map_err(|error| cx.field_error("k", 0, "k", error))
     }
 
     fn references(def: &SoftBodyDef) -> Vec<String> {
@@ -205,31 +238,12 @@ impl EntityKind for SoftBodyKind {
     }
 
     fn resolve(def: &mut SoftBodyDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        let located =
-            |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
-        let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
-        let decoded = file
-            .decoded(|_, bytes| mesh_io::parse(bytes, format).map_err(|error| error.to_string()))
-            .map_err(located)?;
-        def.decoded = Some(decoded);
+        def.decoded = Some(read_mesh(file, cx)?);
         Ok(())
     }
 
     fn build(def: &SoftBodyDef, cx: &BuildContext) -> Result<Arc<SoftBodyBuilt>, FileError> {
-        let (surface, read) = match (&def.decoded, def.sample) {
-            (Some(decoded), _) => {
-                let (mesh, read) = &**decoded;
-                let movable = vec![true; mesh.positions.len()];
-                let surface = Surface::new(mesh.positions.clone(), mesh.triangles.clone(), movable)
-                    .map_err(|error| cx.entity.field_error("mesh", 0, "mesh", error))?;
-                (surface, *read)
-            }
-            (None, Some(sample)) => (sample.shape.make(sample.size.0), MeshReport::default()),
-            (None, None) => return Err(cx.entity.field_error("mesh", 0, "mesh", "the mesh was not read")),
-        };
-        if surface.triangles.is_empty() {
-            return Err(cx.entity.field_error("mesh", 0, "mesh", "the mesh has no triangles"));
-        }
+        let (surface, read) = source_surface(&def.decoded, def.sample, cx)?;
         Ok(Arc::new(SoftBodyBuilt { surface, read }))
     }
 

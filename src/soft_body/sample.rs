@@ -15,6 +15,8 @@ pub enum Shape {
     Cap,
     /// [`sphere`]: a closed unit sphere, `size` vertices around.
     Sphere,
+    /// [`cushion`]: a closed cube 2 m a side with rounded edges, `size` vertices around.
+    Cushion,
     /// [`torus`]: a closed ring 1 m across its centre line, `size` vertices around it.
     Torus,
     /// [`torso`]: an open torso 0.6 m high with a belly, `size` rings from hips to chest.
@@ -32,6 +34,7 @@ impl Shape {
             Shape::Belly => belly(size),
             Shape::Cap => sphere_cap(1.0, 60.0, size.div_ceil(2), size),
             Shape::Sphere => sphere(1.0, size.div_ceil(2), size),
+            Shape::Cushion => cushion(size.div_ceil(2), size),
             Shape::Torus => torus(0.5, 0.18, size, size.div_ceil(3).max(3)),
             Shape::Torso => torso(size, 2 * size),
         }
@@ -93,6 +96,18 @@ pub fn sphere(radius: f32, rings: u32, segments: u32) -> Surface {
     }
     let movable = vec![true; positions.len()];
     Surface::new(positions, triangles, movable).expect("a sphere of finite positions and valid indices")
+}
+
+/// A closed cube 2 m a side with rounded edges and corners (the surface `x^4 + y^4 + z^4 =
+/// 1`): the unit sphere of `rings` rings of `segments` vertices, each vertex pushed out along
+/// its direction onto that surface.
+pub fn cushion(rings: u32, segments: u32) -> Surface {
+    let mut surface = sphere(1.0, rings, segments);
+    for p in &mut surface.positions {
+        let q = *p * *p;
+        *p /= (q.x * q.x + q.y * q.y + q.z * q.z).sqrt().sqrt();
+    }
+    surface
 }
 
 /// A patch of body surface with a belly: [`patch`] with a bump 0.12 m high.

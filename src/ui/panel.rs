@@ -8,7 +8,7 @@ use super::{ViewArea, WindowTimes};
 use crate::controls::HelpVisible;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::keys::KeyMap;
-use crate::foundation::messages::{ReloadScene, SelectEntity, ViewClicked};
+use crate::foundation::messages::{DragPhase, ReloadScene, SelectEntity, ViewClicked, ViewDragged, ViewGrab};
 use crate::foundation::panel::{PanelSection, PanelSections};
 use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};
 use crate::foundation::schedule::{FixedStepTime, SimClock, SimControl};
@@ -195,14 +195,37 @@ pub(super) fn draw_ui(world: &mut World) {
             } else {
                 delta.y
             };
-            let click = response.clicked().then(|| response.interact_pointer_pos()).flatten().map(|pos| {
+            let ndc = |pos: egui::Pos2| {
                 let at = (pos - rect.min) / rect.size();
-                ViewClicked { ndc: Vec2::new(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0), aspect: rect.aspect_ratio() }
-            });
-            (ViewPointer { drag: response.dragged().then(|| response.drag_delta()), scroll, flying }, click)
+                Vec2::new(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0)
+            };
+            let aspect = rect.aspect_ratio();
+            let click = response
+                .clicked()
+                .then(|| response.interact_pointer_pos())
+                .flatten()
+                .map(|pos| ViewClicked { ndc: ndc(pos), aspect });
+            // A primary drag may grab something in the scene: it starts where the button went
+            // down, and the camera does not turn in its first frame, before the scene answers.
+            let primary = egui::PointerButton::Primary;
+            let (phase, at) = if response.drag_started_by(primary) && !flying {
+                (Some(DragPhase::Start), ui.input(|input| input.pointer.press_origin()))
+            } else if response.drag_stopped_by(primary) {
+                (Some(DragPhase::End), response.interact_pointer_pos())
+            } else if response.dragged_by(primary) {
+                (Some(DragPhase::Move), response.interact_pointer_pos())
+            } else {
+                (None, None)
+            };
+            let grab = phase.zip(at).map(|(phase, pos)| ViewDragged { phase, ndc: ndc(pos), aspect });
+            let turning = response.dragged() && phase != Some(DragPhase::Start);
+            (ViewPointer { drag: turning.then(|| response.drag_delta()), scroll, flying }, click, grab)
         })
         .inner;
-    let (view, click) = view;
+    let (mut view, click, grab) = view;
+    if world.resource::<ViewGrab>().held && !view.flying {
+        view.drag = None;
+    }
     if data.help {
         egui::Window::new("Keys").anchor(egui::Align2::LEFT_TOP, [8.0, 8.0]).show(&ctx, |ui| {
             egui::Grid::new("keys").striped(true).show(ui, |ui| {
@@ -250,6 +273,9 @@ pub(super) fn draw_ui(world: &mut World) {
     }
     if let Some(click) = click {
         world.write_message(click);
+    }
+    if let Some(grab) = grab {
+        world.write_message(grab);
     }
     state.panel = started.elapsed();
     world.insert_resource(state);
