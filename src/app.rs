@@ -2,6 +2,7 @@
 //! plugin group.
 
 use crate::controls::ControlsPlugin;
+use crate::elastic::ElasticBodyKind;
 use crate::foundation::FoundationPlugin;
 use crate::foundation::schedule::LongWorkArrival;
 use crate::muscle::MuscleKind;
@@ -10,7 +11,6 @@ use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
-use crate::elastic::ElasticBodyKind;
 use crate::soft_body::SoftBodyKind;
 use crate::terrain::TerrainKind;
 use crate::tree::TreeKind;

@@ -109,6 +109,9 @@ pub struct ElasticBodyDef {
     /// The stem it hangs from, until it is dropped.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stem: Option<StemDef>,
+    /// Its velocity at the start, metres per second; at rest by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<Point>,
     /// The side of the lattice's cubic cells, metres; a tenth of its smallest extent by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cell_m: Option<PositiveMetres>,
@@ -219,8 +222,12 @@ impl EntityKind for ElasticBodyKind {
             return Err(cx.field_error("position", 0, "position", "a body on a stem hangs below it: give no position"));
         }
         match (&stem.support, &stem.point) {
-            (Some(_), Some(_)) => Err(cx.field_error("point", 0, "stem.point", "a stem hangs from a support or a point, not both")),
-            (None, None) => Err(cx.field_error("stem", 0, "stem", "expected `support: TREE/SUPPORT` or `point: [x, y, z]`")),
+            (Some(_), Some(_)) => {
+                Err(cx.field_error("point", 0, "stem.point", "a stem hangs from a support or a point, not both"))
+            }
+            (None, None) => {
+                Err(cx.field_error("stem", 0, "stem", "expected `support: TREE/SUPPORT` or `point: [x, y, z]`"))
+            }
             (None, Some(_)) if stem.at.is_some() => {
                 Err(cx.field_error("at", 0, "stem.at", "`at` is a place along a support: give it with `support`"))
             }
@@ -255,19 +262,18 @@ impl EntityKind for ElasticBodyKind {
         }
         let cell = def.cell();
         let fill_error = |error: TetError| {
-            let key = if matches!(error, TetError::Open(_)) { "mesh" } else { "cell_m" };
+            let key = match (&error, def.sample) {
+                (TetError::Open(_), Some(_)) => "sample",
+                (TetError::Open(_), None) => "mesh",
+                _ => "cell_m",
+            };
             entity.field_error(key, 0, key, format!("the body cannot be filled with tetrahedra: {error}"))
         };
-        let (mesh, embedding) = TetMesh::fill(&surface, cell).map_err(fill_error)?;
-        if mesh.tets.len() > MAX_TETS {
-            return Err(entity.field_error(
-                "cell_m",
-                0,
-                "cell_m",
-                format!("cells of {cell} m make {} tetrahedra, more than {MAX_TETS}: take larger cells", mesh.tets.len()),
-            ));
-        }
+        let (mesh, embedding) = TetMesh::fill(&surface, cell, MAX_TETS).map_err(fill_error)?;
         let mut body = Body::new(mesh, def.material());
+        if let Some(velocity) = def.velocity {
+            body.velocities.fill(velocity.0);
+        }
         if let Some(anchor) = anchor {
             body.stems = stems(&body, anchor, cell);
         }
@@ -296,10 +302,17 @@ fn stem_anchor(stem: &StemDef, cx: &BuildContext) -> Result<Vec3, FileError> {
         tree.supports.iter().find(|s| s.name == support)
     });
     let Some(support) = found else {
-        let known: Vec<String> =
-            trees.iter().flat_map(|(name, tree)| tree.supports.iter().map(move |s| format!("{name}/{}", s.name))).collect();
+        let known: Vec<String> = trees
+            .iter()
+            .flat_map(|(name, tree)| tree.supports.iter().map(move |s| format!("{name}/{}", s.name)))
+            .collect();
         let known = if known.is_empty() { "the scene has no trees".to_string() } else { known.join(", ") };
-        return Err(cx.entity.field_error("support", 0, "stem.support", format!("no support `{label}` (supports: {known})")));
+        return Err(cx.entity.field_error(
+            "support",
+            0,
+            "stem.support",
+            format!("no support `{label}` (supports: {known})"),
+        ));
     };
     let (point, _, radius) = support.at(stem.at.map_or(0.5, |a| a.0));
     Ok(point - Vec3::Y * radius)
@@ -314,7 +327,8 @@ fn stems(body: &Body, anchor: Vec3, cell: f32) -> Vec<Attachment> {
     let reach = (0.25 * (high.x - low.x).min(high.z - low.z)).max(1.5 * cell);
     let across = |p: Vec3| Vec3::new(p.x - anchor.x, 0.0, p.z - anchor.z).length();
     let near_top = |p: usize| body.positions[p].y > top - cell - 1e-6;
-    let mut held: Vec<usize> = (0..body.positions.len()).filter(|&p| near_top(p) && across(body.positions[p]) <= reach).collect();
+    let mut held: Vec<usize> =
+        (0..body.positions.len()).filter(|&p| near_top(p) && across(body.positions[p]) <= reach).collect();
     if held.is_empty() {
         // A top off the anchor's vertical: the top particle nearest it.
         held.extend(
@@ -324,7 +338,12 @@ fn stems(body: &Body, anchor: Vec3, cell: f32) -> Vec<Attachment> {
         );
     }
     held.into_iter()
-        .map(|p| Attachment { particle: p as u32, anchor, length_m: body.positions[p].distance(anchor), compliance: 0.0 })
+        .map(|p| Attachment {
+            particle: p as u32,
+            anchor,
+            length_m: body.positions[p].distance(anchor),
+            compliance: 0.0,
+        })
         .collect()
 }
 

@@ -341,7 +341,13 @@ fn gather_solids(
         let ground = reuse(entity, changed, &|| {
             let (section, height_m) = body.shown?;
             let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
-            Some(Collider::Ground(Arc::new(Ground::of_section(&body.map, section, geometry, body.barycentre, placed.affine()))))
+            Some(Collider::Ground(Arc::new(Ground::of_section(
+                &body.map,
+                section,
+                geometry,
+                body.barycentre,
+                placed.affine(),
+            ))))
         });
         if let Some(ground) = ground {
             colliders.push(ground);
@@ -366,8 +372,12 @@ fn step_bodies(time: Res<Time>, solids: Res<Solids>, mut bodies: Query<(&mut Ela
         if elastic.paused {
             return;
         }
-        let world =
-            Surroundings { gravity: GRAVITY, colliders: &solids.colliders, friction: params.friction, substeps: params.substeps };
+        let world = Surroundings {
+            gravity: GRAVITY,
+            colliders: &solids.colliders,
+            friction: params.friction,
+            substeps: params.substeps,
+        };
         elastic.body.step(dt, world);
         elastic.solids = solids.names.clone();
         elastic.place_surface();

@@ -46,6 +46,14 @@ pub enum TetError {
     /// No cell's centre lies inside the surface: it is smaller than a cell.
     #[error("no cell of {0} m lies inside the surface: it is smaller than a cell")]
     Empty(f32),
+    /// The cells inside make more tetrahedra than allowed.
+    #[error("cells of {cell_m} m make more than {most} tetrahedra: take larger cells")]
+    TooManyTets {
+        /// The most allowed.
+        most: usize,
+        /// The cell size asked for, metres.
+        cell_m: f32,
+    },
     /// The surface has holes: it has no inside to fill.
     #[error("the surface is not closed: {0} edges border a hole")]
     Open(usize),
@@ -184,8 +192,9 @@ impl TetMesh {
     /// The cubes of `cell_m` metres of a lattice over `surface`'s box whose centres lie inside
     /// it, each cut into six tetrahedra as [`Self::lattice_box`] cuts them, and the surface
     /// embedded in them (a vertex outside every kept cube in the nearest kept cube's
-    /// tetrahedron that holds it best, its weights reaching out of it).
-    pub fn fill(surface: &Surface, cell_m: f32) -> Result<(Self, Embedding), TetError> {
+    /// tetrahedron that holds it best, its weights reaching out of it); at most `most_tets`
+    /// tetrahedra.
+    pub fn fill(surface: &Surface, cell_m: f32, most_tets: usize) -> Result<(Self, Embedding), TetError> {
         let (low, high) = surface.bounds();
         let extent = ((high - low) / cell_m).ceil();
         let cells = extent.x.max(1.0) as f64 * extent.y.max(1.0) as f64 * extent.z.max(1.0) as f64;
@@ -210,6 +219,9 @@ impl TetMesh {
                     let centre = low + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * cell_m;
                     if !inside(&bvh, centre) {
                         continue;
+                    }
+                    if tets.len() + 6 > most_tets {
+                        return Err(TetError::TooManyTets { most: most_tets, cell_m });
                     }
                     kept.insert(IVec3::new(i as i32, j as i32, k as i32), tets.len());
                     for corners in &lattice.tets[6 * cell_of(i, j, k)..6 * cell_of(i, j, k) + 6] {
@@ -797,7 +809,7 @@ mod tests {
     #[test]
     fn a_sphere_is_filled_with_cells_and_carries_its_surface() {
         let sphere = sample::sphere(0.5, 24, 48);
-        let (mesh, embedding) = TetMesh::fill(&sphere, 0.05).unwrap();
+        let (mesh, embedding) = TetMesh::fill(&sphere, 0.05, usize::MAX).unwrap();
         let volume = mesh.volume(&mesh.positions);
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.125;
         assert!((volume / exact - 1.0).abs() < 0.1, "{volume} against {exact}");
@@ -813,9 +825,10 @@ mod tests {
         // An open surface has no inside, too fine a lattice is refused, and too coarse a one
         // holds nothing.
         let cap = sample::sphere_cap(0.5, 30.0, 6, 12);
-        assert_eq!(TetMesh::fill(&cap, 0.05), Err(TetError::Open(12)));
-        assert!(matches!(TetMesh::fill(&sphere, 2.0), Err(TetError::Empty(_))));
-        assert!(matches!(TetMesh::fill(&sphere, 1e-4), Err(TetError::TooManyCells { .. })));
+        assert_eq!(TetMesh::fill(&cap, 0.05, usize::MAX), Err(TetError::Open(12)));
+        assert!(matches!(TetMesh::fill(&sphere, 2.0, usize::MAX), Err(TetError::Empty(_))));
+        assert!(matches!(TetMesh::fill(&sphere, 1e-4, usize::MAX), Err(TetError::TooManyCells { .. })));
+        assert!(matches!(TetMesh::fill(&sphere, 0.05, 1000), Err(TetError::TooManyTets { most: 1000, .. })));
     }
 
     #[test]

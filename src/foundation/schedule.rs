@@ -123,7 +123,13 @@ impl Plugin for SchedulePlugin {
             .configure_sets(PreUpdate, ControlSystems::Script.before(InputSystems))
             .configure_sets(
                 FixedUpdate,
-                (SimSystems::Deform, SimSystems::Locomotion, SimSystems::Dynamics, SimSystems::Streaming, SimSystems::Clock)
+                (
+                    SimSystems::Deform,
+                    SimSystems::Locomotion,
+                    SimSystems::Dynamics,
+                    SimSystems::Streaming,
+                    SimSystems::Clock,
+                )
                     .chain()
                     .run_if(SimControl::runs),
             )

@@ -172,7 +172,12 @@ pub struct SoftBodyBuilt {
 }
 
 /// Checks that an entry of kind `key` names a surface by exactly one of `mesh` and `sample`.
-pub fn check_source<F>(key: &str, mesh: &Option<F>, sample: &Option<SampleDef>, cx: &EntityContext) -> Result<(), FileError> {
+pub fn check_source<F>(
+    key: &str,
+    mesh: &Option<F>,
+    sample: &Option<SampleDef>,
+    cx: &EntityContext,
+) -> Result<(), FileError> {
     match (mesh, sample) {
         (Some(_), Some(_)) => Err(cx.field_error("sample", 0, "sample", "a surface from a mesh or a sample, not both")),
         (None, None) => Err(cx.locate(

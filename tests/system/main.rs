@@ -4,6 +4,7 @@
 
 mod common;
 mod controls;
+mod elastic;
 mod muscle;
 mod scene;
 mod shape;
