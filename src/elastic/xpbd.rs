@@ -465,6 +465,11 @@ impl Body {
         }
     }
 
+    /// Each particle's mass, kilograms, pinned particles' included.
+    pub fn masses(&self) -> &[f32] {
+        &self.mass
+    }
+
     /// The body's mass, kilograms.
     pub fn mass_kg(&self) -> f32 {
         self.mass.iter().sum()
