@@ -24,8 +24,13 @@ const RUNS: usize = 5;
 /// The sphere's radius, metres.
 const RADIUS_M: f32 = 0.1;
 
-const MATERIAL: Material =
-    Material { density_kg_m3: 1000.0, young_modulus_pa: 5e4, poisson_ratio: 0.3, damping_per_s: 3.0 };
+const MATERIAL: Material = Material {
+    density_kg_m3: 1000.0,
+    young_modulus_pa: 5e4,
+    poisson_ratio: 0.3,
+    damping_per_s: 3.0,
+    bending_rigidity_nm: 0.0,
+};
 
 /// A step of `dt` for one of the engines.
 trait Stepper {
@@ -82,9 +87,11 @@ impl Rapier {
             .linear_damping(MATERIAL.damping_per_s)
             .no_surface_collider()
             .can_sleep(false);
-        let mut params = rp::IntegrationParameters::default();
-        params.dt = 1.0 / 60.0;
-        params.num_solver_iterations = SUBSTEPS as usize;
+        let mut params = rp::IntegrationParameters {
+            dt: 1.0 / 60.0,
+            num_solver_iterations: SUBSTEPS as usize,
+            ..Default::default()
+        };
         params.soft_bodies.max_extra_substeps = 0;
         params.soft_bodies.resweep_strain = f32::MAX;
         let (mut bodies, mut colliders) = (rp::RigidBodySet::new(), rp::ColliderSet::new());

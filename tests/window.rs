@@ -261,3 +261,46 @@ fn a_region_clicked_on_the_torso_is_shrunk_and_compared_in_the_window() {
     let [r, g, b] = pixel(&shot, BELLY_MIDDLE);
     assert!(r > 2 * g && r > 2 * b, "the overlay tints the belly's middle, which moved most: {:?}", [r, g, b]);
 }
+
+/// Where the jelly of `scenes/softbody.yaml` rests on its crate in the window's view, and the
+/// way a drag takes it: up, then right, beyond the crate.
+const JELLY: (u32, u32) = (608, 375);
+
+#[test]
+#[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
+fn the_jelly_is_dragged_off_its_crate_with_the_mouse_and_let_fall_on_the_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/softbody.yaml");
+    let x = Xvfb::start();
+    let (app, window) = play(&x, &scene, dir.path(), 700);
+    // Let the jelly land and settle on the crate.
+    sleep(Duration::from_secs(2));
+    let (jx, jy) = JELLY;
+    x.xdotool(&["mousemove", "--window", &window, &jx.to_string(), &jy.to_string()]);
+    x.xdotool(&["mousedown", "1"]);
+    for step in 1..=15 {
+        x.xdotool(&["mousemove", "--window", &window, &jx.to_string(), &(jy - step * 12).to_string()]);
+        sleep(Duration::from_millis(30));
+    }
+    for step in 1..=20 {
+        x.xdotool(&["mousemove", "--window", &window, &(jx + step * 12).to_string(), &(jy - 180).to_string()]);
+        sleep(Duration::from_millis(30));
+    }
+    sleep(Duration::from_secs(1));
+    x.xdotool(&["mouseup", "1"]);
+    wait_for_exit(app);
+
+    let state = read(&dir.path().join("state.json"));
+    let jelly = entity(&state, "jelly");
+    let centre: Vec<f64> = jelly["centre_of_mass"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(centre[0] > 0.6, "dragged beyond the crate's right side (x 0.55): {jelly}");
+    assert!(jelly["contacts"]["floor"].as_u64().unwrap() > 0 && jelly["contacts"]["crate"].is_null(), "{jelly}");
+    assert_eq!(jelly["held"], false, "let go: {jelly}");
+    let camera = entity(&state, "camera");
+    let eye: Vec<f64> = camera["position"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let file = [0.0, 1.1, 2.2];
+    assert!(
+        eye.iter().zip(file).all(|(a, b)| (a - b).abs() < 1e-4),
+        "the camera stayed still during the drag: {eye:?}"
+    );
+}

@@ -53,6 +53,12 @@ checked_number!(
     |v| (0.0..=100.0).contains(&v)
 );
 checked_number!(
+    /// A bending rigidity in newton metres: from 0 to 1000.
+    Bending(f32),
+    "a bending rigidity from 0 to 1000 N m",
+    |v| (0.0..=1e3).contains(&v)
+);
+checked_number!(
     /// A friction coefficient: from 0 to 10.
     Friction(f32),
     "a friction coefficient from 0 to 10",
@@ -127,6 +133,9 @@ pub struct ElasticBodyDef {
     /// The share of velocity lost per second; 0.5 by default.
     #[serde(default = "default_damping")]
     pub damping_per_s: Damping,
+    /// The bending rigidity of its skin, newton metres; 0 (no skin) by default.
+    #[serde(default = "default_bending")]
+    pub bending_rigidity_nm: Bending,
     /// Friction with the solids it touches; 0.6 by default.
     #[serde(default = "default_friction")]
     pub friction: Friction,
@@ -161,6 +170,10 @@ fn default_damping() -> Damping {
     Damping(0.5)
 }
 
+fn default_bending() -> Bending {
+    Bending(0.0)
+}
+
 fn default_friction() -> Friction {
     Friction(0.6)
 }
@@ -181,6 +194,7 @@ impl ElasticBodyDef {
             young_modulus_pa: self.young_modulus_pa.0,
             poisson_ratio: self.poisson_ratio.0,
             damping_per_s: self.damping_per_s.0,
+            bending_rigidity_nm: self.bending_rigidity_nm.0,
         }
     }
 
@@ -362,6 +376,7 @@ mod tests {
             ("{sample: {shape: sphere}, density_kg_m3: -3}", "a density from 1 to 100000"),
             ("{sample: {shape: sphere}, friction: .nan}", "a friction coefficient"),
             ("{sample: {shape: sphere}, damping_per_s: 1000}", "a damping rate"),
+            ("{sample: {shape: sphere}, bending_rigidity_nm: -1}", "a bending rigidity from 0 to 1000 N m"),
             ("{sample: {shape: sphere}, stem: {support: a/b, at: 2}}", "a number from 0 to 1"),
             ("{sample: {shape: sphere}, stem: {length_m: -1}}", "a length in metres greater than 0"),
             ("{sample: {shape: sphere}, bounce: 1}", "unknown field `bounce`"),

@@ -3,7 +3,7 @@
 //! dump.
 
 use super::collide::Collider;
-use super::def::{Damping, ElasticBodyDef, ElasticBuilt, Friction, Modulus, Poisson, Substeps};
+use super::def::{Bending, Damping, ElasticBodyDef, ElasticBuilt, Friction, Modulus, Poisson, Substeps};
 use super::panel;
 use super::xpbd::{Attachment, Body, World as Surroundings};
 use crate::foundation::actions::RegisterActions;
@@ -15,13 +15,14 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
-use crate::raster::RasterMesh;
+use crate::raster::{MeshData, RasterMesh};
 use crate::shape::Shape;
 use crate::soft_body::draw::surface_mesh;
 use crate::soft_body::pick::SurfaceBvh;
 use crate::terrain::TerrainBody;
 use crate::terrain::ground::Ground;
 use crate::terrain::section::Geometry;
+use crate::tree::mesh::add_tube;
 use crate::tree::plugin::TreeBody;
 use crate::view::CameraParams;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
@@ -32,6 +33,19 @@ use std::sync::Arc;
 
 /// Gravity, metres per second squared.
 pub const GRAVITY: Vec3 = Vec3::new(0.0, -9.81, 0.0);
+
+/// The colour of a stem, sRGB channels from 0 to 1.
+const STEM_COLOR: Vec3 = Vec3::new(0.36, 0.42, 0.18);
+
+/// Sides of a stem's tube.
+const STEM_SIDES: usize = 6;
+
+/// A stem's radius as a share of its body's lattice cell.
+const STEM_RADIUS_SHARE: f32 = 0.3;
+
+/// Marks the child entity that draws a body's stems.
+#[derive(Component, Debug)]
+struct StemMesh;
 
 /// How soft the hand that drags a body is, as a natural frequency of the body's mass on it,
 /// hertz: firm enough to follow the pointer, soft enough not to tear the body.
@@ -173,10 +187,12 @@ pub struct ElasticParams {
     pub poisson_ratio: f32,
     /// The share of velocity lost per second.
     pub damping_per_s: f32,
+    /// The bending rigidity of its skin, newton metres (0: none).
+    pub bending_rigidity_nm: f32,
     /// Friction with the solids it touches.
     pub friction: f32,
-    /// Substeps a fixed step.
-    pub substeps: u32,
+    /// Substeps a fixed step (a whole number; the panel's number is rounded).
+    pub substeps: f32,
 }
 
 impl ElasticParams {
@@ -186,8 +202,9 @@ impl ElasticParams {
             young_modulus_pa: self.young_modulus_pa.clamp(1.0, 1e9),
             poisson_ratio: self.poisson_ratio.clamp(0.0, 0.5),
             damping_per_s: self.damping_per_s.clamp(0.0, 100.0),
+            bending_rigidity_nm: self.bending_rigidity_nm.clamp(0.0, 1e3),
             friction: self.friction.clamp(0.0, 10.0),
-            substeps: self.substeps.clamp(1, 100),
+            substeps: self.substeps.round().clamp(1.0, 100.0),
         }
     }
 }
@@ -210,15 +227,20 @@ pub(super) fn spawn_elastic_body(entity: &mut EntityWorldMut, def: &ElasticBodyD
         young_modulus_pa: def.young_modulus_pa.0,
         poisson_ratio: def.poisson_ratio.0,
         damping_per_s: def.damping_per_s.0,
+        bending_rigidity_nm: def.bending_rigidity_nm.0,
         friction: def.friction.0,
-        substeps: def.substeps.0,
+        substeps: def.substeps.0 as f32,
     };
-    entity.insert((
-        Transform::IDENTITY,
-        RasterMesh::colored(Arc::default(), srgb_channels(def.color.0)),
-        ElasticBody::new(built),
-        params,
-    ));
+    entity
+        .insert((
+            Transform::IDENTITY,
+            RasterMesh::colored(Arc::default(), srgb_channels(def.color.0)),
+            ElasticBody::new(built),
+            params,
+        ))
+        .with_children(|children| {
+            children.spawn((StemMesh, RasterMesh::colored(Arc::default(), STEM_COLOR)));
+        });
 }
 
 /// Brings the definition's material and stepping up to date with the live parameters.
@@ -227,8 +249,9 @@ pub(super) fn save_live(def: &mut ElasticBodyDef, entity: EntityRef) {
     def.young_modulus_pa = Modulus(params.young_modulus_pa);
     def.poisson_ratio = Poisson(params.poisson_ratio);
     def.damping_per_s = Damping(params.damping_per_s);
+    def.bending_rigidity_nm = Bending(params.bending_rigidity_nm);
     def.friction = Friction(params.friction);
-    def.substeps = Substeps(params.substeps);
+    def.substeps = Substeps(params.substeps as u32);
 }
 
 impl DumpState for ElasticBody {
@@ -376,7 +399,7 @@ fn step_bodies(time: Res<Time>, solids: Res<Solids>, mut bodies: Query<(&mut Ela
             gravity: GRAVITY,
             colliders: &solids.colliders,
             friction: params.friction,
-            substeps: params.substeps,
+            substeps: params.substeps as u32,
         };
         elastic.body.step(dt, world);
         elastic.solids = solids.names.clone();
@@ -395,6 +418,7 @@ fn apply_params(mut bodies: Query<(&mut ElasticBody, &mut ElasticParams), Change
         material.young_modulus_pa = checked.young_modulus_pa;
         material.poisson_ratio = checked.poisson_ratio;
         material.damping_per_s = checked.damping_per_s;
+        material.bending_rigidity_nm = checked.bending_rigidity_nm;
         if material != elastic.body.material() {
             elastic.body.set_material(material);
         }
@@ -476,9 +500,37 @@ fn drag_with_the_mouse(
     }
 }
 
-/// Draws each body's surface where its tetrahedra carry it.
-fn write_back_surfaces(mut bodies: Query<(&ElasticBody, &mut RasterMesh), Changed<ElasticBody>>) {
-    for (elastic, mut raster) in &mut bodies {
+/// The bodies that moved, with their surfaces' meshes and their children.
+type MovedBodies<'w, 's> = Query<
+    'w,
+    's,
+    (&'static ElasticBody, &'static mut RasterMesh, &'static Children),
+    (Changed<ElasticBody>, Without<StemMesh>),
+>;
+
+/// Draws each body's surface where its tetrahedra carry it, and its stems.
+fn write_back_surfaces(mut bodies: MovedBodies, mut stems: Query<&mut RasterMesh, With<StemMesh>>) {
+    for (elastic, mut raster, children) in &mut bodies {
         raster.mesh = Arc::new(surface_mesh(&elastic.surface, &elastic.start.triangles, Vec::new()));
+        let mut drawn = stems.iter_many_mut(children);
+        while let Some(mut stem) = drawn.fetch_next() {
+            if !(stem.mesh.positions.is_empty() && elastic.body.stems.is_empty()) {
+                stem.mesh = Arc::new(stem_mesh(&elastic.body, STEM_RADIUS_SHARE * elastic.start.cell_m));
+            }
+        }
     }
+}
+
+/// A tube of `radius_m` from each stem's anchor to the middle of the particles it holds
+/// (nothing for a body without stems).
+fn stem_mesh(body: &Body, radius_m: f32) -> MeshData {
+    let mut mesh = MeshData::default();
+    let mut stems: Vec<&Attachment> = body.stems.iter().collect();
+    while let Some(first) = stems.first().copied() {
+        let (held, rest): (Vec<&Attachment>, Vec<&Attachment>) = stems.iter().partition(|a| a.anchor == first.anchor);
+        let end = held.iter().map(|a| body.positions[a.particle as usize]).sum::<Vec3>() / held.len() as f32;
+        add_tube(&mut mesh, &[first.anchor, end], &[radius_m, radius_m], STEM_SIDES);
+        stems = rest;
+    }
+    mesh
 }

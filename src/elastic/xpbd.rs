@@ -5,13 +5,17 @@
 //!
 //! A constraint's compliance is its inverse stiffness in physical units, from the material's
 //! Young's modulus and Poisson's ratio (metres per newton for an edge): it enters each substep
-//! as `compliance / h^2`, so that a body is as stiff with five substeps as with twenty.
+//! as `compliance / h^2`, so that a body is as stiff with five substeps as with twenty. A skin
+//! that resists bending is optional: hinges between neighbouring surface triangles whose
+//! stiffness comes from a bending rigidity as in discrete shells (Grinspun et al. 2003), with
+//! the dihedral angle's gradient of Bridson, Marino and Fedkiw (2003).
 
 use super::collide::Collider;
 use crate::soft_body::pick::SurfaceBvh;
 use crate::soft_body::surface::Surface;
 use bevy::math::{IVec3, Vec3};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
+use std::f32::consts::{PI, TAU};
 
 /// Most lattice cells a surface may be filled with.
 pub const MAX_CELLS: usize = 1 << 20;
@@ -296,6 +300,9 @@ pub struct Material {
     pub poisson_ratio: f32,
     /// The share of velocity lost per second, from 0.
     pub damping_per_s: f32,
+    /// The bending rigidity of its skin, newton metres: the hinge between two neighbouring
+    /// surface triangles stores `3 B |e|^2 / (A1 + A2) (angle - rest)^2 / 2` (0: no skin).
+    pub bending_rigidity_nm: f32,
 }
 
 impl Material {
@@ -310,6 +317,12 @@ impl Material {
     fn volume_compliance(&self, volume_m3: f32) -> f32 {
         let bulk = self.young_modulus_pa / (3.0 * (1.0 - 2.0 * self.poisson_ratio).max(0.0));
         36.0 * volume_m3 / bulk
+    }
+
+    /// The compliance of a hinge's angle of `weight` (`3 |e|^2 / (A1 + A2)` at rest), per
+    /// joule; infinite without a skin.
+    fn hinge_compliance(&self, weight: f32) -> f32 {
+        1.0 / (self.bending_rigidity_nm * weight)
     }
 }
 
@@ -363,6 +376,77 @@ struct Cell {
     compliance: f32,
 }
 
+/// A hinge of the surface: two triangles sharing the edge `[p, q]`, `[p, q, r]` and `[q, p, s]`
+/// turned outwards, held at their rest dihedral angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Hinge {
+    /// `[r, s, p, q]`: the wings' tips, then the shared edge's ends.
+    corners: [u32; 4],
+    /// The angle between the triangles' normals at rest, radians (0: flat).
+    rest_rad: f32,
+    /// `3 |e|^2 / (A1 + A2)` at rest, which makes the stiffness a rigidity's.
+    weight: f32,
+    compliance: f32,
+}
+
+/// The dihedral angle of a hinge's corners `[r, s, p, q]` (radians, 0 when its triangles lie
+/// flat, positive where the surface is convex) and its gradient at each corner, or `None` for a
+/// hinge with a collapsed triangle or edge.
+fn dihedral([r, s, p, q]: [Vec3; 4]) -> Option<(f32, [Vec3; 4])> {
+    let edge = q - p;
+    let length = edge.length();
+    let (n1, n2) = ((r - p).cross(r - q), (s - q).cross(s - p));
+    let (a1, a2) = (n1.length_squared(), n2.length_squared());
+    if length < 1e-12 || a1 < 1e-24 || a2 < 1e-24 {
+        return None;
+    }
+    let angle = n1.cross(n2).dot(edge / length).atan2(n1.dot(n2));
+    let (n1, n2) = (n1 / a1, n2 / a2);
+    let along = |v: Vec3| v.dot(edge) / length;
+    let gradients =
+        [-length * n1, -length * n2, -(along(r - q) * n1 + along(s - q) * n2), along(r - p) * n1 + along(s - p) * n2];
+    Some((angle, gradients))
+}
+
+/// The hinges of the surface of the tetrahedral `mesh`: its triangles that belong to one
+/// tetrahedron each, turned outwards, taken two by two at every edge that exactly two share.
+fn hinges(mesh: &TetMesh) -> Vec<Hinge> {
+    let mut faces: BTreeMap<[u32; 3], ([u32; 3], u32)> = BTreeMap::new();
+    for &[a, b, c, d] in &mesh.tets {
+        for (face, opposite) in [([b, c, d], a), ([a, c, d], b), ([a, b, d], c), ([a, b, c], d)] {
+            let mut key = face;
+            key.sort_unstable();
+            let [x, y, z] = face.map(|p| mesh.positions[p as usize]);
+            let outwards = (y - x).cross(z - x).dot(x - mesh.positions[opposite as usize]) > 0.0;
+            let oriented = if outwards { face } else { [face[0], face[2], face[1]] };
+            faces.entry(key).or_insert((oriented, 0)).1 += 1;
+        }
+    }
+    // Each surface edge with the tips of the triangles that run along it either way.
+    let mut wings: BTreeMap<[u32; 2], Vec<(bool, u32)>> = BTreeMap::new();
+    for ([a, b, c], _) in faces.into_values().filter(|&(_, uses)| uses == 1) {
+        for [p, q, r] in [[a, b, c], [b, c, a], [c, a, b]] {
+            wings.entry([p.min(q), p.max(q)]).or_default().push((p < q, r));
+        }
+    }
+    let area = |[p, q, r]: [u32; 3]| {
+        let [x, y, z] = [p, q, r].map(|i| mesh.positions[i as usize]);
+        (y - x).cross(z - x).length() / 2.0
+    };
+    wings
+        .into_iter()
+        .filter_map(|([low, high], tips)| {
+            let (&[(true, r), (false, s)] | &[(false, s), (true, r)]) = tips.as_slice() else { return None };
+            let (p, q) = (low, high);
+            let corners = [r, s, p, q];
+            let (rest_rad, _) = dihedral(corners.map(|i| mesh.positions[i as usize]))?;
+            let length = mesh.positions[p as usize].distance(mesh.positions[q as usize]);
+            let weight = 3.0 * length * length / (area([p, q, r]) + area([q, p, s]));
+            Some(Hinge { corners, rest_rad, weight, compliance: f32::INFINITY })
+        })
+        .collect()
+}
+
 /// A body being simulated: its particles' positions and velocities, their inverse masses
 /// (0 for a pinned particle), its constraints at rest, and what holds it.
 #[derive(Debug, Clone, PartialEq)]
@@ -384,6 +468,7 @@ pub struct Body {
     material: Material,
     edges: Vec<Edge>,
     cells: Vec<Cell>,
+    hinges: Vec<Hinge>,
     previous: Vec<Vec3>,
     /// Particles in contact with each collider at the last substep.
     contacts: Vec<u32>,
@@ -431,6 +516,10 @@ impl Body {
             edge.compliance = material.edge_compliance(edge.rest_m, edge.share_m3);
         }
         let inverse_mass = mass.iter().map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 }).collect();
+        let mut hinges = hinges(&mesh);
+        for hinge in &mut hinges {
+            hinge.compliance = material.hinge_compliance(hinge.weight);
+        }
         Self {
             positions: mesh.positions.clone(),
             velocities: vec![Vec3::ZERO; mesh.positions.len()],
@@ -442,6 +531,7 @@ impl Body {
             material,
             edges,
             cells,
+            hinges,
             contacts: Vec::new(),
             recoveries: 0,
             rest: mesh,
@@ -462,6 +552,9 @@ impl Body {
         }
         for cell in &mut self.cells {
             cell.compliance = self.material.volume_compliance(cell.rest_m3);
+        }
+        for hinge in &mut self.hinges {
+            hinge.compliance = self.material.hinge_compliance(hinge.weight);
         }
     }
 
@@ -532,6 +625,9 @@ impl Body {
         let h2 = h * h;
         self.project_edges(h2);
         self.project_volumes(h2);
+        if self.material.bending_rigidity_nm > 0.0 {
+            self.project_hinges(h2);
+        }
         for attachment in self.stems.iter().chain(&self.grab) {
             hold(&mut self.positions, &self.inverse_mass, attachment, h2);
         }
@@ -611,6 +707,24 @@ impl Body {
         }
     }
 
+    /// Each hinge of the skin towards its rest angle.
+    fn project_hinges(&mut self, h2: f32) {
+        for hinge in &self.hinges {
+            let corners = hinge.corners.map(|p| p as usize);
+            let Some((angle, gradients)) = dihedral(corners.map(|p| self.positions[p])) else { continue };
+            let w: f32 = corners.iter().zip(&gradients).map(|(&p, g)| self.inverse_mass[p] * g.length_squared()).sum();
+            if w == 0.0 {
+                continue;
+            }
+            // The change of angle the short way round.
+            let bend = (angle - hinge.rest_rad + PI).rem_euclid(TAU) - PI;
+            let lambda = -bend / (w + hinge.compliance / h2);
+            for (&p, g) in corners.iter().zip(&gradients) {
+                self.positions[p] += *g * (lambda * self.inverse_mass[p]);
+            }
+        }
+    }
+
     /// The centre of mass, metres.
     pub fn centre_of_mass(&self) -> Vec3 {
         let total: f32 = self.mass.iter().sum();
@@ -651,7 +765,15 @@ impl Body {
                 )
             })
             .sum();
-        edges + cells
+        let hinges: f64 = self
+            .hinges
+            .iter()
+            .map(|hinge| {
+                let angle = dihedral(hinge.corners.map(|p| self.positions[p as usize])).map_or(0.0, |(a, _)| a);
+                stored((angle - hinge.rest_rad + PI).rem_euclid(TAU) - PI, hinge.compliance)
+            })
+            .sum();
+        edges + cells + hinges
     }
 
     /// The body's volume now over its volume at rest.
@@ -717,8 +839,13 @@ mod tests {
 
     use crate::soft_body::sample;
 
-    const JELLY: Material =
-        Material { density_kg_m3: 1000.0, young_modulus_pa: 2e4, poisson_ratio: 0.3, damping_per_s: 0.0 };
+    const JELLY: Material = Material {
+        density_kg_m3: 1000.0,
+        young_modulus_pa: 2e4,
+        poisson_ratio: 0.3,
+        damping_per_s: 0.0,
+        bending_rigidity_nm: 0.0,
+    };
 
     fn world(substeps: u32) -> World<'static> {
         World { gravity: Vec3::new(0.0, -9.81, 0.0), colliders: &[], friction: 0.5, substeps }
@@ -979,6 +1106,64 @@ mod tests {
         let (low, high) = xs.iter().fold((f32::MAX, f32::MIN), |(l, h), &x| (l.min(x), h.max(x)));
         assert!(high - low > 0.05, "it swings: x from {low} to {high}");
         assert!(body.centre_of_mass().y < anchor.y, "below its anchor");
+    }
+
+    #[test]
+    fn a_hinge_s_angle_has_the_gradient_its_differences_give() {
+        let corners =
+            [Vec3::new(0.1, 0.9, -0.3), Vec3::new(0.2, -0.4, 0.8), Vec3::new(-0.5, 0.1, 0.0), Vec3::new(0.7, 0.2, 0.1)];
+        let (_, gradients) = dihedral(corners).unwrap();
+        let step = 1e-3;
+        for (corner, gradient) in gradients.iter().enumerate() {
+            for axis in 0..3 {
+                let moved = |by: f32| {
+                    let mut c = corners;
+                    c[corner][axis] += by;
+                    dihedral(c).unwrap().0
+                };
+                let difference = (moved(step) - moved(-step)) / (2.0 * step);
+                assert!(
+                    (difference - gradient[axis]).abs() < 2e-3,
+                    "corner {corner} axis {axis}: {difference} against {}",
+                    gradient[axis]
+                );
+            }
+        }
+        assert!(dihedral([Vec3::ZERO, Vec3::Y, Vec3::ZERO, Vec3::ZERO]).is_none(), "a collapsed hinge has no angle");
+    }
+
+    #[test]
+    fn a_cube_s_skin_folds_at_its_edges_alone() {
+        let hinges = hinges(&cube(Vec3::ZERO));
+        // 192 surface triangles of a closed surface: 288 edges, each a hinge.
+        assert_eq!(hinges.len(), 288);
+        let folded: Vec<f32> = hinges.iter().map(|h| h.rest_rad).filter(|a| a.abs() > 1e-4).collect();
+        assert_eq!(folded.len(), 12 * 4, "the cube's twelve edges, four hinges each");
+        assert!(folded.iter().all(|a| (a - std::f32::consts::FRAC_PI_2).abs() < 1e-4), "convex: {folded:?}");
+    }
+
+    /// The height of the free end of a slab 0.4 m long held at one end, after settling.
+    fn droop(bending_rigidity_nm: f32) -> f32 {
+        let material = Material { young_modulus_pa: 3e4, damping_per_s: 5.0, bending_rigidity_nm, ..JELLY };
+        let mut body = Body::new(TetMesh::lattice_box(Vec3::ZERO, [8, 1, 2], 0.05), material);
+        for p in 0..body.positions.len() {
+            if body.positions[p].x < 0.051 {
+                body.pin(p);
+            }
+        }
+        for _ in 0..240 {
+            body.step(1.0 / 60.0, world(10));
+        }
+        assert!(body.positions.iter().all(|p| p.is_finite()));
+        let end: Vec<usize> = (0..body.positions.len()).filter(|&p| body.rest.positions[p].x > 0.399).collect();
+        end.iter().map(|&p| body.positions[p].y).sum::<f32>() / end.len() as f32
+    }
+
+    #[test]
+    fn a_skin_that_resists_bending_holds_a_slab_up() {
+        let (bare, thin, thick) = (droop(0.0), droop(0.1), droop(1.0));
+        assert!(bare < -0.3, "without a skin the soft slab hangs down: its end at {bare} m");
+        assert!(thin > bare && thick > thin + 0.1, "a firmer skin holds it higher: {bare}, {thin}, {thick} m");
     }
 
     #[test]
