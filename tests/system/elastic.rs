@@ -70,12 +70,16 @@ fn a_hanging_plum_swings_then_falls_onto_the_terrain_when_the_timeline_drops_it(
     let timeline = canopy::controls::timeline::Timeline::load(&path("timelines/fruit_drop.yaml")).unwrap();
     timeline.check(app.world_mut()).unwrap();
     app.insert_resource(timeline);
-    let (mut xs, mut fell_from) = (Vec::new(), None);
+    let (mut xs, mut fell_from, mut resting) = (Vec::new(), None, Vec::new());
     for step in 0..600 {
         app.update();
         let world = app.world_mut();
         let depth = deepest(world);
         assert!(depth < 1e-3, "step {step}: a particle {depth} m inside a solid");
+        if step >= 300 {
+            let fallen = &body(world, "fallen").body;
+            resting.push((fallen.lowest().y, fallen.centre_of_mass()));
+        }
         let plum = &body(world, "plum_1").body;
         if step < 115 {
             assert!(!plum.stems.is_empty(), "on its stem until the timeline drops it");
@@ -96,6 +100,14 @@ fn a_hanging_plum_swings_then_falls_onto_the_terrain_when_the_timeline_drops_it(
         names.iter().zip(plum.body.contacts()).filter(|(_, n)| **n > 0).map(|(n, _)| n).collect();
     assert!(touching.contains(&&"meadow".to_string()), "it lies on the terrain: {touching:?}");
     assert!(plum.body.centre_of_mass().y < fell_from.unwrap() - 0.8, "it fell");
+    // The plum that fell at the start lies on the terrain for the last five seconds, rocking
+    // in its hollow (a ball rolls) but neither sinking nor bouncing.
+    let fallen = body(world, "fallen");
+    let on_meadow = names.iter().zip(fallen.body.contacts()).any(|(n, &c)| n == "meadow" && c > 0);
+    assert!(on_meadow, "the fallen plum touches the terrain");
+    let (low, high) = resting.iter().fold((f32::MAX, f32::MIN), |(l, h), (y, _)| (l.min(*y), h.max(*y)));
+    let wandered = resting.iter().map(|(_, c)| c.distance(resting[0].1)).fold(0.0f32, f32::max);
+    assert!(high - low < 1e-3 && wandered < 0.1, "it stays in its hollow: lowest {low} to {high}, {wandered} m away");
     // The third was pulled aside by a hand, then let go and dropped.
     let third = body(world, "plum_3");
     assert!(third.dropped && third.body.grab.is_empty());
