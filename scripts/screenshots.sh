@@ -20,6 +20,13 @@ cargo run --quiet -- run scenes/torso.yaml --input timelines/torso_shrink.yaml -
     --size 640x360 --screenshot docs/images/torso_shrunk.png
 echo "docs/images/torso_marked.png docs/images/torso_shrunk.png"
 
+# Elastic bodies at rest, and the plums after the timeline has dropped them.
+cargo run --quiet -- run scenes/softbody.yaml --seconds 3 --size 640x360 --screenshot docs/images/softbody.png
+cargo run --quiet -- run scenes/fruit.yaml --seconds 1.5 --size 640x360 --screenshot docs/images/fruit.png
+cargo run --quiet -- run scenes/fruit.yaml --input timelines/fruit_drop.yaml --seconds 6 \
+    --size 640x360 --screenshot docs/images/fruit_dropped.png
+echo "docs/images/softbody.png docs/images/fruit.png docs/images/fruit_dropped.png"
+
 # The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then
     xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 120
