@@ -395,6 +395,13 @@ struct Hinge {
     compliance: f32,
 }
 
+impl Hinge {
+    /// How far `angle` is from the rest angle, radians, the short way round.
+    fn bend(&self, angle: f32) -> f32 {
+        (angle - self.rest_rad + PI).rem_euclid(TAU) - PI
+    }
+}
+
 /// The dihedral angle of a hinge's corners `[r, s, p, q]` (radians, 0 when its triangles lie
 /// flat, positive where the surface is convex) and its gradient at each corner, or `None` for a
 /// hinge with a collapsed triangle or edge.
@@ -415,8 +422,9 @@ fn dihedral([r, s, p, q]: [Vec3; 4]) -> Option<(f32, [Vec3; 4])> {
 }
 
 /// The hinges of the surface of the tetrahedral `mesh`: its triangles that belong to one
-/// tetrahedron each, turned outwards, taken two by two at every edge that exactly two share.
-fn hinges(mesh: &TetMesh) -> Vec<Hinge> {
+/// tetrahedron each, turned outwards, taken two by two at every edge that exactly two share,
+/// with the compliance `material` gives them.
+fn hinges(mesh: &TetMesh, material: &Material) -> Vec<Hinge> {
     let mut faces: BTreeMap<[u32; 3], ([u32; 3], u32)> = BTreeMap::new();
     for &[a, b, c, d] in &mesh.tets {
         for (face, opposite) in [([b, c, d], a), ([a, c, d], b), ([a, b, d], c), ([a, b, c], d)] {
@@ -448,7 +456,7 @@ fn hinges(mesh: &TetMesh) -> Vec<Hinge> {
             let (rest_rad, _) = dihedral(corners.map(|i| mesh.positions[i as usize]))?;
             let length = mesh.positions[p as usize].distance(mesh.positions[q as usize]);
             let weight = 3.0 * length * length / (area([p, q, r]) + area([q, p, s]));
-            Some(Hinge { corners, rest_rad, weight, compliance: f32::INFINITY })
+            Some(Hinge { corners, rest_rad, weight, compliance: material.hinge_compliance(weight) })
         })
         .collect()
 }
@@ -456,7 +464,7 @@ fn hinges(mesh: &TetMesh) -> Vec<Hinge> {
 /// Orders `constraints` by a greedy colouring of the particles they move (each takes the first
 /// colour none of its particles has yet): within a colour no two share a particle, so that
 /// one projection need not wait for the one before.
-fn colour_order<T>(constraints: &mut Vec<T>, particles: impl Fn(&T) -> Vec<u32>, count: usize) {
+fn colour_order<T, const N: usize>(constraints: &mut Vec<T>, particles: impl Fn(&T) -> [u32; N], count: usize) {
     // The colours each particle's constraints have taken, as bits.
     let mut taken = vec![0u64; count];
     let mut coloured: Vec<(u32, T)> = constraints
@@ -509,7 +517,7 @@ impl Body {
     /// tetrahedra's volumes times the density, a quarter of each at each corner.
     pub fn new(mesh: TetMesh, material: Material) -> Self {
         let mut mass = vec![0.0f32; mesh.positions.len()];
-        let cells: Vec<Cell> = mesh
+        let mut cells: Vec<Cell> = mesh
             .tets
             .iter()
             .map(|&corners| {
@@ -543,14 +551,10 @@ impl Body {
         for edge in &mut edges {
             edge.compliance = material.edge_compliance(edge.rest_m, edge.share_m3);
         }
-        let mut cells = cells;
-        colour_order(&mut edges, |edge| edge.ends.to_vec(), mesh.positions.len());
-        colour_order(&mut cells, |cell| cell.corners.to_vec(), mesh.positions.len());
+        colour_order(&mut edges, |edge| edge.ends, mesh.positions.len());
+        colour_order(&mut cells, |cell| cell.corners, mesh.positions.len());
         let inverse_mass = mass.iter().map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 }).collect();
-        let mut hinges = hinges(&mesh);
-        for hinge in &mut hinges {
-            hinge.compliance = material.hinge_compliance(hinge.weight);
-        }
+        let hinges = hinges(&mesh, &material);
         Self {
             positions: mesh.positions.clone(),
             velocities: vec![Vec3::ZERO; mesh.positions.len()],
@@ -763,9 +767,7 @@ impl Body {
             if w == 0.0 {
                 continue;
             }
-            // The change of angle the short way round.
-            let bend = (angle - hinge.rest_rad + PI).rem_euclid(TAU) - PI;
-            let lambda = -bend / (w + hinge.compliance / h2);
+            let lambda = -hinge.bend(angle) / (w + hinge.compliance / h2);
             for (&p, g) in corners.iter().zip(&gradients) {
                 self.positions[p] += *g * (lambda * self.inverse_mass[p]);
             }
@@ -817,7 +819,7 @@ impl Body {
             .iter()
             .map(|hinge| {
                 let angle = dihedral(hinge.corners.map(|p| self.positions[p as usize])).map_or(0.0, |(a, _)| a);
-                stored((angle - hinge.rest_rad + PI).rem_euclid(TAU) - PI, hinge.compliance)
+                stored(hinge.bend(angle), hinge.compliance)
             })
             .sum();
         edges + cells + hinges
@@ -981,7 +983,7 @@ mod tests {
         edges.sort_unstable();
         edges.dedup();
         let mut ordered = edges.clone();
-        colour_order(&mut ordered, |e| e.to_vec(), mesh.positions.len());
+        colour_order(&mut ordered, |e| *e, mesh.positions.len());
         let mut sorted = ordered.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, edges, "the same constraints");
@@ -1249,7 +1251,7 @@ mod tests {
 
     #[test]
     fn a_cube_s_skin_folds_at_its_edges_alone() {
-        let hinges = hinges(&cube(Vec3::ZERO));
+        let hinges = hinges(&cube(Vec3::ZERO), &JELLY);
         // 192 surface triangles of a closed surface: 288 edges, each a hinge.
         assert_eq!(hinges.len(), 288);
         let folded: Vec<f32> = hinges.iter().map(|h| h.rest_rad).filter(|a| a.abs() > 1e-4).collect();
