@@ -1,0 +1,31 @@
+//! Canopy's marker tracking, pure and independent of Bevy's world: the camera images' side of
+//! augmented reality.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`gray`] | grey images, made from RGB(A) pixels, sampled between pixel centres |
+//! | [`contour`] | adaptive threshold, dark regions' outer boundaries, polygon simplification |
+//! | [`dictionary`] | OpenCV's predefined ArUco and AprilTag dictionaries and matching with error correction |
+//! | [`detect`] | the marker detector: candidates, cells, ids, sub-pixel corners |
+//! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
+//! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
+//! | [`synth`] | printable markers and synthetic camera frames with known poses |
+//! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
+//!
+//! Pixel coordinates are OpenCV's throughout: pixel `(x, y)`'s centre is at `(x, y)`.
+
+pub mod camera;
+pub mod contour;
+pub mod detect;
+mod dictionaries;
+pub mod dictionary;
+pub mod evaluate;
+pub mod gray;
+pub mod pose;
+pub mod synth;
+
+pub use camera::{Distortion, Intrinsics};
+pub use detect::{Marker, Scratch, Settings, detect};
+pub use dictionary::Dictionary;
+pub use gray::Gray;
+pub use pose::{Pose, PoseEstimate};
