@@ -18,7 +18,7 @@ use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, RenderSystems};
 use crate::foundation::values::wrap_degrees;
-use crate::raster::{Camera, Light, RenderView};
+use crate::raster::{Camera, Lens, Light, RenderView};
 use crate::scene::schema::{Background, CameraDef, LightDef};
 use bevy::color::ColorToPacked;
 use bevy::prelude::*;
@@ -119,7 +119,7 @@ impl CameraParams {
         Camera {
             eye: self.eye(),
             target: self.target,
-            fov_y: self.fov_deg.clamp(1.0, 179.0).to_radians(),
+            lens: Lens::FieldOfView(self.fov_deg.clamp(1.0, 179.0).to_radians()),
             near,
             far: self.far.max(near * 2.0),
         }

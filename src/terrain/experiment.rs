@@ -10,7 +10,7 @@
 use super::bands::{Band, BandRule, band_texture};
 use super::generate::{PerlinLayer, perlin};
 use super::section::{Geometry, Section, mesh_section};
-use crate::raster::{Camera, Frame, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
+use crate::raster::{Camera, Frame, Lens, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
 use bevy::math::{Mat4, UVec2, Vec3};
 use bevy::tasks::TaskPool;
 use std::sync::Arc;
@@ -70,7 +70,7 @@ pub fn run(sizes: &[u32], runs: usize, frame: UVec2, pool: &TaskPool) -> Vec<Tim
             let camera = Camera {
                 eye: Vec3::new(0.0, 0.8, 0.9),
                 target: Vec3::ZERO,
-                fov_y: 90f32.to_radians(),
+                lens: Lens::FieldOfView(90f32.to_radians()),
                 near: 0.05,
                 far: 10.0,
             };

@@ -6,7 +6,7 @@
 //! `l = normalize(0.4, 0.8, 0.3)`, drawn at 1280 x 720 with a 60 degree vertical field of view,
 //! near 0.1 and far 10, depth-tested with back faces culled.
 
-use crate::{Camera, Frame, Instance, Light, Material, MeshData, RenderSettings};
+use crate::{Camera, Frame, Lens, Instance, Light, Material, MeshData, RenderSettings};
 use bevy_math::{Mat4, Vec3};
 use std::sync::Arc;
 
@@ -39,7 +39,7 @@ pub struct StandardCamera {
 impl StandardCamera {
     /// The rasterizer camera for this viewpoint.
     pub fn camera(&self) -> Camera {
-        Camera { eye: self.eye, target: self.target, fov_y: 60f32.to_radians(), near: 0.1, far: 10.0 }
+        Camera { eye: self.eye, target: self.target, lens: Lens::FieldOfView(60f32.to_radians()), near: 0.1, far: 10.0 }
     }
 }
 

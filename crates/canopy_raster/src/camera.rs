@@ -3,7 +3,7 @@
 use bevy_math::{Mat4, Vec2, Vec3, Vec4};
 
 /// A perspective camera looking from `eye` towards `target`, with +y up (or +z when looking
-/// straight up or down).
+/// straight up or down) unless its lens says otherwise.
 ///
 /// Its projection maps the view volume to normalized device depth in `[0, 1]`: 0 at `near`,
 /// 1 at `far` (see [`FAR_DEPTH`](super::framebuffer::FAR_DEPTH)).
@@ -13,12 +13,41 @@ pub struct Camera {
     pub eye: Vec3,
     /// The point looked at, in world units.
     pub target: Vec3,
-    /// Vertical field of view in radians.
-    pub fov_y: f32,
+    /// How view directions map to the image.
+    pub lens: Lens,
     /// Distance to the near clipping plane, > 0.
     pub near: f32,
     /// Distance to the far clipping plane, > `near`.
     pub far: f32,
+}
+
+/// How a camera maps view directions to the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lens {
+    /// A symmetric perspective with this vertical field of view in radians; the image's
+    /// width over height sets the horizontal one.
+    FieldOfView(f32),
+    /// A calibrated pinhole camera, so that a render lines up with a photograph taken by it.
+    Pinhole(Pinhole),
+}
+
+/// A pinhole camera as computer vision calibrates one (OpenCV's camera matrix without
+/// distortion), in shares of the image so that it fits any resolution of the same shape: a
+/// point at `(X, Y, Z)` in the camera's frame (x right, y down, z along the view) is seen at
+/// `(focal.x X / Z + centre.x, focal.y Y / Z + centre.y)` times the image's width and height,
+/// from the image's top-left corner.
+///
+/// From a calibration in pixels of a `W x H` image: `focal = (fx / W, fy / H)` and
+/// `centre = ((cx + 0.5) / W, (cy + 0.5) / H)` (OpenCV puts pixel centres at whole numbers).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pinhole {
+    /// Focal lengths over the image's width and height.
+    pub focal: Vec2,
+    /// The principal point as a share of the image's width and height.
+    pub centre: Vec2,
+    /// The world direction the image's up points along (the camera's -y), perpendicular to
+    /// the view direction: the roll a look-at camera cannot express.
+    pub up: Vec3,
 }
 
 impl Camera {
@@ -29,15 +58,32 @@ impl Camera {
             forward = Vec3::NEG_Z;
         }
         let forward = forward.normalize();
-        let up = if forward.y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
+        let up = match self.lens {
+            Lens::Pinhole(pinhole) => pinhole.up,
+            Lens::FieldOfView(_) if forward.y.abs() > 0.999 => Vec3::Z,
+            Lens::FieldOfView(_) => Vec3::Y,
+        };
         Mat4::look_at_rh(self.eye, self.eye + forward, up)
     }
 
-    /// The view-to-clip matrix for an image of the given width / height ratio.
+    /// The view-to-clip matrix for an image of the given width / height ratio (a pinhole's
+    /// calibration fixes its own).
     pub fn projection(&self, aspect: f32) -> Mat4 {
-        Mat4::perspective_rh(self.fov_y, aspect, self.near, self.far)
+        match self.lens {
+            Lens::FieldOfView(fov_y) => Mat4::perspective_rh(fov_y, aspect, self.near, self.far),
+            Lens::Pinhole(Pinhole { focal, centre, .. }) => {
+                // x_ndc = 2 (focal.x x / -z + centre.x) - 1, y_ndc = 1 - 2 (focal.y -y / -z + centre.y),
+                // both times w = -z; depth as `perspective_rh`'s.
+                let r = self.far / (self.near - self.far);
+                Mat4::from_cols(
+                    Vec4::new(2.0 * focal.x, 0.0, 0.0, 0.0),
+                    Vec4::new(0.0, 2.0 * focal.y, 0.0, 0.0),
+                    Vec4::new(1.0 - 2.0 * centre.x, 2.0 * centre.y - 1.0, r, -1.0),
+                    Vec4::new(0.0, 0.0, r * self.near, 0.0),
+                )
+            }
+        }
     }
-
     /// The world-to-clip matrix.
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
         self.projection(aspect) * self.view()
@@ -108,8 +154,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_pinhole_sees_points_where_its_calibration_puts_them() {
+        // A 640 x 480 calibration: fx 500, fy 520, principal point (300.5, 250).
+        let (fx, fy, cx, cy) = (500.0, 520.0, 300.5, 250.0);
+        let pinhole = Pinhole {
+            focal: Vec2::new(fx / 640.0, fy / 480.0),
+            centre: Vec2::new((cx + 0.5) / 640.0, (cy + 0.5) / 480.0),
+            up: Vec3::Y,
+        };
+        let camera = Camera { eye: Vec3::ZERO, target: Vec3::NEG_Z, lens: Lens::Pinhole(pinhole), near: 0.1, far: 50.0 };
+        // (0.4, -0.3, 2) in the computer-vision frame is (0.4, 0.3, -2) in the view frame.
+        let ndc = camera.view_projection(4.0 / 3.0).project_point3(Vec3::new(0.4, 0.3, -2.0));
+        let pixel = Vec2::new((ndc.x + 1.0) * 0.5 * 640.0 - 0.5, (1.0 - ndc.y) * 0.5 * 480.0 - 0.5);
+        let expected = Vec2::new(fx * 0.4 / 2.0 + cx, fy * -0.3 / 2.0 + cy);
+        assert!(pixel.distance(expected) < 1e-3, "{pixel} for {expected}");
+        assert!(ndc.z > 0.0 && ndc.z < 1.0);
+        // The up vector rolls the image: with +x up, a point to the right of centre (+x)
+        // shows above it.
+        let rolled = Camera { lens: Lens::Pinhole(Pinhole { up: Vec3::X, ..pinhole }), ..camera };
+        let ndc = rolled.view_projection(4.0 / 3.0).project_point3(Vec3::new(0.4, 0.0, -2.0));
+        assert!(ndc.y > 0.3 && ndc.x.abs() < 0.1, "{ndc}");
+    }
+
+    #[test]
     fn near_and_far_map_to_zero_and_one() {
-        let camera = Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.5, far: 20.0 };
+        let camera = Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.5, far: 20.0 };
         let clip = camera.view_projection(1.5);
         let near = clip.project_point3(Vec3::new(0.0, 0.0, 4.5));
         let far = clip.project_point3(Vec3::new(0.0, 0.0, -15.0));
@@ -118,7 +187,7 @@ mod tests {
 
     #[test]
     fn the_ray_through_a_projected_point_passes_through_it() {
-        let camera = Camera { eye: Vec3::new(1.0, 2.0, 5.0), target: Vec3::ZERO, fov_y: 0.9, near: 0.1, far: 50.0 };
+        let camera = Camera { eye: Vec3::new(1.0, 2.0, 5.0), target: Vec3::ZERO, lens: Lens::FieldOfView(0.9), near: 0.1, far: 50.0 };
         let point = Vec3::new(0.7, -0.4, 1.3);
         let ndc = camera.view_projection(1.6).project_point3(point);
         let (origin, direction) = camera.ray(ndc.truncate(), 1.6);
@@ -129,7 +198,7 @@ mod tests {
 
     #[test]
     fn looking_straight_down_is_well_defined() {
-        let camera = Camera { eye: Vec3::new(0.0, 10.0, 0.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 };
+        let camera = Camera { eye: Vec3::new(0.0, 10.0, 0.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
         let centre = camera.view_projection(1.0).project_point3(Vec3::ZERO);
         assert!(centre.is_finite() && centre.x.abs() < 1e-5 && centre.y.abs() < 1e-5);
     }

@@ -50,7 +50,7 @@ pub mod texture;
 mod vertex;
 mod work_queue;
 
-pub use camera::{Camera, Light};
+pub use camera::{Camera, Lens, Light, Pinhole};
 pub use frame::{Fog, Frame, Instance, RenderSettings, RenderStats};
 pub use framebuffer::Framebuffer;
 pub use mesh::{MeshData, Morph};

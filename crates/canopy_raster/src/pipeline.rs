@@ -188,14 +188,14 @@ impl Renderer {
 mod tests {
     use super::*;
     use crate::clip::outside;
-    use crate::{Camera, Instance, Light, Material, MeshData, Morph, RenderSettings};
+    use crate::{Camera, Instance, Lens, Light, Material, MeshData, Morph, RenderSettings};
     use std::f32::consts::FRAC_PI_2;
     use std::sync::Arc;
 
     const SKY: [u8; 4] = [10, 20, 30, 255];
 
     fn camera_at(eye: Vec3, target: Vec3) -> Camera {
-        Camera { eye, target, fov_y: FRAC_PI_2, near: 0.1, far: 100.0 }
+        Camera { eye, target, lens: Lens::FieldOfView(FRAC_PI_2), near: 0.1, far: 100.0 }
     }
 
     fn full_light() -> Light {

@@ -442,10 +442,11 @@ fn light_bounds(view: Mat4, points: &[Vec3]) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Lens;
     use proptest::prelude::*;
 
     fn overhead() -> (Camera, Light) {
-        let camera = Camera { eye: Vec3::new(0.0, 3.0, 4.0), target: Vec3::ZERO, fov_y: 1.0, near: 0.1, far: 100.0 };
+        let camera = Camera { eye: Vec3::new(0.0, 3.0, 4.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
         let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 1.0, fill: 0.0, ambient: 0.2 };
         (camera, light)
     }
@@ -484,7 +485,7 @@ mod tests {
         let camera = Camera {
             eye: Vec3::new(0.0, 2.0, 0.0),
             target: Vec3::new(0.0, 0.0, -20.0),
-            fov_y: 1.0,
+            lens: Lens::FieldOfView(1.0),
             near: 0.1,
             far: 1000.0,
         };

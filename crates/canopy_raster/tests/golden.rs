@@ -9,7 +9,7 @@ use bevy_math::{Mat4, Vec2, Vec3};
 use bevy_tasks::TaskPool;
 use canopy_raster::benchmark_scene as standard;
 use canopy_raster::{
-    Address, Camera, Filter, Fog, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
+    Address, Camera, Filter, Lens, Fog, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
     Renderer, Sampler, Shading, Texture,
 };
 use std::f32::consts::FRAC_PI_2;
@@ -110,7 +110,7 @@ fn steep_plane() -> (Camera, Instance) {
         morph: None,
     };
     let camera =
-        Camera { eye: Vec3::new(0.0, 1.0, 1.5), target: Vec3::new(0.0, 0.0, -3.0), fov_y: 1.0, near: 0.1, far: 100.0 };
+        Camera { eye: Vec3::new(0.0, 1.0, 1.5), target: Vec3::new(0.0, 0.0, -3.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
     (camera, Instance { mesh: Arc::new(mesh), model: Mat4::IDENTITY, material })
 }
 
@@ -168,7 +168,7 @@ fn receding_checkerboard(filter: Filter) -> (Framebuffer, Vec<u32>, Vec<u32>) {
         material,
     };
     let camera =
-        Camera { eye: Vec3::new(0.0, 1.5, 0.0), target: Vec3::new(0.0, 0.0, -6.0), fov_y: 1.0, near: 0.1, far: 300.0 };
+        Camera { eye: Vec3::new(0.0, 1.5, 0.0), target: Vec3::new(0.0, 0.0, -6.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 300.0 };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let (width, height) = (320, 240);
     let mut image = Framebuffer::new(width, height);
@@ -226,7 +226,7 @@ fn box_on_plane() -> (Camera, Vec<Instance>) {
         Vec3::new(0.9, 0.4, 0.3),
     );
     let camera =
-        Camera { eye: Vec3::new(1.5, 3.0, 5.0), target: Vec3::new(0.3, 0.0, 0.0), fov_y: 0.9, near: 0.1, far: 50.0 };
+        Camera { eye: Vec3::new(1.5, 3.0, 5.0), target: Vec3::new(0.3, 0.0, 0.0), lens: Lens::FieldOfView(0.9), near: 0.1, far: 50.0 };
     (camera, vec![ground, block])
 }
 
@@ -264,7 +264,7 @@ fn a_box_casts_a_shadow_onto_the_plane() {
 
 #[test]
 fn the_three_shading_modes() {
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.2), target: Vec3::ZERO, fov_y: 0.7, near: 0.1, far: 10.0 };
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.2), target: Vec3::ZERO, lens: Lens::FieldOfView(0.7), near: 0.1, far: 10.0 };
     let sphere = [colored(MeshData::sphere(8, 12), Mat4::IDENTITY, Vec3::new(0.3, 0.7, 0.9))];
     let light = Light { direction: Vec3::new(-1.0, -0.6, -1.0).normalize(), diffuse: 0.9, fill: 0.0, ambient: 0.1 };
     let mut images = Vec::new();
@@ -300,7 +300,7 @@ fn a_triangle_crossing_the_near_plane_is_cut() {
         morph: None,
     };
     let camera =
-        Camera { eye: Vec3::new(0.0, 0.3, 0.0), target: Vec3::new(0.0, 0.0, -3.0), fov_y: 1.2, near: 0.1, far: 20.0 };
+        Camera { eye: Vec3::new(0.0, 0.3, 0.0), target: Vec3::new(0.0, 0.0, -3.0), lens: Lens::FieldOfView(1.2), near: 0.1, far: 20.0 };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let (image, stats) = render(camera, full, &[colored(mesh, Mat4::IDENTITY, Vec3::ONE)], RenderSettings::default());
     assert_golden("near_plane_triangle", &image);
@@ -318,7 +318,7 @@ fn a_watertight_mesh_shows_no_background_through_its_edges() {
     let camera = Camera {
         eye: Vec3::new(0.05, 2.6, 0.02),
         target: Vec3::new(0.05, 0.0, 0.02),
-        fov_y: 0.45,
+        lens: Lens::FieldOfView(0.45),
         near: 0.1,
         far: 10.0,
     };
@@ -337,7 +337,7 @@ fn interpenetrating_triangles_meet_on_their_intersection() {
             Mat4::from_rotation_y(angle) * Mat4::from_rotation_x(FRAC_PI_2) * Mat4::from_scale(Vec3::splat(3.0));
         colored(MeshData::plane(1), model, color)
     };
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.0), target: Vec3::ZERO, fov_y: FRAC_PI_2, near: 0.1, far: 100.0 };
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.0), target: Vec3::ZERO, lens: Lens::FieldOfView(FRAC_PI_2), near: 0.1, far: 100.0 };
     let full = Light { direction: Vec3::NEG_Z, diffuse: 0.0, fill: 0.0, ambient: 1.0 };
     let (image, _) = render(camera, full, &[tilted(0.4, Vec3::X), tilted(-0.4, Vec3::Y)], RenderSettings::default());
     assert_golden("interpenetrating", &image);
@@ -368,7 +368,7 @@ fn blend_weights_fade_one_texture_into_another() {
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         morph: None,
     };
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, fov_y: 0.9, near: 0.1, far: 10.0 };
+    let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, lens: Lens::FieldOfView(0.9), near: 0.1, far: 10.0 };
     let full = Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let square = Instance { mesh: Arc::new(mesh), model: Mat4::IDENTITY, material };
     let (image, _) = render(camera, full, &[square], RenderSettings::default());
@@ -388,7 +388,7 @@ fn fog_fades_distant_pixels_into_its_colour() {
     // The receding checkerboard's plane, untextured, lit in full: white near and far.
     let ground = colored(MeshData::plane(1), Mat4::from_scale(Vec3::new(200.0, 1.0, 200.0)), Vec3::ONE);
     let camera =
-        Camera { eye: Vec3::new(0.0, 1.5, 90.0), target: Vec3::new(0.0, 0.0, 84.0), fov_y: 1.0, near: 0.1, far: 300.0 };
+        Camera { eye: Vec3::new(0.0, 1.5, 90.0), target: Vec3::new(0.0, 0.0, 84.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 300.0 };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     // The background's colour, as a fog without one of its own takes.
     let fog = Fog { color: None, start_m: 10.0, end_m: 60.0 };
