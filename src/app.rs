@@ -1,6 +1,7 @@
 //! Assembly of the app, windowed or headless, in one place: the list of entity kinds and the
 //! plugin group.
 
+use crate::ar::ArKind;
 use crate::controls::ControlsPlugin;
 use crate::elastic::ElasticBodyKind;
 use crate::foundation::FoundationPlugin;
@@ -38,6 +39,7 @@ pub fn entity_kinds() -> KindRegistry {
         .with::<WorldKind>()
         .with::<SoftBodyKind>()
         .with::<ElasticBodyKind>()
+        .with::<ArKind>()
         .build()
 }
 

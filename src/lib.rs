@@ -56,6 +56,7 @@
 #![warn(missing_docs)]
 
 pub mod app;
+pub mod ar;
 pub mod controls;
 pub mod elastic;
 pub mod foundation;

@@ -7,7 +7,7 @@
 //! | `FixedUpdate` | [`SimSystems::Deform`] -> [`SimSystems::Locomotion`] -> [`SimSystems::Dynamics`] -> [`SimSystems::Streaming`] -> [`SimSystems::Clock`] | the simulations, one fixed step; only while a scene is live and not paused |
 //! | `Update` | [`ControlSystems::Load`] | the scene is (re)spawned after a (re)load |
 //! | `PostUpdate` | [`WriteBackSystems`] (after the panel, before transform propagation) | each kind updates its `RasterMesh` when its shape changed, and nowhere else |
-//! | `PostUpdate` | [`RenderSystems::Collect`] -> [`RenderSystems::Raster`] -> [`RenderSystems::Present`] (after transform propagation) | meshes and transforms gathered; shadow map and frame drawn; the frame handed on |
+//! | `PostUpdate` | [`RenderSystems::Collect`] -> [`RenderSystems::Camera`] -> [`RenderSystems::Raster`] -> [`RenderSystems::Composite`] -> [`RenderSystems::Present`] (after transform propagation) | meshes and transforms gathered; the camera taken over by an overlay; shadow map and frame drawn; laid over a photograph; the frame handed on |
 //!
 //! Input is read before the fixed steps of its frame (Bevy's pattern for fixed timesteps), so a
 //! key held for a frame acts in that frame's step. Nothing in the simulation reads the wall
@@ -57,8 +57,13 @@ pub struct WriteBackSystems;
 pub enum RenderSystems {
     /// Gather what to draw and from where.
     Collect,
+    /// Views that take the camera over move it here: the augmented-reality overlay puts it
+    /// where the camera that took the photograph was.
+    Camera,
     /// Draw the shadow map and the frame.
     Raster,
+    /// Lay the drawn frame over what shows behind it: the overlay's photograph.
+    Composite,
     /// Hand the frame to the window or to files.
     Present,
 }
@@ -145,7 +150,13 @@ impl Plugin for SchedulePlugin {
             )
             .configure_sets(
                 PostUpdate,
-                (RenderSystems::Collect, RenderSystems::Raster, RenderSystems::Present)
+                (
+                    RenderSystems::Collect,
+                    RenderSystems::Camera,
+                    RenderSystems::Raster,
+                    RenderSystems::Composite,
+                    RenderSystems::Present,
+                )
                     .chain()
                     .after(TransformSystems::Propagate)
                     .after(EguiPostUpdateSet::EndPass),

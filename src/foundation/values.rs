@@ -121,7 +121,7 @@ checked_number!(
 );
 
 /// Whether `path` is relative and stays inside the folder it is relative to (no `..`, no root).
-fn inside_folder(path: &str) -> bool {
+pub(crate) fn inside_folder(path: &str) -> bool {
     !path.is_empty()
         && std::path::Path::new(path)
             .components()

@@ -13,7 +13,8 @@
 
 use super::primitives::PrimitiveMeshes;
 use super::{
-    Camera, Framebuffer, Instance, Lens, Light, MAX_TARGET_SIZE, Material, MeshData, RenderSettings, RenderStats, Renderer,
+    Camera, Framebuffer, Instance, Lens, Light, MAX_TARGET_SIZE, Material, MeshData, RenderSettings, RenderStats,
+    Renderer,
 };
 use crate::foundation::messages::SaveScreenshot;
 use crate::foundation::schedule::{ControlSystems, RenderSystems};
@@ -61,7 +62,13 @@ pub struct RenderView {
 impl Default for RenderView {
     fn default() -> Self {
         Self {
-            camera: Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 },
+            camera: Camera {
+                eye: Vec3::new(0.0, 0.0, 5.0),
+                target: Vec3::ZERO,
+                lens: Lens::FieldOfView(1.0),
+                near: 0.1,
+                far: 100.0,
+            },
             light: Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.2 },
             background: [0, 0, 0, 255],
             settings: RenderSettings::default(),
@@ -136,7 +143,13 @@ impl Plugin for RasterPlugin {
             .init_resource::<PrimitiveMeshes>()
             .configure_sets(
                 PostUpdate,
-                (RenderSystems::Collect, RenderSystems::Raster, RenderSystems::Present)
+                (
+                    RenderSystems::Collect,
+                    RenderSystems::Camera,
+                    RenderSystems::Raster,
+                    RenderSystems::Composite,
+                    RenderSystems::Present,
+                )
                     .run_if(RenderPolicy::wants_frame),
             )
             .add_systems(Update, request_screenshots.in_set(ControlSystems::Apply))

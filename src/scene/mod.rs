@@ -55,7 +55,13 @@ pub struct SceneKinds(pub Arc<KindRegistry>);
 
 /// Loads `.yaml` / `.yml` scene files.
 #[derive(TypePath)]
-pub struct SceneLoader(Arc<KindRegistry>);
+pub struct SceneLoader {
+    kinds: Arc<KindRegistry>,
+    /// The played scene's folder as the user named it: the scene is checked and built under
+    /// its path there, so that messages show that path and kinds that read folders (camera
+    /// frames) find them.
+    folder: PathBuf,
+}
 
 impl AssetLoader for SceneLoader {
     type Asset = SceneAsset;
@@ -71,7 +77,7 @@ impl AssetLoader for SceneLoader {
         let path = load_context.path().path().to_path_buf();
         let mut bytes = Vec::new();
         reader.read_to_end(&mut bytes).await.map_err(|error| FileError::unreadable(&path, error))?;
-        let kinds = &self.0;
+        let kinds = &self.kinds;
         let scene = kinds.parse_unresolved(&path, &bytes)?;
         let folder = path.parent().unwrap_or(Path::new(""));
         let mut files = Vec::new();
@@ -85,7 +91,7 @@ impl AssetLoader for SceneLoader {
                 .map_err(|error| FileError::unreadable(&referenced, error))?;
             files.push(ReadFile { file, path: referenced, contents });
         }
-        Ok(SceneAsset(Arc::new(kinds.finish(scene, &path, &bytes, &files)?)))
+        Ok(SceneAsset(Arc::new(kinds.finish(scene, &self.folder.join(&path), &bytes, &files)?)))
     }
 
     fn extensions(&self) -> &[&str] {
@@ -139,7 +145,10 @@ pub struct ScenePlugin {
 impl Plugin for ScenePlugin {
     fn build(&self, app: &mut App) {
         app.init_asset::<SceneAsset>()
-            .register_asset_loader(SceneLoader(self.kinds.clone()))
+            .register_asset_loader(SceneLoader {
+                kinds: self.kinds.clone(),
+                folder: self.path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            })
             .insert_resource(SceneKinds(self.kinds.clone()))
             .init_resource::<Background>()
             .insert_resource(ActiveScene {

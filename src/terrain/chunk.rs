@@ -395,7 +395,7 @@ mod tests {
         skirt_m: f32,
         morph: Option<MorphBand>,
     ) -> (crate::raster::Framebuffer, crate::raster::Camera, [f32; 2]) {
-        use crate::raster::{Camera, Frame, Lens, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
+        use crate::raster::{Camera, Frame, Framebuffer, Instance, Lens, Light, Material, RenderSettings, Renderer};
         use bevy::math::Mat4;
         use bevy::tasks::TaskPool;
         let geometry = Geometry { cell_m: 1.0, height_m: 60.0, texture_cells: 8.0 };
@@ -412,7 +412,13 @@ mod tests {
             }
         }
         assert!(EYE.y > highest, "the eye above the ground");
-        let camera = Camera { eye: EYE, target: Vec3::new(60.0, 20.0, 16.0), lens: Lens::FieldOfView(1.2), near: 0.1, far: 500.0 };
+        let camera = Camera {
+            eye: EYE,
+            target: Vec3::new(60.0, 20.0, 16.0),
+            lens: Lens::FieldOfView(1.2),
+            near: 0.1,
+            far: 500.0,
+        };
         let mut image = Framebuffer::new(400, 300);
         let light = Light { direction: Vec3::new(-0.5, -1.0, 0.3).normalize(), diffuse: 0.7, fill: 0.0, ambient: 0.3 };
         let settings = RenderSettings::default();

@@ -10,7 +10,7 @@
 use super::bands::{Band, BandRule, band_texture};
 use super::generate::{PerlinLayer, perlin};
 use super::section::{Geometry, Section, mesh_section};
-use crate::raster::{Camera, Frame, Lens, Framebuffer, Instance, Light, Material, RenderSettings, Renderer};
+use crate::raster::{Camera, Frame, Framebuffer, Instance, Lens, Light, Material, RenderSettings, Renderer};
 use bevy::math::{Mat4, UVec2, Vec3};
 use bevy::tasks::TaskPool;
 use std::sync::Arc;

@@ -6,7 +6,7 @@
 //! `l = normalize(0.4, 0.8, 0.3)`, drawn at 1280 x 720 with a 60 degree vertical field of view,
 //! near 0.1 and far 10, depth-tested with back faces culled.
 
-use crate::{Camera, Frame, Lens, Instance, Light, Material, MeshData, RenderSettings};
+use crate::{Camera, Frame, Instance, Lens, Light, Material, MeshData, RenderSettings};
 use bevy_math::{Mat4, Vec3};
 use std::sync::Arc;
 

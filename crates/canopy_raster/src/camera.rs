@@ -162,7 +162,8 @@ mod tests {
             centre: Vec2::new((cx + 0.5) / 640.0, (cy + 0.5) / 480.0),
             up: Vec3::Y,
         };
-        let camera = Camera { eye: Vec3::ZERO, target: Vec3::NEG_Z, lens: Lens::Pinhole(pinhole), near: 0.1, far: 50.0 };
+        let camera =
+            Camera { eye: Vec3::ZERO, target: Vec3::NEG_Z, lens: Lens::Pinhole(pinhole), near: 0.1, far: 50.0 };
         // (0.4, -0.3, 2) in the computer-vision frame is (0.4, 0.3, -2) in the view frame.
         let ndc = camera.view_projection(4.0 / 3.0).project_point3(Vec3::new(0.4, 0.3, -2.0));
         let pixel = Vec2::new((ndc.x + 1.0) * 0.5 * 640.0 - 0.5, (1.0 - ndc.y) * 0.5 * 480.0 - 0.5);
@@ -178,7 +179,13 @@ mod tests {
 
     #[test]
     fn near_and_far_map_to_zero_and_one() {
-        let camera = Camera { eye: Vec3::new(0.0, 0.0, 5.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.5, far: 20.0 };
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            lens: Lens::FieldOfView(1.0),
+            near: 0.5,
+            far: 20.0,
+        };
         let clip = camera.view_projection(1.5);
         let near = clip.project_point3(Vec3::new(0.0, 0.0, 4.5));
         let far = clip.project_point3(Vec3::new(0.0, 0.0, -15.0));
@@ -187,7 +194,13 @@ mod tests {
 
     #[test]
     fn the_ray_through_a_projected_point_passes_through_it() {
-        let camera = Camera { eye: Vec3::new(1.0, 2.0, 5.0), target: Vec3::ZERO, lens: Lens::FieldOfView(0.9), near: 0.1, far: 50.0 };
+        let camera = Camera {
+            eye: Vec3::new(1.0, 2.0, 5.0),
+            target: Vec3::ZERO,
+            lens: Lens::FieldOfView(0.9),
+            near: 0.1,
+            far: 50.0,
+        };
         let point = Vec3::new(0.7, -0.4, 1.3);
         let ndc = camera.view_projection(1.6).project_point3(point);
         let (origin, direction) = camera.ray(ndc.truncate(), 1.6);
@@ -198,7 +211,13 @@ mod tests {
 
     #[test]
     fn looking_straight_down_is_well_defined() {
-        let camera = Camera { eye: Vec3::new(0.0, 10.0, 0.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
+        let camera = Camera {
+            eye: Vec3::new(0.0, 10.0, 0.0),
+            target: Vec3::ZERO,
+            lens: Lens::FieldOfView(1.0),
+            near: 0.1,
+            far: 100.0,
+        };
         let centre = camera.view_projection(1.0).project_point3(Vec3::ZERO);
         assert!(centre.is_finite() && centre.x.abs() < 1e-5 && centre.y.abs() < 1e-5);
     }

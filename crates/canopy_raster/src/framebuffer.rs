@@ -59,6 +59,21 @@ impl Framebuffer {
         self.depth.fill(FAR_DEPTH);
     }
 
+    /// Gives every pixel no surface was drawn at (its depth still [`FAR_DEPTH`]) the colour
+    /// of the same pixel of `backdrop` (RGBA8, row by row, this framebuffer's size): a frame
+    /// drawn over a photograph. A backdrop of another size leaves the frame as it is.
+    pub fn fill_empty(&mut self, backdrop: &[u8]) {
+        if backdrop.len() != self.color.len() {
+            return;
+        }
+        let pixels = self.color.chunks_exact_mut(4).zip(backdrop.chunks_exact(4));
+        for ((pixel, behind), depth) in pixels.zip(&self.depth) {
+            if *depth == FAR_DEPTH {
+                pixel.copy_from_slice(behind);
+            }
+        }
+    }
+
     /// The RGBA8 bytes, row by row.
     pub fn color(&self) -> &[u8] {
         &self.color
@@ -163,6 +178,17 @@ pub(crate) struct Band<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_empty_pixels_take_the_backdrop() {
+        let mut framebuffer = Framebuffer::new(2, 1);
+        framebuffer.clear([1, 2, 3, 255]);
+        framebuffer.depth[1] = 0.5;
+        framebuffer.fill_empty(&[9, 9, 9, 255, 7, 7, 7, 255]);
+        assert_eq!((framebuffer.pixel(0, 0), framebuffer.pixel(1, 0)), ([9, 9, 9, 255], [1, 2, 3, 255]));
+        framebuffer.fill_empty(&[0; 4]);
+        assert_eq!(framebuffer.pixel(0, 0), [9, 9, 9, 255], "a backdrop of another size is ignored");
+    }
 
     #[test]
     fn clear_sets_colour_and_far_depth() {

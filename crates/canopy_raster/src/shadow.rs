@@ -446,7 +446,13 @@ mod tests {
     use proptest::prelude::*;
 
     fn overhead() -> (Camera, Light) {
-        let camera = Camera { eye: Vec3::new(0.0, 3.0, 4.0), target: Vec3::ZERO, lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
+        let camera = Camera {
+            eye: Vec3::new(0.0, 3.0, 4.0),
+            target: Vec3::ZERO,
+            lens: Lens::FieldOfView(1.0),
+            near: 0.1,
+            far: 100.0,
+        };
         let light = Light { direction: Vec3::new(0.2, -1.0, 0.1).normalize(), diffuse: 1.0, fill: 0.0, ambient: 0.2 };
         (camera, light)
     }

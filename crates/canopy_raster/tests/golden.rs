@@ -9,8 +9,8 @@ use bevy_math::{Mat4, Vec2, Vec3};
 use bevy_tasks::TaskPool;
 use canopy_raster::benchmark_scene as standard;
 use canopy_raster::{
-    Address, Camera, Filter, Lens, Fog, Frame, Framebuffer, Instance, Light, Material, MeshData, RenderSettings, RenderStats,
-    Renderer, Sampler, Shading, Texture,
+    Address, Camera, Filter, Fog, Frame, Framebuffer, Instance, Lens, Light, Material, MeshData, RenderSettings,
+    RenderStats, Renderer, Sampler, Shading, Texture,
 };
 use std::f32::consts::FRAC_PI_2;
 use std::path::PathBuf;
@@ -109,8 +109,13 @@ fn steep_plane() -> (Camera, Instance) {
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         morph: None,
     };
-    let camera =
-        Camera { eye: Vec3::new(0.0, 1.0, 1.5), target: Vec3::new(0.0, 0.0, -3.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 100.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 1.0, 1.5),
+        target: Vec3::new(0.0, 0.0, -3.0),
+        lens: Lens::FieldOfView(1.0),
+        near: 0.1,
+        far: 100.0,
+    };
     (camera, Instance { mesh: Arc::new(mesh), model: Mat4::IDENTITY, material })
 }
 
@@ -167,8 +172,13 @@ fn receding_checkerboard(filter: Filter) -> (Framebuffer, Vec<u32>, Vec<u32>) {
         model: Mat4::from_translation(Vec3::new(0.0, 0.0, -99.5)) * Mat4::from_scale(Vec3::new(200.0, 1.0, 200.0)),
         material,
     };
-    let camera =
-        Camera { eye: Vec3::new(0.0, 1.5, 0.0), target: Vec3::new(0.0, 0.0, -6.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 300.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 1.5, 0.0),
+        target: Vec3::new(0.0, 0.0, -6.0),
+        lens: Lens::FieldOfView(1.0),
+        near: 0.1,
+        far: 300.0,
+    };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let (width, height) = (320, 240);
     let mut image = Framebuffer::new(width, height);
@@ -225,8 +235,13 @@ fn box_on_plane() -> (Camera, Vec<Instance>) {
         Mat4::from_translation(Vec3::new(0.0, 0.5, 0.0)) * Mat4::from_rotation_y(0.4),
         Vec3::new(0.9, 0.4, 0.3),
     );
-    let camera =
-        Camera { eye: Vec3::new(1.5, 3.0, 5.0), target: Vec3::new(0.3, 0.0, 0.0), lens: Lens::FieldOfView(0.9), near: 0.1, far: 50.0 };
+    let camera = Camera {
+        eye: Vec3::new(1.5, 3.0, 5.0),
+        target: Vec3::new(0.3, 0.0, 0.0),
+        lens: Lens::FieldOfView(0.9),
+        near: 0.1,
+        far: 50.0,
+    };
     (camera, vec![ground, block])
 }
 
@@ -264,7 +279,13 @@ fn a_box_casts_a_shadow_onto_the_plane() {
 
 #[test]
 fn the_three_shading_modes() {
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.2), target: Vec3::ZERO, lens: Lens::FieldOfView(0.7), near: 0.1, far: 10.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.0, 2.2),
+        target: Vec3::ZERO,
+        lens: Lens::FieldOfView(0.7),
+        near: 0.1,
+        far: 10.0,
+    };
     let sphere = [colored(MeshData::sphere(8, 12), Mat4::IDENTITY, Vec3::new(0.3, 0.7, 0.9))];
     let light = Light { direction: Vec3::new(-1.0, -0.6, -1.0).normalize(), diffuse: 0.9, fill: 0.0, ambient: 0.1 };
     let mut images = Vec::new();
@@ -299,8 +320,13 @@ fn a_triangle_crossing_the_near_plane_is_cut() {
         triangles: vec![[0, 1, 2]],
         morph: None,
     };
-    let camera =
-        Camera { eye: Vec3::new(0.0, 0.3, 0.0), target: Vec3::new(0.0, 0.0, -3.0), lens: Lens::FieldOfView(1.2), near: 0.1, far: 20.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.3, 0.0),
+        target: Vec3::new(0.0, 0.0, -3.0),
+        lens: Lens::FieldOfView(1.2),
+        near: 0.1,
+        far: 20.0,
+    };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let (image, stats) = render(camera, full, &[colored(mesh, Mat4::IDENTITY, Vec3::ONE)], RenderSettings::default());
     assert_golden("near_plane_triangle", &image);
@@ -337,7 +363,13 @@ fn interpenetrating_triangles_meet_on_their_intersection() {
             Mat4::from_rotation_y(angle) * Mat4::from_rotation_x(FRAC_PI_2) * Mat4::from_scale(Vec3::splat(3.0));
         colored(MeshData::plane(1), model, color)
     };
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 2.0), target: Vec3::ZERO, lens: Lens::FieldOfView(FRAC_PI_2), near: 0.1, far: 100.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.0, 2.0),
+        target: Vec3::ZERO,
+        lens: Lens::FieldOfView(FRAC_PI_2),
+        near: 0.1,
+        far: 100.0,
+    };
     let full = Light { direction: Vec3::NEG_Z, diffuse: 0.0, fill: 0.0, ambient: 1.0 };
     let (image, _) = render(camera, full, &[tilted(0.4, Vec3::X), tilted(-0.4, Vec3::Y)], RenderSettings::default());
     assert_golden("interpenetrating", &image);
@@ -368,7 +400,13 @@ fn blend_weights_fade_one_texture_into_another() {
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         morph: None,
     };
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, lens: Lens::FieldOfView(0.9), near: 0.1, far: 10.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.0, 3.0),
+        target: Vec3::ZERO,
+        lens: Lens::FieldOfView(0.9),
+        near: 0.1,
+        far: 10.0,
+    };
     let full = Light { direction: Vec3::NEG_Z, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     let square = Instance { mesh: Arc::new(mesh), model: Mat4::IDENTITY, material };
     let (image, _) = render(camera, full, &[square], RenderSettings::default());
@@ -387,8 +425,13 @@ fn blend_weights_fade_one_texture_into_another() {
 fn fog_fades_distant_pixels_into_its_colour() {
     // The receding checkerboard's plane, untextured, lit in full: white near and far.
     let ground = colored(MeshData::plane(1), Mat4::from_scale(Vec3::new(200.0, 1.0, 200.0)), Vec3::ONE);
-    let camera =
-        Camera { eye: Vec3::new(0.0, 1.5, 90.0), target: Vec3::new(0.0, 0.0, 84.0), lens: Lens::FieldOfView(1.0), near: 0.1, far: 300.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 1.5, 90.0),
+        target: Vec3::new(0.0, 0.0, 84.0),
+        lens: Lens::FieldOfView(1.0),
+        near: 0.1,
+        far: 300.0,
+    };
     let full = Light { direction: Vec3::NEG_Y, diffuse: 1.0, fill: 0.0, ambient: 0.0 };
     // The background's colour, as a fog without one of its own takes.
     let fog = Fog { color: None, start_m: 10.0, end_m: 60.0 };

@@ -1,0 +1,229 @@
+//! The `ar:` entry of a scene file, and the kind that reads and spawns it.
+
+use super::calibration::{self, Calibration};
+use super::frames::FrameFolder;
+use super::plugin::{ArPlugin, ArState, ArView};
+use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use crate::foundation::values::{FileType, FolderFile, PositiveMetres, checked_number, inside_folder};
+use crate::foundation::yaml::{FileError, deserialize_str_with};
+use bevy::ecs::world::EntityWorldMut;
+use canopy_vision::camera::Intrinsics;
+use canopy_vision::dictionary::Dictionary;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+checked_number!(
+    /// Camera frames a second.
+    FrameRate(f64),
+    "frames a second greater than 0 and at most 1000",
+    |v| v > 0.0 && v <= 1000.0
+);
+checked_number!(
+    /// Marker metres to the world metre.
+    Scale(f64),
+    "a scale greater than 0 and at most 1000",
+    |v| v > 0.0 && v <= 1000.0
+);
+checked_number!(
+    /// Seconds a lost marker's pose is kept.
+    HoldSeconds(f64),
+    "seconds from 0 to 3600",
+    |v| (0.0..=3600.0).contains(&v)
+);
+
+/// Calibration files: OpenCV's YAML or JSON.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CalibrationFile;
+
+impl FileType for CalibrationFile {
+    const EXTENSIONS: &'static [&'static str] = &[".yaml", ".yml", ".json"];
+    const EXPECTING: &'static str = "a .yaml, .yml or .json calibration file in the scene's folder";
+    const FILES: &'static str = "a .yaml, .yml or .json file";
+}
+
+/// A folder next to the scene: relative, without `..`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FolderPath(pub String);
+
+impl Serialize for FolderPath {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for FolderPath {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserialize_str_with(deserializer, "a folder inside the scene's folder", |path| {
+            if inside_folder(path) {
+                Ok(FolderPath(path.to_string()))
+            } else {
+                Err(format!("expected a folder inside the scene's folder (relative, without `..`), found \"{path}\""))
+            }
+        })
+    }
+}
+
+/// A dictionary by OpenCV's name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DictionaryName(pub Dictionary);
+
+impl Serialize for DictionaryName {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.0.name)
+    }
+}
+
+impl<'de> Deserialize<'de> for DictionaryName {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserialize_str_with(deserializer, "a marker dictionary such as 6x6_250", |name| {
+            Dictionary::named(name).map(DictionaryName).map_err(|error| error.to_string())
+        })
+    }
+}
+
+/// An `ar` entity: the scene drawn over a camera's frames, on a marker.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArDef {
+    /// The folder of frames (PNG or JPEG files, shown in name order), next to the scene.
+    pub frames: FolderPath,
+    /// Frames a second; 30 by default.
+    #[serde(default = "thirty")]
+    pub fps: FrameRate,
+    /// Whether the frames start over after the last; yes by default.
+    #[serde(default = "yes", rename = "loop")]
+    pub repeat: bool,
+    /// The camera's calibration in OpenCV's layout.
+    pub calibration: FolderFile<CalibrationFile>,
+    /// The markers' dictionary, by OpenCV's name: `4x4_50`, `6x6_250`, `aruco_original`, ...
+    pub dictionary: DictionaryName,
+    /// The marker the scene stands on.
+    pub marker_id: u32,
+    /// The marker's side (its black square), metres.
+    pub marker_side_m: PositiveMetres,
+    /// Marker metres to the world metre: the scene shrunk onto the marker; 1 by default.
+    #[serde(default = "one")]
+    pub scale: Scale,
+    /// Seconds a lost marker's last pose is kept before the scene is hidden; 0.5 by default.
+    #[serde(default = "half_second")]
+    pub hold_s: HoldSeconds,
+    /// The calibration, read when the scene is resolved.
+    #[serde(skip)]
+    pub calibration_read: Option<Arc<Calibration>>,
+}
+
+fn thirty() -> FrameRate {
+    FrameRate(30.0)
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn one() -> Scale {
+    Scale(1.0)
+}
+
+fn half_second() -> HoldSeconds {
+    HoldSeconds(0.5)
+}
+
+/// What an `ar` entity is built into: its frames and the camera for their size.
+#[derive(Debug, Clone)]
+pub struct ArBuilt {
+    /// The frames.
+    pub frames: Arc<FrameFolder>,
+    /// The calibrated camera for the frames' size.
+    pub camera: Intrinsics,
+    /// Where the frames are, for messages and the dump.
+    pub folder: PathBuf,
+}
+
+/// The `ar` kind.
+pub struct ArKind;
+
+impl EntityKind for ArKind {
+    const KEY: &'static str = "ar";
+    type Def = ArDef;
+    type Built = ArBuilt;
+    type Plugin = ArPlugin;
+
+    fn validate(def: &ArDef, cx: &EntityContext) -> Result<(), FileError> {
+        let dictionary = def.dictionary.0;
+        if def.marker_id >= dictionary.len() {
+            return Err(cx.field_error(
+                "marker_id",
+                0,
+                "marker_id",
+                format!("{} has markers 0 to {}, not {}", dictionary.name, dictionary.len() - 1, def.marker_id),
+            ));
+        }
+        if cx.kind_index > 0 {
+            return Err(cx.field_error("frames", 0, "frames", "a scene has one camera to draw over: one `ar` entity"));
+        }
+        Ok(())
+    }
+
+    fn references(def: &ArDef) -> Vec<String> {
+        vec![def.calibration.path.clone()]
+    }
+
+    fn resolve(def: &mut ArDef, file: &mut ReferencedFile, _cx: &EntityContext) -> Result<(), FileError> {
+        if def.calibration.path == file.file {
+            def.calibration_read = Some(file.decoded(calibration::parse)?);
+        }
+        Ok(())
+    }
+
+    fn build(def: &ArDef, cx: &BuildContext) -> Result<ArBuilt, FileError> {
+        let entity = cx.entity;
+        let folder = entity.path.parent().unwrap_or(std::path::Path::new(".")).join(&def.frames.0);
+        let frames = FrameFolder::open(&folder).map_err(|error| entity.field_error("frames", 0, "frames", error))?;
+        let calibration = def
+            .calibration_read
+            .as_ref()
+            .ok_or_else(|| entity.field_error("calibration", 0, "calibration", "the calibration file was not read"))?;
+        let camera = calibration
+            .for_frames(frames.size)
+            .map_err(|error| entity.field_error("calibration", 0, "calibration", error))?;
+        Ok(ArBuilt { frames: Arc::new(frames), camera, folder })
+    }
+
+    fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {
+        entity.insert((ArView::new(def, built), ArState::default()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_and_checked_values() {
+        let def: ArDef = serde_yaml::from_str(
+            "{frames: clip, calibration: cam.yaml, dictionary: DICT_6X6_250, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap();
+        assert_eq!((def.fps, def.repeat, def.scale, def.hold_s), (FrameRate(30.0), true, Scale(1.0), HoldSeconds(0.5)));
+        assert_eq!(def.dictionary.0.name, "6x6_250");
+        let error = serde_yaml::from_str::<ArDef>(
+            "{frames: clip, calibration: cam.yaml, dictionary: 9x9, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(error.contains("unknown dictionary `9x9`"), "{error}");
+        let error = serde_yaml::from_str::<ArDef>(
+            "{frames: ../clip, calibration: cam.yaml, dictionary: 4x4_50, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(error.contains("a folder inside the scene's folder"), "{error}");
+        let error = serde_yaml::from_str::<ArDef>(
+            "{frames: clip, calibration: cam.txt, dictionary: 4x4_50, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(error.contains(".json"), "{error}");
+    }
+}

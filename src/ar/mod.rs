@@ -1,0 +1,25 @@
+//! The `ar` entity kind: the scene drawn over a camera's frames, standing on an ArUco marker
+//! found in each frame (the source's augmented reality, on image sequences).
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`def`] | the `ar:` entry of a scene file and [`ArKind`] |
+//! | [`calibration`] | OpenCV's calibration files (YAML and JSON), read and written |
+//! | [`frames`] | a folder of PNG and JPEG frames in name order |
+//! | [`overlay`] | the world on the marker, the render camera from the pose, the photograph fitted behind, the pose held |
+//! | [`sample`] | synthetic sequences written with their calibration and ground truth |
+//! | [`plugin`] | [`ArPlugin`]: frames shown at their rate, the marker found, the camera placed, the frame laid over the photograph |
+//!
+//! Detection and pose are the `canopy_vision` crate's: OpenCV's dictionaries, sub-pixel
+//! corners, IPPE refined on reprojection error. The scene's other entities stand on the marker:
+//! the world's origin at its centre, its ground the marker's plane, shrunk by `scale`.
+
+pub mod calibration;
+pub mod def;
+pub mod frames;
+pub mod overlay;
+pub mod plugin;
+pub mod sample;
+
+pub use def::{ArDef, ArKind};
+pub use plugin::{ArPlugin, ArState, ArView};

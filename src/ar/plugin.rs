@@ -1,0 +1,302 @@
+//! The overlay's plugin: camera frames shown at their rate, the marker found in each and its
+//! pose estimated, the rasterizer's camera put where the photographing camera was, and the
+//! drawn frame laid over the photograph.
+//!
+//! | schedule, set | system | what it does |
+//! |---|---|---|
+//! | `FixedUpdate`, [`SimSystems::Streaming`] | `show_frames` | takes the frame due at the simulated time, finds the marker, updates the pose held |
+//! | `PostUpdate`, [`RenderSystems::Camera`] | `place_camera` | the render camera at the pose, fitted to the view |
+//! | `PostUpdate`, [`RenderSystems::Composite`] | `lay_over_frame` | the photograph behind what was drawn, or alone when the marker is lost |
+
+use super::def::{ArBuilt, ArDef};
+use super::frames::FrameFolder;
+use super::overlay::{BackdropMap, Fit, Tracker, render_camera, world_from_marker};
+use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::schedule::{RenderSystems, SimSystems};
+use crate::raster::RenderView;
+use crate::raster::plugin::RasterTarget;
+use bevy::math::{DVec2, DVec3};
+use bevy::prelude::*;
+use canopy_vision::camera::Intrinsics;
+use canopy_vision::detect::{Scratch, Settings, detect};
+use canopy_vision::dictionary::Dictionary;
+use canopy_vision::gray::Gray;
+use canopy_vision::pose::{Pose, estimate, marker_corners};
+use image::RgbaImage;
+use serde_json::{Map, Value, json};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Runs `ar` entities.
+#[derive(Default)]
+pub struct ArPlugin;
+
+impl Plugin for ArPlugin {
+    fn build(&self, app: &mut App) {
+        app.register_dump::<ArView>()
+            .register_dump::<ArState>()
+            .add_systems(FixedUpdate, show_frames.in_set(SimSystems::Streaming))
+            .add_systems(PostUpdate, place_camera.in_set(RenderSystems::Camera))
+            .add_systems(PostUpdate, lay_over_frame.in_set(RenderSystems::Composite));
+    }
+}
+
+/// What an `ar` entity shows and how: fixed when the scene is loaded.
+#[derive(Component, Debug, Clone)]
+pub struct ArView {
+    /// The camera frames.
+    pub frames: Arc<FrameFolder>,
+    /// The folder they are in.
+    pub folder: PathBuf,
+    /// The calibrated camera, for the frames' size.
+    pub camera: Intrinsics,
+    /// The markers' dictionary.
+    pub dictionary: Dictionary,
+    /// The marker the scene stands on.
+    pub marker_id: u32,
+    /// Its side, metres.
+    pub side_m: f64,
+    /// Marker metres to the world metre.
+    pub scale: f64,
+    /// Frames a second.
+    pub fps: f64,
+    /// Whether the frames start over after the last.
+    pub repeat: bool,
+    /// Seconds a lost marker's pose is kept.
+    pub hold_s: f64,
+}
+
+impl ArView {
+    /// The view an `ar` definition describes.
+    pub fn new(def: &ArDef, built: &ArBuilt) -> Self {
+        Self {
+            frames: built.frames.clone(),
+            folder: built.folder.clone(),
+            camera: built.camera,
+            dictionary: def.dictionary.0,
+            marker_id: def.marker_id,
+            side_m: f64::from(def.marker_side_m.0),
+            scale: def.scale.0,
+            fps: def.fps.0,
+            repeat: def.repeat,
+            hold_s: def.hold_s.0,
+        }
+    }
+
+    /// The frame due at `time_s` seconds.
+    fn frame_at(&self, time_s: f64) -> usize {
+        let index = (time_s * self.fps + 1e-9).floor() as usize;
+        if self.repeat { index % self.frames.len() } else { index.min(self.frames.len() - 1) }
+    }
+}
+
+/// What became of the marker in one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Finding {
+    /// Found, with its corners (pixels, OpenCV's order) and its pose.
+    Found {
+        /// The corners.
+        corners: [DVec2; 4],
+        /// The pose.
+        pose: Pose,
+        /// Root-mean-square reprojection error, pixels.
+        error_px: f64,
+        /// The other planar solution's error, pixels.
+        alternative_error_px: f64,
+    },
+    /// Not found; the last pose is shown while it is held.
+    Lost {
+        /// Whether an earlier pose is still shown.
+        held: bool,
+    },
+    /// The frame could not be read (the message names the file).
+    Unreadable(String),
+}
+
+/// One shown frame's record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameRecord {
+    /// Its index in the folder.
+    pub frame: usize,
+    /// When it was shown, simulated seconds.
+    pub time_s: f64,
+    /// The marker in it.
+    pub finding: Finding,
+}
+
+/// The overlay's changing state.
+#[derive(Component, Debug, Default)]
+pub struct ArState {
+    /// Simulated seconds since the first frame.
+    time_s: f64,
+    /// The frame shown and its pixels.
+    shown: Option<(usize, Arc<RgbaImage>)>,
+    tracker: Tracker,
+    /// The pose the scene is drawn at; `None` hides it.
+    pub pose: Option<Pose>,
+    /// The detected corners in the frame shown, if found in it.
+    corners: Option<[DVec2; 4]>,
+    /// Every shown frame's record, in order.
+    pub records: Vec<FrameRecord>,
+    /// The largest distance between the detected corners and the marker's corners as the
+    /// render camera projects them, view pixels: the overlay's alignment.
+    pub overlay_error_px: Option<f64>,
+    scratch: Scratch,
+    backdrop: Option<BackdropMap>,
+    backdrop_pixels: Vec<u8>,
+}
+
+fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
+    for (view, mut state) in &mut overlays {
+        let state = &mut *state;
+        let due = view.frame_at(state.time_s);
+        if state.shown.as_ref().is_none_or(|(index, _)| *index != due) {
+            show(view, state, due);
+        }
+        state.time_s += time.delta_secs_f64();
+    }
+}
+
+/// Reads frame `index`, finds the marker and updates the pose.
+fn show(view: &ArView, state: &mut ArState, index: usize) {
+    let finding = match view.frames.load(index) {
+        Err(message) => {
+            warn!("{message}");
+            Finding::Unreadable(message)
+        }
+        Ok(image) => {
+            let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
+            let markers = detect(&gray, &view.dictionary, &Settings::default(), Some(&view.camera), &mut state.scratch);
+            state.shown = Some((index, Arc::new(image)));
+            let found = markers.iter().find(|m| m.id == view.marker_id).and_then(|marker| {
+                let corners = marker.corners.map(|c| c.as_dvec2());
+                estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
+            });
+            match found {
+                Some((corners, estimate)) => Finding::Found {
+                    corners,
+                    pose: estimate.pose,
+                    error_px: estimate.error_px,
+                    alternative_error_px: estimate.alternative_error_px,
+                },
+                None => Finding::Lost { held: false },
+            }
+        }
+    };
+    let (found_pose, corners) = match &finding {
+        Finding::Found { pose, corners, .. } => (Some(*pose), Some(*corners)),
+        _ => (None, None),
+    };
+    let shown = state.tracker.update(found_pose, state.time_s, view.hold_s);
+    state.pose = shown.map(|(pose, _)| pose);
+    state.corners = corners;
+    let finding = match finding {
+        Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
+        other => other,
+    };
+    state.records.push(FrameRecord { frame: index, time_s: state.time_s, finding });
+}
+
+fn place_camera(
+    target: Res<RasterTarget>,
+    mut render: ResMut<RenderView>,
+    mut overlays: Query<(&ArView, &mut ArState)>,
+) {
+    let Some((view, mut state)) = overlays.iter_mut().next() else { return };
+    let Some(pose) = state.pose else {
+        state.overlay_error_px = None;
+        return;
+    };
+    let size = target.size.max(UVec2::ONE);
+    let fit = Fit::new(view.camera.size, size);
+    let (near, far) = (render.camera.near, render.camera.far);
+    render.camera = render_camera(&pose, &view.camera, &fit, size, view.scale, near, far);
+    // Where the drawn scene puts the marker's corners, against where they were found (both
+    // without the lens's distortion, as the backdrop shows them).
+    let clip = render.camera.view_projection(size.x as f32 / size.y as f32);
+    let ideal = |pixel: DVec2| {
+        let n = view.camera.normalized(pixel);
+        DVec2::new(view.camera.fx * n.x + view.camera.cx, view.camera.fy * n.y + view.camera.cy)
+    };
+    state.overlay_error_px = state.corners.map(|corners| {
+        marker_corners(view.side_m)
+            .iter()
+            .zip(corners)
+            .map(|(&corner, found)| {
+                let ndc = clip.project_point3(world_from_marker(corner, view.scale));
+                let drawn = DVec2::new(
+                    f64::from((ndc.x + 1.0) * 0.5 * size.x as f32) - 0.5,
+                    f64::from((1.0 - ndc.y) * 0.5 * size.y as f32) - 0.5,
+                );
+                drawn.distance(fit.to_view(ideal(found)))
+            })
+            .fold(0.0, f64::max)
+    });
+}
+
+fn lay_over_frame(
+    render: Res<RenderView>,
+    mut target: ResMut<RasterTarget>,
+    mut overlays: Query<(&ArView, &mut ArState)>,
+) {
+    let Some((view, mut state)) = overlays.iter_mut().next() else { return };
+    let state = &mut *state;
+    let Some((_, image)) = &state.shown else { return };
+    let framebuffer = &mut target.framebuffer;
+    let size = UVec2::new(framebuffer.width(), framebuffer.height());
+    if state.backdrop.as_ref().is_none_or(|map| map.target != size || map.camera != view.camera) {
+        state.backdrop = Some(BackdropMap::new(&view.camera, size));
+    }
+    if let Some(map) = &state.backdrop {
+        map.apply(image.as_raw(), render.background, &mut state.backdrop_pixels);
+    }
+    if state.pose.is_none() {
+        // The marker is lost: the photograph alone.
+        framebuffer.clear(render.background);
+    }
+    framebuffer.fill_empty(&state.backdrop_pixels);
+}
+
+impl DumpState for ArView {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        out.insert("frames".into(), json!(self.frames.len()));
+        out.insert("frame_size".into(), json!(self.frames.size));
+        out.insert("dictionary".into(), json!(self.dictionary.name));
+        out.insert("marker_id".into(), json!(self.marker_id));
+        out.insert("marker_side_m".into(), json!(self.side_m));
+    }
+}
+
+impl DumpState for ArState {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let vector = |v: DVec3| json!(v.to_array());
+        let records: Vec<Value> = self
+            .records
+            .iter()
+            .map(|record| {
+                let mut entry = json!({"frame": record.frame, "time_s": record.time_s});
+                let fields = match &record.finding {
+                    Finding::Found { corners, pose, error_px, alternative_error_px } => json!({
+                        "marker": "found",
+                        "corners": corners.map(|c| c.to_array()),
+                        "rvec": vector(pose.rvec()),
+                        "tvec": vector(pose.translation),
+                        "reprojection_error_px": error_px,
+                        "alternative_error_px": alternative_error_px,
+                    }),
+                    Finding::Lost { held: true } => json!({"marker": "held"}),
+                    Finding::Lost { held: false } => json!({"marker": "not found"}),
+                    Finding::Unreadable(message) => json!({"marker": "unreadable", "error": message}),
+                };
+                if let (Value::Object(entry), Value::Object(fields)) = (&mut entry, fields) {
+                    entry.extend(fields);
+                }
+                entry
+            })
+            .collect();
+        out.insert("shown".into(), json!(self.shown.as_ref().map(|(index, _)| index)));
+        out.insert("overlay_visible".into(), json!(self.pose.is_some()));
+        out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
+        out.insert("poses".into(), Value::Array(records));
+    }
+}
