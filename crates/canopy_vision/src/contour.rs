@@ -44,14 +44,35 @@ impl Integral {
         mask.resize(width * height, 0);
         for y in 0..height {
             let (y0, y1) = (y.saturating_sub(half), (y + half + 1).min(height));
-            let (top, bottom) = (&self.sums[y0 * stride..], &self.sums[y1 * stride..]);
+            let (top, bottom) =
+                (&self.sums[y0 * stride..(y0 + 1) * stride], &self.sums[y1 * stride..(y1 + 1) * stride]);
             let row = &gray.pixels[y * width..(y + 1) * width];
             let out = &mut mask[y * width..(y + 1) * width];
-            for x in 0..width {
-                let (x0, x1) = (x.saturating_sub(half), (x + half + 1).min(width));
+            let rows = (y1 - y0) as f32;
+            // `pixel <= sum / area - offset`, as `(pixel + offset) * area <= sum`.
+            let dark = |x: usize, x0: usize, x1: usize| {
                 let sum = bottom[x1] + top[x0] - bottom[x0] - top[x1];
-                let area = ((x1 - x0) * (y1 - y0)) as f32;
-                out[x] = u8::from(f32::from(row[x]) <= sum as f32 / area - offset);
+                u8::from((f32::from(row[x]) + offset) * ((x1 - x0) as f32 * rows) <= sum as f32)
+            };
+            if width <= 2 * half + 1 {
+                for x in 0..width {
+                    out[x] = dark(x, x.saturating_sub(half), (x + half + 1).min(width));
+                }
+                continue;
+            }
+            for x in (0..half).chain(width - half - 1..width) {
+                out[x] = dark(x, x.saturating_sub(half), (x + half + 1).min(width));
+            }
+            // The interior, where the window is whole: one pass of slices the compiler can
+            // vectorize.
+            let area = (2 * half + 1) as f32 * rows;
+            let span = width - 2 * half - 1;
+            let corners = bottom[2 * half + 1..].iter().zip(&top[..]).zip(&bottom[..]).zip(&top[2 * half + 1..]);
+            for ((((&br, &tl), &bl), &tr), (&pixel, out)) in
+                corners.zip(row[half..].iter().zip(&mut out[half..])).take(span)
+            {
+                let sum = br + tl - bl - tr;
+                *out = u8::from((f32::from(pixel) + offset) * area <= sum as f32);
             }
         }
     }
@@ -99,19 +120,22 @@ struct Region {
     max: [i32; 2],
 }
 
-/// Labels the 8-connected regions of `mask` (two passes with union–find) and returns them in
-/// the raster order of their first pixels.
+/// Labels the 8-connected regions of `mask` (one pass with union–find, each provisional
+/// label keeping its first pixel and bounding box) and returns them in the raster order of
+/// their first pixels.
 fn label_regions(mask: &[u8], w: usize, h: usize, labels: &mut Vec<u32>) -> Vec<Region> {
     labels.clear();
     labels.resize(w * h, 0);
-    // parent[0] is the background; provisional labels start at 1.
+    // parent[0] is the background; provisional labels start at 1, each with a region.
     let mut parent: Vec<u32> = vec![0];
+    let mut boxes: Vec<Region> = vec![Region { start: [0, 0], min: [0, 0], max: [0, 0] }];
     for y in 0..h {
+        let row = &mask[y * w..(y + 1) * w];
         for x in 0..w {
-            let i = y * w + x;
-            if mask[i] == 0 {
+            if row[x] == 0 {
                 continue;
             }
+            let i = y * w + x;
             // Already-labelled neighbours: west, north-west, north, north-east.
             let mut label = 0;
             let mut join = |other: u32, parent: &mut Vec<u32>| {
@@ -142,36 +166,34 @@ fn label_regions(mask: &[u8], w: usize, h: usize, labels: &mut Vec<u32>) -> Vec<
                     join(labels[above + 1], &mut parent);
                 }
             }
+            let (xi, yi) = (x as i32, y as i32);
             if label == 0 {
                 label = parent.len() as u32;
                 parent.push(label);
+                boxes.push(Region { start: [xi, yi], min: [xi, yi], max: [xi, yi] });
+            } else {
+                let region = &mut boxes[label as usize];
+                region.min = [region.min[0].min(xi), region.min[1].min(yi)];
+                region.max = [region.max[0].max(xi), region.max[1].max(yi)];
             }
             labels[i] = label;
         }
     }
-    // Every label's root; roots numbered in order of first appearance (raster order, since a
-    // root is the smallest label of its set).
-    let mut region_of = vec![u32::MAX; parent.len()];
-    let mut regions: Vec<Region> = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let label = labels[y * w + x];
-            if label == 0 {
-                continue;
-            }
-            let root = find(&mut parent, label) as usize;
-            let (xi, yi) = (x as i32, y as i32);
-            if region_of[root] == u32::MAX {
-                region_of[root] = regions.len() as u32;
-                regions.push(Region { start: [xi, yi], min: [xi, yi], max: [xi, yi] });
-            } else {
-                let region = &mut regions[region_of[root] as usize];
-                region.min = [region.min[0].min(xi), region.min[1].min(yi)];
-                region.max = [region.max[0].max(xi), region.max[1].max(yi)];
-            }
+    // Each set's root is its smallest label, created at the set's first pixel in raster
+    // order; the other labels' boxes are merged into it.
+    for label in (1..parent.len()).rev() {
+        let root = find(&mut parent, label as u32) as usize;
+        if root != label {
+            let (min, max) = (boxes[label].min, boxes[label].max);
+            let region = &mut boxes[root];
+            region.min = [region.min[0].min(min[0]), region.min[1].min(min[1])];
+            region.max = [region.max[0].max(max[0]), region.max[1].max(max[1])];
         }
     }
-    regions
+    (1..parent.len())
+        .filter(|&label| parent[label] == label as u32)
+        .map(|label| std::mem::replace(&mut boxes[label], Region { start: [0, 0], min: [0, 0], max: [0, 0] }))
+        .collect()
 }
 
 fn find(parent: &mut [u32], mut label: u32) -> u32 {
@@ -337,6 +359,33 @@ mod tests {
         let points = &outer_contours(&mask, w, h, 1, 100, &mut Vec::new())[0].points;
         // Out along the top and back, down the side and back: the spur's pixels twice.
         assert_eq!(points.len(), 11, "{points:?}");
+    }
+
+    #[test]
+    fn the_threshold_equals_the_window_mean_rule_everywhere() {
+        let mut gray = Gray::filled(23, 17, 0);
+        for (i, p) in gray.pixels.iter_mut().enumerate() {
+            *p = ((i * 7919) % 251) as u8;
+        }
+        let integral = Integral::new(&gray);
+        let mut mask = Vec::new();
+        for window in [3, 5, 13, 31] {
+            integral.threshold(&gray, window, 7.0, &mut mask);
+            let half = (window / 2) as i32;
+            for y in 0..17i32 {
+                for x in 0..23i32 {
+                    let (mut sum, mut area) = (0.0, 0.0);
+                    for v in (y - half).max(0)..=(y + half).min(16) {
+                        for u in (x - half).max(0)..=(x + half).min(22) {
+                            sum += f32::from(gray.at(u as u32, v as u32));
+                            area += 1.0;
+                        }
+                    }
+                    let expected = u8::from(f32::from(gray.at(x as u32, y as u32)) <= sum / area - 7.0);
+                    assert_eq!(mask[(y * 23 + x) as usize], expected, "window {window} at ({x}, {y})");
+                }
+            }
+        }
     }
 
     #[test]
