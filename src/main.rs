@@ -5,7 +5,7 @@ use bevy::math::UVec2;
 use canopy::app::{FIXED_HZ, entity_kinds, window_app};
 use canopy::foundation::dump::write_dump;
 use canopy::raster::MAX_TARGET_SIZE;
-use canopy::run::{RunOptions, run_headless};
+use canopy::run::{Recording, RunOptions, run_headless, run_recorded};
 use canopy::terrain::bands::{Band, band_texture};
 use canopy::terrain::def::draw_seed;
 use canopy::terrain::experiment;
@@ -411,6 +411,12 @@ struct RunArgs {
     /// Frame size in pixels, WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH", default_value = "1280x720", value_parser = parse_size)]
     size: UVec2,
+    /// Write frames as PNG files into this folder while running (`frame-00001.png`, ...).
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+    /// Steps between recorded frames: 2 records 30 frames a second.
+    #[arg(long, default_value_t = 1, requires = "record", value_parser = clap::value_parser!(u64).range(1..))]
+    record_every: u64,
 }
 
 fn parse_seconds(text: &str) -> Result<f64, String> {
@@ -735,7 +741,8 @@ fn run(args: RunArgs) -> ExitCode {
         (None, None) => FIXED_HZ as u64,
     };
     let options = RunOptions { scene: args.scene, frames, timeline: args.input, size: args.size, log: true };
-    let output = match run_headless(&options) {
+    let recording = args.record.map(|folder| Recording { folder, every: args.record_every });
+    let output = match run_recorded(&options, recording.as_ref()) {
         Ok(output) => output,
         Err(error) => {
             eprintln!("{error}");

@@ -79,8 +79,23 @@ pub fn update_until_loaded(app: &mut App, scene: &Path) -> Result<(), RunError> 
     }
 }
 
+/// Frames written while a run goes: every `every`-th step's frame into `folder` as
+/// `frame-00001.png`, ... (an augmented-reality scene's composited frames, a video's stills).
+#[derive(Debug, Clone)]
+pub struct Recording {
+    /// Where the frames go (created if needed).
+    pub folder: PathBuf,
+    /// Steps between recorded frames, at least 1.
+    pub every: u64,
+}
+
 /// Runs a scene headless.
 pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
+    run_recorded(options, None)
+}
+
+/// Runs a scene headless, writing frames as it goes when `recording` says so.
+pub fn run_recorded(options: &RunOptions, recording: Option<&Recording>) -> Result<RunOutput, RunError> {
     // Check the files first, so that errors come out before any app is built.
     entity_kinds().load(&options.scene)?;
     let timeline = options.timeline.as_deref().map(Timeline::load).transpose()?;
@@ -95,11 +110,26 @@ pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
             .map_err(|error| RunError::Parameter { path: options.timeline.clone().unwrap_or_default(), error })?;
         app.insert_resource(timeline);
     }
+    if let Some(recording) = recording {
+        std::fs::create_dir_all(&recording.folder)
+            .map_err(|error| RunError::Load(format!("{}: {error}", recording.folder.display())))?;
+    }
+    let mut recorded = 0;
     for frame in 0..options.frames {
-        if frame + 1 == options.frames {
+        let record = recording.filter(|r| frame % r.every.max(1) == 0);
+        if frame + 1 == options.frames || record.is_some() {
             app.world_mut().resource_mut::<RenderPolicy>().requested = true;
         }
         app.update();
+        if let Some(recording) = record {
+            recorded += 1;
+            let path = recording.folder.join(format!("frame-{recorded:05}.png"));
+            app.world()
+                .resource::<RasterTarget>()
+                .framebuffer
+                .save_png(&path)
+                .map_err(|error| RunError::Load(format!("{}: {error}", path.display())))?;
+        }
     }
     if options.frames == 0 {
         // Draw the initial state without stepping.

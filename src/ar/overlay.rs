@@ -154,14 +154,14 @@ pub struct Tracker {
 
 impl Tracker {
     /// Takes frame time `time_s`'s finding; returns the pose to show and whether it is held
-    /// from an earlier frame.
+    /// from an earlier frame (a microsecond's rounding of the frame times is forgiven).
     pub fn update(&mut self, found: Option<Pose>, time_s: f64, hold_s: f64) -> Option<(Pose, bool)> {
         if let Some(pose) = found {
             self.last = Some((pose, time_s));
             return Some((pose, false));
         }
         match self.last {
-            Some((pose, seen)) if time_s - seen <= hold_s + 1e-9 => Some((pose, true)),
+            Some((pose, seen)) if time_s - seen <= hold_s + 1e-6 => Some((pose, true)),
             _ => {
                 self.last = None;
                 None

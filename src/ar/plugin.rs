@@ -83,9 +83,10 @@ impl ArView {
         }
     }
 
-    /// The frame due at `time_s` seconds.
+    /// The frame due at `time_s` seconds (a millionth of a frame early counts as on time:
+    /// fixed steps of 1/60 s are not exact in binary).
     fn frame_at(&self, time_s: f64) -> usize {
-        let index = (time_s * self.fps + 1e-9).floor() as usize;
+        let index = (time_s * self.fps + 1e-6).floor() as usize;
         if self.repeat { index % self.frames.len() } else { index.min(self.frames.len() - 1) }
     }
 }
@@ -127,10 +128,14 @@ pub struct FrameRecord {
 /// The overlay's changing state.
 #[derive(Component, Debug, Default)]
 pub struct ArState {
+    /// Fixed steps since the first frame.
+    steps: u64,
     /// Simulated seconds since the first frame.
     time_s: f64,
-    /// The frame shown and its pixels.
-    shown: Option<(usize, Arc<RgbaImage>)>,
+    /// The frame shown.
+    shown: Option<usize>,
+    /// The last frame read's pixels (an unreadable frame leaves the one before).
+    image: Option<Arc<RgbaImage>>,
     tracker: Tracker,
     /// The pose the scene is drawn at; `None` hides it.
     pub pose: Option<Pose>,
@@ -139,8 +144,11 @@ pub struct ArState {
     /// Every shown frame's record, in order.
     pub records: Vec<FrameRecord>,
     /// The largest distance between the detected corners and the marker's corners as the
-    /// render camera projects them, view pixels: the overlay's alignment.
+    /// render camera projects them in the last frame drawn, view pixels: the overlay's
+    /// alignment.
     pub overlay_error_px: Option<f64>,
+    /// The largest [`ArState::overlay_error_px`] of every frame drawn so far.
+    pub overlay_error_max_px: f64,
     scratch: Scratch,
     backdrop: Option<BackdropMap>,
     backdrop_pixels: Vec<u8>,
@@ -150,15 +158,17 @@ fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
     for (view, mut state) in &mut overlays {
         let state = &mut *state;
         let due = view.frame_at(state.time_s);
-        if state.shown.as_ref().is_none_or(|(index, _)| *index != due) {
+        if state.shown != Some(due) {
             show(view, state, due);
         }
-        state.time_s += time.delta_secs_f64();
+        state.steps += 1;
+        state.time_s = state.steps as f64 * time.delta_secs_f64();
     }
 }
 
 /// Reads frame `index`, finds the marker and updates the pose.
 fn show(view: &ArView, state: &mut ArState, index: usize) {
+    state.shown = Some(index);
     let finding = match view.frames.load(index) {
         Err(message) => {
             warn!("{message}");
@@ -167,7 +177,7 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
         Ok(image) => {
             let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
             let markers = detect(&gray, &view.dictionary, &Settings::default(), Some(&view.camera), &mut state.scratch);
-            state.shown = Some((index, Arc::new(image)));
+            state.image = Some(Arc::new(image));
             let found = markers.iter().find(|m| m.id == view.marker_id).and_then(|marker| {
                 let corners = marker.corners.map(|c| c.as_dvec2());
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
@@ -232,6 +242,7 @@ fn place_camera(
             })
             .fold(0.0, f64::max)
     });
+    state.overlay_error_max_px = state.overlay_error_max_px.max(state.overlay_error_px.unwrap_or(0.0));
 }
 
 fn lay_over_frame(
@@ -241,7 +252,7 @@ fn lay_over_frame(
 ) {
     let Some((view, mut state)) = overlays.iter_mut().next() else { return };
     let state = &mut *state;
-    let Some((_, image)) = &state.shown else { return };
+    let Some(image) = &state.image else { return };
     let framebuffer = &mut target.framebuffer;
     let size = UVec2::new(framebuffer.width(), framebuffer.height());
     if state.backdrop.as_ref().is_none_or(|map| map.target != size || map.camera != view.camera) {
@@ -294,9 +305,10 @@ impl DumpState for ArState {
                 entry
             })
             .collect();
-        out.insert("shown".into(), json!(self.shown.as_ref().map(|(index, _)| index)));
+        out.insert("shown".into(), json!(self.shown));
         out.insert("overlay_visible".into(), json!(self.pose.is_some()));
         out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
+        out.insert("overlay_error_max_px".into(), json!(self.overlay_error_max_px));
         out.insert("poses".into(), Value::Array(records));
     }
 }

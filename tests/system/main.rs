@@ -2,6 +2,7 @@
 //! dump and the framebuffer; one module per domain, in one binary so that they build once and
 //! run in parallel.
 
+mod ar;
 mod common;
 mod controls;
 mod elastic;

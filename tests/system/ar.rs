@@ -1,0 +1,189 @@
+//! The augmented-reality overlay over the sample sequence, whose true poses are in its
+//! `truth.json`: the marker found in every frame showing it whole, its pose within 1 % of the
+//! distance and 1 degree, nothing taken for it in frames without it, the drawn marker within
+//! a pixel of the photographed one, a lost marker held then hidden, and bad input reported
+//! with its file.
+
+use crate::common::{entity, path};
+use bevy::math::{DVec3, UVec2};
+use canopy::run::{Recording, RunOptions, run_recorded};
+use canopy_vision::pose::Pose;
+use serde_json::Value;
+use std::path::Path;
+
+const SAMPLE: &str = "scenes/ar/table";
+
+fn run(scene: &Path, seconds: f64, size: UVec2, record: bool) -> Value {
+    let frames_folder = tempfile::tempdir().unwrap();
+    let options =
+        RunOptions { scene: scene.to_path_buf(), frames: (seconds * 60.0) as u64, timeline: None, size, log: false };
+    let recording = Recording { folder: frames_folder.path().to_path_buf(), every: 1 };
+    let output = run_recorded(&options, record.then_some(&recording)).unwrap_or_else(|e| panic!("{e}"));
+    if record {
+        let written = std::fs::read_dir(frames_folder.path()).unwrap().count() as u64;
+        assert_eq!(written, options.frames, "one recorded frame a step");
+    }
+    output.dump
+}
+
+fn vector(value: &Value) -> DVec3 {
+    let a: Vec<f64> = value.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    DVec3::new(a[0], a[1], a[2])
+}
+
+fn truth() -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path(SAMPLE).join("truth.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn the_sample_sequence_is_tracked_within_a_percent_and_a_degree() {
+    let dump = run(&path("scenes/ar.yaml"), 3.0, UVec2::new(640, 480), true);
+    let overlay = entity(&dump, "overlay");
+    let truth = truth();
+    let truth_frames = truth["frames"].as_array().unwrap();
+    let records = overlay["poses"].as_array().unwrap();
+    assert_eq!(records.len(), 90, "every frame of the 3 s at 30 a second shown once");
+    let (mut whole, mut absent, mut last_found_s) = (0, 0, f64::NEG_INFINITY);
+    for record in records {
+        let index = record["frame"].as_u64().unwrap() as usize;
+        let time = record["time_s"].as_f64().unwrap();
+        let expected = &truth_frames[index];
+        let marker = record["marker"].as_str().unwrap();
+        match expected["view"].as_str().unwrap() {
+            "whole" => {
+                whole += 1;
+                assert_eq!(marker, "found", "frame {index}");
+                let true_pose = Pose::from_rvec(vector(&expected["rvec"]), vector(&expected["tvec"]));
+                let pose = Pose::from_rvec(vector(&record["rvec"]), vector(&record["tvec"]));
+                let distance = true_pose.translation.length();
+                let position = pose.translation.distance(true_pose.translation) / distance;
+                let angle = pose.angle_to(&true_pose).to_degrees();
+                assert!(position < 0.01 && angle < 1.0, "frame {index}: {position} of the distance, {angle} degrees");
+                assert!(record["reprojection_error_px"].as_f64().unwrap() < 0.5, "frame {index}");
+            }
+            "absent" => {
+                absent += 1;
+                let expected = if time - last_found_s <= 0.5 { "held" } else { "not found" };
+                assert_eq!(marker, expected, "frame {index}: nothing is taken for the marker");
+            }
+            _ => assert!(["found", "held"].contains(&marker), "frame {index}: {marker}"),
+        }
+        if marker == "found" {
+            last_found_s = time;
+        }
+    }
+    assert!(whole >= 60 && absent >= 5, "{whole} whole, {absent} absent");
+    let drawn = overlay["overlay_error_max_px"].as_f64().unwrap();
+    assert!(drawn > 0.0 && drawn < 1.0, "the drawn marker's corners are {drawn} px from the found ones");
+}
+
+#[test]
+fn the_marker_found_is_drawn_over_and_the_photograph_shows_around_it() {
+    let options =
+        RunOptions { scene: path("scenes/ar.yaml"), frames: 2, timeline: None, size: UVec2::new(640, 480), log: false };
+    let output = run_recorded(&options, None).unwrap();
+    let overlay = entity(&output.dump, "overlay");
+    assert_eq!(overlay["overlay_visible"], true);
+    // The first frame as the camera took it: where the scene is not drawn, the framebuffer
+    // holds its pixels (no distortion in the sample, the same size).
+    let photograph = image::open(path(SAMPLE).join("frame-0001.jpg")).unwrap().to_rgba8();
+    let (mut same, mut drawn) = (0, 0);
+    for (pixel, photo) in output.framebuffer.color().chunks_exact(4).zip(photograph.as_raw().chunks_exact(4)) {
+        if pixel.iter().zip(photo).all(|(a, b)| a.abs_diff(*b) <= 1) {
+            same += 1;
+        } else {
+            drawn += 1;
+        }
+    }
+    assert!(same > 640 * 480 / 2, "the photograph fills the background: {same} pixels");
+    assert!(drawn > 2000, "the scene is drawn over it: {drawn} pixels");
+}
+
+/// A scene over `frames` of the sample copied into a folder, with `hold_s`.
+fn copied_scene(folder: &Path, frames: &[usize], hold_s: f64) -> std::path::PathBuf {
+    let clip = folder.join("clip");
+    std::fs::create_dir_all(&clip).unwrap();
+    for (i, &frame) in frames.iter().enumerate() {
+        let name = format!("frame-{frame:04}.jpg");
+        std::fs::copy(path(SAMPLE).join(&name), clip.join(format!("{i:03}.jpg"))).unwrap();
+    }
+    std::fs::copy(path(SAMPLE).join("calibration.yaml"), folder.join("camera.yaml")).unwrap();
+    let scene = folder.join("scene.yaml");
+    std::fs::write(
+        &scene,
+        format!(
+            "entities:\n  - name: overlay\n    ar: {{frames: clip, fps: 30, loop: false, calibration: camera.yaml, \
+             dictionary: 6x6_250, marker_id: 23, marker_side_m: 0.1, scale: 0.02, hold_s: {hold_s}}}\n  \
+             - shape: {{primitive: box, size: 2}}\n"
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+#[test]
+fn a_lost_marker_is_held_for_its_time_then_the_scene_is_hidden() {
+    let truth = truth();
+    let view = |i: usize| truth["frames"][i - 1]["view"].as_str().unwrap().to_string();
+    let whole = (1..=90).find(|&i| view(i) == "whole").unwrap();
+    let absent = (1..=90).find(|&i| view(i) == "absent").unwrap();
+    // One frame with the marker, then 20 without (two thirds of a second at 30 a second).
+    let frames: Vec<usize> = std::iter::once(whole).chain(std::iter::repeat_n(absent, 20)).collect();
+    for (hold_s, held) in [(0.3, 9), (0.0, 0)] {
+        let folder = tempfile::tempdir().unwrap();
+        let dump = run(&copied_scene(folder.path(), &frames, hold_s), 0.7, UVec2::new(320, 240), false);
+        let overlay = entity(&dump, "overlay");
+        let marks: Vec<&str> =
+            overlay["poses"].as_array().unwrap().iter().map(|r| r["marker"].as_str().unwrap()).collect();
+        assert_eq!(marks[0], "found");
+        assert_eq!(marks.iter().filter(|m| **m == "held").count(), held, "hold {hold_s} s: {marks:?}");
+        assert!(marks[1 + held..].iter().all(|m| *m == "not found"), "{marks:?}");
+        assert_eq!(overlay["overlay_visible"], false, "hidden once the hold is over");
+    }
+}
+
+#[test]
+fn an_unreadable_frame_is_named_and_the_run_goes_on() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = copied_scene(folder.path(), &[1, 2, 3], 0.5);
+    std::fs::write(folder.path().join("clip/001.jpg"), b"no image").unwrap();
+    let dump = run(&scene, 0.1, UVec2::new(320, 240), false);
+    let records = entity(&dump, "overlay")["poses"].as_array().unwrap().clone();
+    let marks: Vec<&str> = records.iter().map(|r| r["marker"].as_str().unwrap()).collect();
+    assert_eq!(marks, vec!["found", "unreadable", "found"]);
+    assert!(records[1]["error"].as_str().unwrap().contains("001.jpg"), "{}", records[1]["error"]);
+}
+
+#[test]
+fn bad_sources_and_calibrations_are_located_errors() {
+    let kinds = canopy::app::entity_kinds();
+    let folder = tempfile::tempdir().unwrap();
+    let scene = copied_scene(folder.path(), &[1], 0.5);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let check = |scene_text: &str| {
+        std::fs::write(&scene, scene_text).unwrap();
+        kinds.load(&scene).unwrap_err()
+    };
+    // No frames in the folder.
+    std::fs::create_dir_all(folder.path().join("nothing")).unwrap();
+    let error = check(&text.replace("frames: clip", "frames: nothing"));
+    assert_eq!(error.location.map(|l| l.0), Some(3), "{error}");
+    assert!(error.message.contains("entities[0].ar.frames") && error.message.contains("no frames"), "{error}");
+    // An unknown dictionary and a marker the dictionary lacks.
+    let error = check(&text.replace("6x6_250", "6x6_9"));
+    assert!(error.message.contains("unknown dictionary `6x6_9`") && error.location.is_some(), "{error}");
+    let error = check(&text.replace("marker_id: 23", "marker_id: 250"));
+    assert!(error.message.contains("marker_id") && error.message.contains("0 to 249"), "{error}");
+    // A calibration without its distortion: the calibration file is named.
+    let calibration = std::fs::read_to_string(folder.path().join("camera.yaml")).unwrap();
+    let cut = calibration.split("distortion_coefficients").next().unwrap().to_string();
+    std::fs::write(folder.path().join("camera.yaml"), cut).unwrap();
+    let error = check(&text);
+    assert_eq!(error.path, folder.path().join("camera.yaml"), "{error}");
+    assert!(error.message.contains("missing distortion_coefficients"), "{error}");
+    // A calibration for frames of another shape.
+    std::fs::write(folder.path().join("camera.yaml"), calibration.replace("image_height: 480", "image_height: 400"))
+        .unwrap();
+    let error = check(&text);
+    assert!(error.message.contains("entities[0].ar.calibration") && error.message.contains("another shape"), "{error}");
+}
