@@ -209,3 +209,66 @@ fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
     assert!(!Path::new("x.obj").exists());
 }
+
+#[test]
+fn ar_tools_print_markers_poses_and_sequences() {
+    let folder = tempfile::tempdir().unwrap();
+    // A printable marker, read back by the detector tool.
+    let marker = folder.path().join("marker.png");
+    let output = canopy(&["ar", "marker", "--dictionary", "4x4_50", "--id", "7", "--cell-px", "20", "--out", marker.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let image = image::open(&marker).unwrap();
+    assert_eq!((image.width(), image.height()), (160, 160), "4 cells, the border and a margin of a cell: 8 cells");
+    let again = canopy(&["ar", "marker", "--id", "7", "--out", marker.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(1), "an existing file is never replaced unasked");
+    let wrong = canopy(&["ar", "marker", "--dictionary", "4x4_50", "--id", "50", "--out", "x.png"]);
+    assert!(wrong.status.code() == Some(2) && stderr(&wrong).contains("markers 0 to 49"), "{}", stderr(&wrong));
+
+    // A short synthetic sequence, then the detector on two of its frames and a bad file.
+    let sequence = folder.path().join("seq");
+    let output = canopy(&["ar", "sequence", "--out", sequence.to_str().unwrap(), "--frames", "3", "--size", "320x240", "--no-look-away"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sequence.join("truth.json")).unwrap()).unwrap();
+    let broken = folder.path().join("broken.png");
+    std::fs::write(&broken, b"not an image").unwrap();
+    let frame = sequence.join("frame-0001.png");
+    let calibration = sequence.join("calibration.yaml");
+    let output = canopy(&[
+        "ar",
+        "detect",
+        frame.to_str().unwrap(),
+        broken.to_str().unwrap(),
+        "--calibration",
+        calibration.to_str().unwrap(),
+        "--dictionary",
+        "6x6_250",
+        "--side",
+        "0.1",
+    ]);
+    assert_eq!(output.status.code(), Some(1), "an unreadable image fails the run: {}", stderr(&output));
+    assert!(stderr(&output).contains("broken.png"));
+    let results: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let found = &results[0]["markers"];
+    assert_eq!(found.as_array().unwrap().len(), 1);
+    assert_eq!(found[0]["id"], 23);
+    for (corner, expected) in found[0]["corners"].as_array().unwrap().iter().zip(truth["frames"][0]["corners"].as_array().unwrap()) {
+        let d = (0..2).map(|k| (corner[k].as_f64().unwrap() - expected[k].as_f64().unwrap()).powi(2)).sum::<f64>();
+        assert!(d.sqrt() < 0.5, "{corner} for {expected}");
+    }
+    let tz = found[0]["tvec"][2].as_f64().unwrap();
+    let true_tz = truth["frames"][0]["tvec"][2].as_f64().unwrap();
+    assert!((tz - true_tz).abs() < 0.01 * true_tz, "{tz} for {true_tz}");
+    assert!(results[1]["error"].as_str().unwrap().contains("broken.png"));
+    // The printed marker, without a calibration: ids and corners only.
+    let read = |dictionary: &str| {
+        let output = canopy(&["ar", "detect", marker.to_str().unwrap(), "--dictionary", dictionary]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        serde_json::from_slice::<serde_json::Value>(&output.stdout).unwrap()[0]["markers"].clone()
+    };
+    assert_eq!(read("6x6_250"), serde_json::json!([]), "a 4x4 marker is not in 6x6_250: none found");
+    let printed = read("4x4_50");
+    assert_eq!((printed[0]["id"].as_u64(), printed[0].get("rvec")), (Some(7), None));
+
+    let unknown = canopy(&["ar", "detect", frame.to_str().unwrap(), "--dictionary", "8x8_1"]);
+    assert!(unknown.status.code() == Some(2) && stderr(&unknown).contains("unknown dictionary `8x8_1`"), "{}", stderr(&unknown));
+}
