@@ -215,7 +215,18 @@ fn ar_tools_print_markers_poses_and_sequences() {
     let folder = tempfile::tempdir().unwrap();
     // A printable marker, read back by the detector tool.
     let marker = folder.path().join("marker.png");
-    let output = canopy(&["ar", "marker", "--dictionary", "4x4_50", "--id", "7", "--cell-px", "20", "--out", marker.to_str().unwrap()]);
+    let output = canopy(&[
+        "ar",
+        "marker",
+        "--dictionary",
+        "4x4_50",
+        "--id",
+        "7",
+        "--cell-px",
+        "20",
+        "--out",
+        marker.to_str().unwrap(),
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     let image = image::open(&marker).unwrap();
     assert_eq!((image.width(), image.height()), (160, 160), "4 cells, the border and a margin of a cell: 8 cells");
@@ -226,9 +237,20 @@ fn ar_tools_print_markers_poses_and_sequences() {
 
     // A short synthetic sequence, then the detector on two of its frames and a bad file.
     let sequence = folder.path().join("seq");
-    let output = canopy(&["ar", "sequence", "--out", sequence.to_str().unwrap(), "--frames", "3", "--size", "320x240", "--no-look-away"]);
+    let output = canopy(&[
+        "ar",
+        "sequence",
+        "--out",
+        sequence.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--size",
+        "320x240",
+        "--no-look-away",
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sequence.join("truth.json")).unwrap()).unwrap();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sequence.join("truth.json")).unwrap()).unwrap();
     let broken = folder.path().join("broken.png");
     std::fs::write(&broken, b"not an image").unwrap();
     let frame = sequence.join("frame-0001.png");
@@ -251,7 +273,9 @@ fn ar_tools_print_markers_poses_and_sequences() {
     let found = &results[0]["markers"];
     assert_eq!(found.as_array().unwrap().len(), 1);
     assert_eq!(found[0]["id"], 23);
-    for (corner, expected) in found[0]["corners"].as_array().unwrap().iter().zip(truth["frames"][0]["corners"].as_array().unwrap()) {
+    for (corner, expected) in
+        found[0]["corners"].as_array().unwrap().iter().zip(truth["frames"][0]["corners"].as_array().unwrap())
+    {
         let d = (0..2).map(|k| (corner[k].as_f64().unwrap() - expected[k].as_f64().unwrap()).powi(2)).sum::<f64>();
         assert!(d.sqrt() < 0.5, "{corner} for {expected}");
     }
@@ -270,5 +294,9 @@ fn ar_tools_print_markers_poses_and_sequences() {
     assert_eq!((printed[0]["id"].as_u64(), printed[0].get("rvec")), (Some(7), None));
 
     let unknown = canopy(&["ar", "detect", frame.to_str().unwrap(), "--dictionary", "8x8_1"]);
-    assert!(unknown.status.code() == Some(2) && stderr(&unknown).contains("unknown dictionary `8x8_1`"), "{}", stderr(&unknown));
+    assert!(
+        unknown.status.code() == Some(2) && stderr(&unknown).contains("unknown dictionary `8x8_1`"),
+        "{}",
+        stderr(&unknown)
+    );
 }

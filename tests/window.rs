@@ -304,3 +304,29 @@ fn the_jelly_is_dragged_off_its_crate_with_the_mouse_and_let_fall_on_the_floor()
         "the camera stayed still during the drag: {eye:?}"
     );
 }
+
+#[test]
+#[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
+fn the_ar_scene_plays_its_camera_frames_with_the_scene_on_the_marker() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ar.yaml");
+    let x = Xvfb::start();
+    let (app, _window) = play(&x, &scene, dir.path(), 60);
+    wait_for_exit(app);
+
+    let state = read(&dir.path().join("state.json"));
+    let overlay = entity(&state, "overlay");
+    assert!(overlay["shown"].as_u64().unwrap() > 0, "the frames advance: {overlay}");
+    let error = overlay["overlay_error_max_px"].as_f64().unwrap();
+    assert!(error > 0.0 && error < 1.0, "the drawn marker lies on the photographed one: {error} px");
+    // The window shows the photograph (the table's brown) and the scene on it (the land's
+    // green), in the view fitted to the frame's shape.
+    let image = image::open(dir.path().join("window.png")).unwrap().to_rgb8();
+    let (mut table, mut land) = (0, 0);
+    for p in image.pixels() {
+        let [r, g, b] = p.0.map(i32::from);
+        table += usize::from(r > g + 20 && g > b + 15);
+        land += usize::from(g > r + 20 && g > b + 20);
+    }
+    assert!(table > 50_000 && land > 500, "table {table} pixels, land {land}");
+}

@@ -1,7 +1,6 @@
 //! Drawing the scene over a camera frame: the scene's world placed in the marker's frame, the
-//! rasterizer's camera made from the marker's pose and the calibration, the frame fitted into
-//! the view (scaled, centred, its lens distortion removed) as the backdrop, and the pose held
-//! for a while when the marker is lost.
+//! rasterizer's camera made from the marker's pose and the calibration for the frame as it is
+//! fitted into the view, and the pose held for a while when the marker is lost.
 //!
 //! The scene's world has +y up; the marker's frame (OpenCV's) has +z out of the marker. The
 //! world's origin is the marker's centre, its ground the marker's plane, its +x the marker's
@@ -9,8 +8,9 @@
 //! scene's `scale`.
 
 use crate::raster::{Camera, Lens, Pinhole};
-use bevy::math::{DVec2, DVec3, UVec2, Vec2, Vec3};
+use bevy::math::{DVec3, UVec2, Vec2, Vec3};
 use canopy_vision::camera::Intrinsics;
+use canopy_vision::fit::Fit;
 use canopy_vision::pose::Pose;
 
 /// A world point (metres, +y up) in the marker's frame (metres), `scale` marker metres to the
@@ -23,36 +23,6 @@ pub fn marker_from_world(point: Vec3, scale: f64) -> DVec3 {
 pub fn world_from_marker(point: DVec3, scale: f64) -> Vec3 {
     let p = point / scale;
     Vec3::new(p.x as f32, p.z as f32, -p.y as f32)
-}
-
-/// Where the camera frame sits in a view of `target` pixels: scaled by `scale` (as large as
-/// fits, the shape kept) with its top-left corner at `offset` pixels.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fit {
-    /// View pixels per frame pixel.
-    pub scale: f64,
-    /// The frame's top-left corner in the view, pixels.
-    pub offset: DVec2,
-}
-
-impl Fit {
-    /// The frame of `frame` pixels as large as fits in `target`, centred.
-    pub fn new(frame: [u32; 2], target: UVec2) -> Self {
-        let [w, h] = frame.map(f64::from);
-        let (tw, th) = (f64::from(target.x), f64::from(target.y));
-        let scale = (tw / w).min(th / h);
-        Self { scale, offset: DVec2::new(0.5 * (tw - w * scale), 0.5 * (th - h * scale)) }
-    }
-
-    /// A frame pixel position (OpenCV's convention) in the view, same convention.
-    pub fn to_view(&self, pixel: DVec2) -> DVec2 {
-        (pixel + 0.5) * self.scale + self.offset - 0.5
-    }
-
-    /// A view pixel position in the frame.
-    pub fn to_frame(&self, pixel: DVec2) -> DVec2 {
-        (pixel + 0.5 - self.offset) / self.scale - 0.5
-    }
 }
 
 /// The rasterizer's camera that sees the world as the calibrated camera at `pose` saw the
@@ -84,66 +54,6 @@ pub fn render_camera(
     Camera { eye: centre, target: centre + forward, lens: Lens::Pinhole(pinhole), near, far }
 }
 
-/// For each view pixel, where in the camera frame its colour comes from (frame pixels), or
-/// none outside the fitted frame: the frame as a pinhole camera would have taken it, so that
-/// the pinhole render lines up with it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct BackdropMap {
-    /// The view's size, pixels.
-    pub target: UVec2,
-    /// The camera it was made for.
-    pub camera: Intrinsics,
-    /// Row by row over the view.
-    sources: Vec<Option<Vec2>>,
-}
-
-impl BackdropMap {
-    /// The map for a view of `target` pixels.
-    pub fn new(camera: &Intrinsics, target: UVec2) -> Self {
-        let fit = Fit::new(camera.size, target);
-        let [w, h] = camera.size.map(|s| f64::from(s) - 0.5);
-        let mut sources = Vec::with_capacity(target.x as usize * target.y as usize);
-        for y in 0..target.y {
-            for x in 0..target.x {
-                let ideal = fit.to_frame(DVec2::new(f64::from(x), f64::from(y)));
-                let inside = |p: DVec2| p.x >= -0.5 && p.y >= -0.5 && p.x <= w && p.y <= h;
-                let source = inside(ideal).then(|| {
-                    let normalized = DVec2::new((ideal.x - camera.cx) / camera.fx, (ideal.y - camera.cy) / camera.fy);
-                    camera.pixel_of(normalized)
-                });
-                sources.push(source.filter(|&p| inside(p)).map(|p| p.as_vec2()));
-            }
-        }
-        Self { target, camera: *camera, sources }
-    }
-
-    /// The backdrop of `frame` (RGBA8, the camera's size) for the view: RGBA8 row by row,
-    /// `background` outside the frame.
-    pub fn apply(&self, frame: &[u8], background: [u8; 4], out: &mut Vec<u8>) {
-        let [w, h] = self.camera.size;
-        out.clear();
-        out.reserve(self.sources.len() * 4);
-        let texel = |x: u32, y: u32| {
-            let i = (y.min(h - 1) as usize * w as usize + x.min(w - 1) as usize) * 4;
-            Vec3::new(f32::from(frame[i]), f32::from(frame[i + 1]), f32::from(frame[i + 2]))
-        };
-        for source in &self.sources {
-            let Some(p) = source else {
-                out.extend_from_slice(&background);
-                continue;
-            };
-            let p = p.max(Vec2::ZERO);
-            let (x0, y0) = (p.x.floor(), p.y.floor());
-            let (fx, fy) = (p.x - x0, p.y - y0);
-            let (x0, y0) = (x0 as u32, y0 as u32);
-            let top = texel(x0, y0).lerp(texel(x0 + 1, y0), fx);
-            let bottom = texel(x0, y0 + 1).lerp(texel(x0 + 1, y0 + 1), fx);
-            let c = top.lerp(bottom, fy);
-            out.extend_from_slice(&[c.x.round() as u8, c.y.round() as u8, c.z.round() as u8, 255]);
-        }
-    }
-}
-
 /// The pose shown: the latest found, kept for `hold_s` seconds of frames without the marker,
 /// then none.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -173,6 +83,7 @@ impl Tracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bevy::math::DVec2;
     use canopy_vision::pose::marker_corners;
 
     #[test]
@@ -189,7 +100,7 @@ mod tests {
         let scale = 0.01;
         // A view of another shape: the frame is scaled and centred in it.
         for target in [UVec2::new(640, 480), UVec2::new(1000, 500)] {
-            let fit = Fit::new(camera.size, target);
+            let fit = Fit::new(camera.size, target.to_array());
             let render = render_camera(&pose, &camera, &fit, target, scale, 0.1, 1000.0);
             let clip = render.view_projection(target.x as f32 / target.y as f32);
             for corner in marker_corners(0.1) {
@@ -202,20 +113,6 @@ mod tests {
                 assert!(pixel.distance(seen) < 0.01, "{target}: {pixel} for {seen}");
             }
         }
-    }
-
-    #[test]
-    fn the_backdrop_is_the_frame_fitted_and_bordered() {
-        let camera = Intrinsics::pinhole([4, 2], 60.0);
-        let frame: Vec<u8> = (0..8u8).flat_map(|i| [i * 30, 0, 0, 255]).collect();
-        let map = BackdropMap::new(&camera, UVec2::new(8, 8));
-        let mut out = Vec::new();
-        map.apply(&frame, [1, 2, 3, 255], &mut out);
-        // Scaled twice: rows 2 to 5 hold the frame, the rest is background.
-        assert_eq!(&out[..4], &[1, 2, 3, 255]);
-        let at = |x: usize, y: usize| out[(y * 8 + x) * 4];
-        assert_eq!((at(0, 2), at(7, 5)), (0, 210));
-        assert!(at(1, 2) > 0 && at(1, 2) < 30, "between the first two pixels");
     }
 
     #[test]

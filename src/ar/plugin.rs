@@ -10,7 +10,7 @@
 
 use super::def::{ArBuilt, ArDef};
 use super::frames::FrameFolder;
-use super::overlay::{BackdropMap, Fit, Tracker, render_camera, world_from_marker};
+use super::overlay::{Tracker, render_camera, world_from_marker};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::RenderView;
@@ -20,6 +20,7 @@ use bevy::prelude::*;
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::detect::{Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
+use canopy_vision::fit::{Fit, Remap};
 use canopy_vision::gray::Gray;
 use canopy_vision::pose::{Pose, estimate, marker_corners};
 use image::RgbaImage;
@@ -136,6 +137,8 @@ pub struct ArState {
     shown: Option<usize>,
     /// The last frame read's pixels (an unreadable frame leaves the one before).
     image: Option<Arc<RgbaImage>>,
+    /// Frames read so far: tells a new photograph from the one already fitted.
+    images_read: u64,
     tracker: Tracker,
     /// The pose the scene is drawn at; `None` hides it.
     pub pose: Option<Pose>,
@@ -144,14 +147,16 @@ pub struct ArState {
     /// Every shown frame's record, in order.
     pub records: Vec<FrameRecord>,
     /// The largest distance between the detected corners and the marker's corners as the
-    /// render camera projects them in the last frame drawn, view pixels: the overlay's
-    /// alignment.
+    /// render camera projects them in the last frame drawn, in camera-frame pixels (the view
+    /// may show the frame larger or smaller): the overlay's alignment.
     pub overlay_error_px: Option<f64>,
     /// The largest [`ArState::overlay_error_px`] of every frame drawn so far.
     pub overlay_error_max_px: f64,
     scratch: Scratch,
-    backdrop: Option<BackdropMap>,
+    /// The photograph fitted to the view, and the frame and background it was made from.
+    backdrop: Option<Remap>,
     backdrop_pixels: Vec<u8>,
+    backdrop_of: Option<(u64, [u8; 4])>,
 }
 
 fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
@@ -178,6 +183,7 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
             let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
             let markers = detect(&gray, &view.dictionary, &Settings::default(), Some(&view.camera), &mut state.scratch);
             state.image = Some(Arc::new(image));
+            state.images_read += 1;
             let found = markers.iter().find(|m| m.id == view.marker_id).and_then(|marker| {
                 let corners = marker.corners.map(|c| c.as_dvec2());
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
@@ -218,7 +224,7 @@ fn place_camera(
         return;
     };
     let size = target.size.max(UVec2::ONE);
-    let fit = Fit::new(view.camera.size, size);
+    let fit = Fit::new(view.camera.size, size.to_array());
     let (near, far) = (render.camera.near, render.camera.far);
     render.camera = render_camera(&pose, &view.camera, &fit, size, view.scale, near, far);
     // Where the drawn scene puts the marker's corners, against where they were found (both
@@ -238,7 +244,7 @@ fn place_camera(
                     f64::from((ndc.x + 1.0) * 0.5 * size.x as f32) - 0.5,
                     f64::from((1.0 - ndc.y) * 0.5 * size.y as f32) - 0.5,
                 );
-                drawn.distance(fit.to_view(ideal(found)))
+                drawn.distance(fit.to_view(ideal(found))) / fit.scale
             })
             .fold(0.0, f64::max)
     });
@@ -254,12 +260,18 @@ fn lay_over_frame(
     let state = &mut *state;
     let Some(image) = &state.image else { return };
     let framebuffer = &mut target.framebuffer;
-    let size = UVec2::new(framebuffer.width(), framebuffer.height());
+    let size = [framebuffer.width(), framebuffer.height()];
     if state.backdrop.as_ref().is_none_or(|map| map.target != size || map.camera != view.camera) {
-        state.backdrop = Some(BackdropMap::new(&view.camera, size));
+        state.backdrop = Some(Remap::new(&view.camera, size));
+        state.backdrop_of = None;
     }
-    if let Some(map) = &state.backdrop {
+    // The photograph fitted to the view is made once per camera frame.
+    let current = (state.images_read, render.background);
+    if state.backdrop_of != Some(current)
+        && let Some(map) = &state.backdrop
+    {
         map.apply(image.as_raw(), render.background, &mut state.backdrop_pixels);
+        state.backdrop_of = Some(current);
     }
     if state.pose.is_none() {
         // The marker is lost: the photograph alone.

@@ -8,6 +8,7 @@
 //! | [`dictionary`] | OpenCV's predefined ArUco and AprilTag dictionaries and matching with error correction |
 //! | [`detect`] | the marker detector: candidates, cells, ids, sub-pixel corners |
 //! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
+//! | [`fit`] | a camera frame fitted into a view of another size, its distortion removed |
 //! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
@@ -20,6 +21,7 @@ pub mod detect;
 mod dictionaries;
 pub mod dictionary;
 pub mod evaluate;
+pub mod fit;
 pub mod gray;
 pub mod pose;
 pub mod synth;
