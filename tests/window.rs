@@ -325,7 +325,7 @@ fn the_ar_scene_plays_its_camera_frames_with_the_scene_on_the_marker() {
     let (mut table, mut land) = (0, 0);
     for p in image.pixels() {
         let [r, g, b] = p.0.map(i32::from);
-        table += usize::from(r > g + 20 && g > b + 15);
+        table += usize::from(r > b + 15 && r >= g && g >= b);
         land += usize::from(g > r + 20 && g > b + 20);
     }
     assert!(table > 50_000 && land > 500, "table {table} pixels, land {land}");
