@@ -27,6 +27,11 @@ cargo run --quiet -- run scenes/fruit.yaml --input timelines/fruit_drop.yaml --s
     --size 640x360 --screenshot docs/images/fruit_dropped.png
 echo "docs/images/softbody.png docs/images/fruit.png docs/images/fruit_dropped.png"
 
+# The scene on the marker over the sample sequence's frame 50 (shown at step 100), and a marker.
+cargo run --quiet -- run scenes/ar.yaml --frames 100 --size 640x480 --screenshot docs/images/ar.png
+cargo run --quiet -- ar marker --dictionary 6x6_250 --id 23 --cell-px 16 --out docs/images/ar_marker.png --force
+echo "docs/images/ar.png docs/images/ar_marker.png"
+
 # The window with its panel, where a display server can be started (Xvfb).
 if command -v xvfb-run >/dev/null; then
     xvfb-run -a -s "-screen 0 1280x720x24" cargo run --quiet -- play scenes/demo.yaml --screenshot docs/images/window.png --frames 120

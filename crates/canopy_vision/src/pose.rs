@@ -26,8 +26,9 @@ pub struct PoseEstimate {
     pub pose: Pose,
     /// Its root-mean-square reprojection error over the four corners, pixels.
     pub error_px: f64,
-    /// The other solution of the planar ambiguity and its error, pixels: close to
-    /// `error_px` when the marker is small or seen face on and the choice is uncertain.
+    /// The other solution of the planar ambiguity (refined if it is a minimum of its own): its
+    /// error is close to `error_px` when the marker is small or seen face on and the choice
+    /// is uncertain.
     pub alternative: Pose,
     /// The alternative's root-mean-square reprojection error, pixels.
     pub alternative_error_px: f64,
@@ -91,13 +92,20 @@ pub fn estimate(corners: &[DVec2; 4], side: f64, camera: &Intrinsics) -> Option<
     let plane = object.map(|p| p.truncate());
     let homography = homography(&plane, &normalized)?;
     let [first, second] = ippe(&homography)?;
-    let mut solutions = [first, second].map(|rotation| {
-        let translation = translation(&rotation, &object, &normalized);
-        let pose = refine(Pose { rotation, translation }, &object, corners, camera);
+    let start =
+        [first, second].map(|rotation| Pose { rotation, translation: translation(&rotation, &object, &normalized) });
+    let mut solutions = start.map(|pose| {
+        let pose = refine(pose, &object, corners, camera);
         (pose, reprojection_error(&pose, &object, corners, camera))
     });
     solutions.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let [(pose, error_px), (alternative, alternative_error_px)] = solutions;
+    let [(pose, error_px), (mut alternative, mut alternative_error_px)] = solutions;
+    if alternative.angle_to(&pose) < 1e-3 {
+        // Both refinements reached the same minimum: the other solution is IPPE's mirrored
+        // pose as it was, the farther of the two from the one kept.
+        alternative = *start.iter().max_by(|a, b| a.angle_to(&pose).total_cmp(&b.angle_to(&pose))).unwrap_or(&start[1]);
+        alternative_error_px = reprojection_error(&alternative, &object, corners, camera);
+    }
     error_px.is_finite().then_some(PoseEstimate { pose, error_px, alternative, alternative_error_px })
 }
 
@@ -335,10 +343,18 @@ mod tests {
     #[test]
     fn a_tilted_marker_has_a_worse_mirror_solution() {
         let camera = camera();
-        let truth = Pose::from_rvec(DVec3::new(2.4, 0.0, 0.0), DVec3::new(0.0, 0.0, 0.5));
-        let found = estimate(&seen(&truth, 0.1, &camera), 0.1, &camera).unwrap();
-        assert!(found.alternative.angle_to(&truth) > 0.3, "the alternative is the mirrored tilt");
-        assert!(found.alternative_error_px > 1.0, "{}", found.alternative_error_px);
+        // Tilted 43 and 30 degrees from facing the camera (the second close to it, where
+        // refining the mirrored pose slides into the true one's minimum).
+        for (rvec, tvec) in [
+            (DVec3::new(2.4, 0.0, 0.0), DVec3::new(0.0, 0.0, 0.5)),
+            (DVec3::new(2.62, 0.0, 0.0), DVec3::new(-0.06, 0.0, 0.3)),
+        ] {
+            let truth = Pose::from_rvec(rvec, tvec);
+            let found = estimate(&seen(&truth, 0.1, &camera), 0.1, &camera).unwrap();
+            assert!(found.pose.angle_to(&truth) < 1e-6);
+            assert!(found.alternative.angle_to(&truth) > 0.3, "the alternative is the mirrored tilt");
+            assert!(found.alternative_error_px > 1.0, "{}", found.alternative_error_px);
+        }
     }
 
     #[test]
