@@ -51,7 +51,7 @@ def main(path):
         n, values = codes(name)
         digits = (n * n + 3) // 4
         lines.append(f"/// `{name}`: {len(values)} markers of {n} x {n} cells.")
-        lines.append(f"pub(super) const {table}: [u64; {len(values)}] = [")
+        lines.append(f"pub(super) static {table}: [u64; {len(values)}] = [")
         for start in range(0, len(values), 8):
             row = ", ".join(f"0x{v:0{digits}x}" for v in values[start : start + 8])
             lines.append(f"    {row},")

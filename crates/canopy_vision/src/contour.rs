@@ -55,8 +55,8 @@ impl Integral {
                 u8::from((f32::from(row[x]) + offset) * ((x1 - x0) as f32 * rows) <= sum as f32)
             };
             if width <= 2 * half + 1 {
-                for x in 0..width {
-                    out[x] = dark(x, x.saturating_sub(half), (x + half + 1).min(width));
+                for (x, out) in out.iter_mut().enumerate() {
+                    *out = dark(x, x.saturating_sub(half), (x + half + 1).min(width));
                 }
                 continue;
             }
@@ -67,7 +67,7 @@ impl Integral {
             // vectorize.
             let area = (2 * half + 1) as f32 * rows;
             let span = width - 2 * half - 1;
-            let corners = bottom[2 * half + 1..].iter().zip(&top[..]).zip(&bottom[..]).zip(&top[2 * half + 1..]);
+            let corners = bottom[2 * half + 1..].iter().zip(top).zip(bottom).zip(&top[2 * half + 1..]);
             for ((((&br, &tl), &bl), &tr), (&pixel, out)) in
                 corners.zip(row[half..].iter().zip(&mut out[half..])).take(span)
             {
@@ -131,8 +131,8 @@ fn label_regions(mask: &[u8], w: usize, h: usize, labels: &mut Vec<u32>) -> Vec<
     let mut boxes: Vec<Region> = vec![Region { start: [0, 0], min: [0, 0], max: [0, 0] }];
     for y in 0..h {
         let row = &mask[y * w..(y + 1) * w];
-        for x in 0..w {
-            if row[x] == 0 {
+        for (x, &dark) in row.iter().enumerate() {
+            if dark == 0 {
                 continue;
             }
             let i = y * w + x;

@@ -4,7 +4,7 @@
 //! (1 = white).
 
 /// `DICT_4X4_1000`: 1000 markers of 4 x 4 cells.
-pub(super) const ARUCO_4X4: [u64; 1000] = [
+pub(super) static ARUCO_4X4: [u64; 1000] = [
     0xb532, 0x0f9a, 0x332d, 0x9946, 0x549e, 0x79cd, 0x9e2e, 0xc4f2, 0xfeda, 0xcf56, 0xf991, 0x11a7, 0x0eb7, 0x2a0f,
     0x24b1, 0x263e, 0x4665, 0x6600, 0x6c5e, 0x76af, 0x868b, 0xb02b, 0xccd5, 0xdd82, 0xfe47, 0x9471, 0xace4, 0xa554,
     0x2123, 0x346f, 0x4415, 0x57b2, 0x9ecf, 0xf0cb, 0x08ae, 0x0929, 0x1875, 0x04ff, 0x0df6, 0x1c5a, 0x1718, 0x2a28,
@@ -80,7 +80,7 @@ pub(super) const ARUCO_4X4: [u64; 1000] = [
 ];
 
 /// `DICT_5X5_1000`: 1000 markers of 5 x 5 cells.
-pub(super) const ARUCO_5X5: [u64; 1000] = [
+pub(super) static ARUCO_5X5: [u64; 1000] = [
     0x145b2bc, 0x01c06e6, 0x1af0edd, 0x10395f7, 0x1aeb524, 0x1d4082d, 0x0d3d7ec, 0x0e2146b, 0x10d6132, 0x1313fa5,
     0x13cee03, 0x1a2dac0, 0x1e62b11, 0x05e7166, 0x1fcfca8, 0x051e37f, 0x097a758, 0x0bea26f, 0x0f64dc4, 0x1061de8,
     0x12dda75, 0x150e440, 0x16b0ca1, 0x0ba12de, 0x19cd023, 0x1a59972, 0x1c3ce8b, 0x0224246, 0x03b9672, 0x024223b,
@@ -184,7 +184,7 @@ pub(super) const ARUCO_5X5: [u64; 1000] = [
 ];
 
 /// `DICT_6X6_1000`: 1000 markers of 6 x 6 cells.
-pub(super) const ARUCO_6X6: [u64; 1000] = [
+pub(super) static ARUCO_6X6: [u64; 1000] = [
     0x1e3dd82a6,
     0x0efba3891,
     0x15907eacd,
@@ -1188,7 +1188,7 @@ pub(super) const ARUCO_6X6: [u64; 1000] = [
 ];
 
 /// `DICT_7X7_1000`: 1000 markers of 7 x 7 cells.
-pub(super) const ARUCO_7X7: [u64; 1000] = [
+pub(super) static ARUCO_7X7: [u64; 1000] = [
     0x1bab8d94b9415,
     0x1c837e27c8156,
     0x13d545758ba4f,
@@ -2192,7 +2192,7 @@ pub(super) const ARUCO_7X7: [u64; 1000] = [
 ];
 
 /// `DICT_ARUCO_ORIGINAL`: 1024 markers of 5 x 5 cells.
-pub(super) const ARUCO_ORIGINAL: [u64; 1024] = [
+pub(super) static ARUCO_ORIGINAL: [u64; 1024] = [
     0x1084210, 0x1084217, 0x1084209, 0x108420e, 0x10842f0, 0x10842f7, 0x10842e9, 0x10842ee, 0x1084130, 0x1084137,
     0x1084129, 0x108412e, 0x10841d0, 0x10841d7, 0x10841c9, 0x10841ce, 0x1085e10, 0x1085e17, 0x1085e09, 0x1085e0e,
     0x1085ef0, 0x1085ef7, 0x1085ee9, 0x1085eee, 0x1085d30, 0x1085d37, 0x1085d29, 0x1085d2e, 0x1085dd0, 0x1085dd7,
@@ -2299,7 +2299,7 @@ pub(super) const ARUCO_ORIGINAL: [u64; 1024] = [
 ];
 
 /// `DICT_ARUCO_MIP_36h12`: 250 markers of 6 x 6 cells.
-pub(super) const ARUCO_MIP_36H12: [u64; 250] = [
+pub(super) static ARUCO_MIP_36H12: [u64; 250] = [
     0xd2b63a09d,
     0x6001134e5,
     0x1206fbe72,
@@ -2553,14 +2553,14 @@ pub(super) const ARUCO_MIP_36H12: [u64; 250] = [
 ];
 
 /// `DICT_APRILTAG_16h5`: 30 markers of 4 x 4 cells.
-pub(super) const APRILTAG_16H5: [u64; 30] = [
+pub(super) static APRILTAG_16H5: [u64; 30] = [
     0xd8c4, 0xa574, 0x562c, 0x9da2, 0x659e, 0xd6fe, 0x1acd, 0xa2e7, 0x9a7f, 0xb6a8, 0xd01c, 0xd50f, 0x21b0, 0x6ce2,
     0x4e31, 0x08f5, 0x3c90, 0x2dc9, 0xc0a5, 0xf162, 0xec87, 0xa9ea, 0x42fb, 0xb838, 0x3b97, 0xb5ce, 0xfab5, 0x0cab,
     0x53e0, 0x74f5,
 ];
 
 /// `DICT_APRILTAG_25h9`: 35 markers of 5 x 5 cells.
-pub(super) const APRILTAG_25H9: [u64; 35] = [
+pub(super) static APRILTAG_25H9: [u64; 35] = [
     0x11fa755, 0x0db164f, 0x02da1bd, 0x16726af, 0x0e650e9, 0x1ba2558, 0x0cfd5dc, 0x1ab74c1, 0x1ce8abb, 0x022caf6,
     0x1c93702, 0x1049b14, 0x0ea27b6, 0x130e14f, 0x0973035, 0x082836d, 0x1580f8d, 0x103b372, 0x046ef9d, 0x120b8ea,
     0x1147df4, 0x07fd90b, 0x08d5276, 0x144e803, 0x0685587, 0x04be1c2, 0x121c512, 0x01e42cd, 0x14a9e26, 0x1baf982,
@@ -2568,7 +2568,7 @@ pub(super) const APRILTAG_25H9: [u64; 35] = [
 ];
 
 /// `DICT_APRILTAG_36h10`: 2320 markers of 6 x 6 cells.
-pub(super) const APRILTAG_36H10: [u64; 2320] = [
+pub(super) static APRILTAG_36H10: [u64; 2320] = [
     0xe16549538,
     0x323584a04,
     0x6bedfc5e4,
@@ -4892,7 +4892,7 @@ pub(super) const APRILTAG_36H10: [u64; 2320] = [
 ];
 
 /// `DICT_APRILTAG_36h11`: 587 markers of 6 x 6 cells.
-pub(super) const APRILTAG_36H11: [u64; 587] = [
+pub(super) static APRILTAG_36H11: [u64; 587] = [
     0x21a146bab,
     0x92d18fe9b,
     0x7089014bb,

@@ -129,11 +129,12 @@ fn solve8(mut rows: [[f64; 9]; 8]) -> Option<[f64; 8]> {
             return None;
         }
         rows.swap(col, pivot);
-        for row in 0..8 {
-            if row != col {
-                let factor = rows[row][col] / rows[col][col];
-                for k in col..9 {
-                    rows[row][k] -= factor * rows[col][k];
+        let pivot_row = rows[col];
+        for (index, row) in rows.iter_mut().enumerate() {
+            if index != col {
+                let factor = row[col] / pivot_row[col];
+                for (value, pivot_value) in row.iter_mut().zip(&pivot_row).skip(col) {
+                    *value -= factor * pivot_value;
                 }
             }
         }
@@ -165,7 +166,7 @@ fn ippe(h: &DMat3) -> Option<[DMat3; 2]> {
     // of the rotation in the ray's frame.
     let (p, q, r) = (a.x_axis.length_squared(), a.x_axis.dot(a.y_axis), a.y_axis.length_squared());
     let gamma = (0.5 * (p + r + ((p - r) * (p - r) + 4.0 * q * q).sqrt())).sqrt();
-    if !(gamma > 1e-12) {
+    if gamma.is_nan() || gamma <= 1e-12 {
         return None;
     }
     let block = a * (1.0 / gamma);
@@ -279,10 +280,11 @@ fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
         }
         a.swap(col, pivot);
         b.swap(col, pivot);
+        let pivot_row = a[col];
         for row in col + 1..6 {
-            let factor = a[row][col] / a[col][col];
-            for k in col..6 {
-                a[row][k] -= factor * a[col][k];
+            let factor = a[row][col] / pivot_row[col];
+            for (value, pivot_value) in a[row].iter_mut().zip(&pivot_row).skip(col) {
+                *value -= factor * pivot_value;
             }
             b[row] -= factor * b[col];
         }
