@@ -13,8 +13,8 @@ use super::frames::FrameFolder;
 use super::overlay::{Tracker, render_camera, world_from_marker};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::{RenderSystems, SimSystems};
-use crate::raster::RenderView;
 use crate::raster::plugin::RasterTarget;
+use crate::raster::{MAX_TARGET_SIZE, RenderView};
 use bevy::math::{DVec2, DVec3};
 use bevy::prelude::*;
 use canopy_vision::camera::Intrinsics;
@@ -25,6 +25,7 @@ use canopy_vision::gray::Gray;
 use canopy_vision::pose::{Pose, estimate, marker_corners};
 use image::RgbaImage;
 use serde_json::{Map, Value, json};
+use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -41,6 +42,10 @@ impl Plugin for ArPlugin {
             .add_systems(PostUpdate, lay_over_frame.in_set(RenderSystems::Composite));
     }
 }
+
+/// The most frame records kept: an hour at 30 frames a second; older ones are dropped, so that
+/// a scene left playing does not grow without bound.
+pub const MAX_RECORDS: usize = 108_000;
 
 /// What an `ar` entity shows and how: fixed when the scene is loaded.
 #[derive(Component, Debug, Clone)]
@@ -144,8 +149,10 @@ pub struct ArState {
     pub pose: Option<Pose>,
     /// The detected corners in the frame shown, if found in it.
     corners: Option<[DVec2; 4]>,
-    /// Every shown frame's record, in order.
-    pub records: Vec<FrameRecord>,
+    /// The shown frames' records, in order: the last [`MAX_RECORDS`].
+    pub records: VecDeque<FrameRecord>,
+    /// Records dropped from the front to keep [`MAX_RECORDS`].
+    pub records_dropped: u64,
     /// The largest distance between the detected corners and the marker's corners as the
     /// render camera projects them in the last frame drawn, in camera-frame pixels (the view
     /// may show the frame larger or smaller): the overlay's alignment.
@@ -210,7 +217,11 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
         Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
         other => other,
     };
-    state.records.push(FrameRecord { frame: index, time_s: state.time_s, finding });
+    if state.records.len() == MAX_RECORDS {
+        state.records.pop_front();
+        state.records_dropped += 1;
+    }
+    state.records.push_back(FrameRecord { frame: index, time_s: state.time_s, finding });
 }
 
 fn place_camera(
@@ -223,7 +234,8 @@ fn place_camera(
         state.overlay_error_px = None;
         return;
     };
-    let size = target.size.max(UVec2::ONE);
+    // The size the frame will be drawn at (the rasterizer's bound applied).
+    let size = target.size.clamp(UVec2::ONE, UVec2::splat(MAX_TARGET_SIZE));
     let fit = Fit::new(view.camera.size, size.to_array());
     let (near, far) = (render.camera.near, render.camera.far);
     render.camera = render_camera(&pose, &view.camera, &fit, size, view.scale, near, far);
@@ -322,5 +334,6 @@ impl DumpState for ArState {
         out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
         out.insert("overlay_error_max_px".into(), json!(self.overlay_error_max_px));
         out.insert("poses".into(), Value::Array(records));
+        out.insert("poses_dropped".into(), json!(self.records_dropped));
     }
 }
