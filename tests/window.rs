@@ -305,28 +305,43 @@ fn the_jelly_is_dragged_off_its_crate_with_the_mouse_and_let_fall_on_the_floor()
     );
 }
 
+/// Where the overlay's entry is in the panel's entity list of `scenes/ar.yaml`, and its outline
+/// switch once it is selected, in the 1280 x 720 window.
+const OVERLAY_ENTRY: (u32, u32) = (1015, 401);
+const OUTLINE_SWITCH: (u32, u32) = (1060, 532);
+
 #[test]
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn the_ar_scene_plays_its_camera_frames_with_the_scene_on_the_marker() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ar.yaml");
     let x = Xvfb::start();
-    let (app, _window) = play(&x, &scene, dir.path(), 60);
+    let (app, window) = play(&x, &scene, dir.path(), 240);
+    // Select the overlay in the panel's entity list, then switch its outline on.
+    click(&x, &window, OVERLAY_ENTRY);
+    click(&x, &window, OUTLINE_SWITCH);
     wait_for_exit(app);
 
     let state = read(&dir.path().join("state.json"));
     let overlay = entity(&state, "overlay");
     assert!(overlay["shown"].as_u64().unwrap() > 0, "the frames advance: {overlay}");
+    assert_eq!(overlay["outline"], true, "the panel's switch reached the overlay");
     let error = overlay["overlay_error_max_px"].as_f64().unwrap();
     assert!(error > 0.0 && error < 1.0, "the drawn marker lies on the photographed one: {error} px");
     // The window shows the photograph (the table's brown) and the scene on it (the land's
-    // green), in the view fitted to the frame's shape.
+    // green), in the view fitted to the frame's shape, and the outline while the marker is
+    // found: its first side red.
     let image = image::open(dir.path().join("window.png")).unwrap().to_rgb8();
-    let (mut table, mut land) = (0, 0);
+    let (mut table, mut land, mut red) = (0, 0, 0);
     for p in image.pixels() {
         let [r, g, b] = p.0.map(i32::from);
         table += usize::from(r > b + 15 && r >= g && g >= b);
         land += usize::from(g > r + 20 && g > b + 20);
+        red += usize::from(p.0 == [230, 40, 40]);
     }
     assert!(table > 50_000 && land > 500, "table {table} pixels, land {land}");
+    let last = overlay["poses"].as_array().unwrap().last().unwrap();
+    if last["marker"] == "found" {
+        assert!(red > 40, "the outline's first side: {red} pixels");
+    }
 }

@@ -7,6 +7,7 @@
 //! | [`calibration`] | OpenCV's calibration files (YAML and JSON), read and written |
 //! | [`frames`] | a folder of PNG and JPEG frames in name order |
 //! | [`overlay`] | the world on the marker, the render camera from the pose, the photograph fitted behind, the pose held |
+//! | [`panel`] | the panel's section: the frame, the marker's pose and errors, an outline switch |
 //! | [`sample`] | synthetic sequences written with their calibration and ground truth |
 //! | [`plugin`] | [`ArPlugin`]: frames shown at their rate, the marker found, the camera placed, the frame laid over the photograph |
 //!
@@ -18,6 +19,7 @@ pub mod calibration;
 pub mod def;
 pub mod frames;
 pub mod overlay;
+pub mod panel;
 pub mod plugin;
 pub mod sample;
 

@@ -12,6 +12,7 @@ use super::def::{ArBuilt, ArDef};
 use super::frames::FrameFolder;
 use super::overlay::{Tracker, render_camera, world_from_marker};
 use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
@@ -28,6 +29,7 @@ use serde_json::{Map, Value, json};
 use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// Runs `ar` entities.
 #[derive(Default)]
@@ -36,6 +38,7 @@ pub struct ArPlugin;
 impl Plugin for ArPlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<ArView>()
+            .register_panel_section("ar", super::panel::overlay_section)
             .register_dump::<ArState>()
             .add_systems(FixedUpdate, show_frames.in_set(SimSystems::Streaming))
             .add_systems(PostUpdate, place_camera.in_set(RenderSystems::Camera))
@@ -160,6 +163,10 @@ pub struct ArState {
     /// The largest [`ArState::overlay_error_px`] of every frame drawn so far.
     pub overlay_error_max_px: f64,
     scratch: Scratch,
+    /// Wall-clock time the last frame's decoding, detection and pose took (for display only).
+    pub read_time: Duration,
+    /// Whether the found marker's outline is drawn over the frame (the panel's switch).
+    pub outline: bool,
     /// The photograph fitted to the view, and the frame and background it was made from.
     backdrop: Option<Remap>,
     backdrop_pixels: Vec<u8>,
@@ -180,6 +187,7 @@ fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
 
 /// Reads frame `index`, finds the marker and updates the pose.
 fn show(view: &ArView, state: &mut ArState, index: usize) {
+    let started = Instant::now();
     state.shown = Some(index);
     let finding = match view.frames.load(index) {
         Err(message) => {
@@ -217,6 +225,7 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
         Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
         other => other,
     };
+    state.read_time = started.elapsed();
     if state.records.len() == MAX_RECORDS {
         state.records.pop_front();
         state.records_dropped += 1;
@@ -290,6 +299,21 @@ fn lay_over_frame(
         framebuffer.clear(render.background);
     }
     framebuffer.fill_empty(&state.backdrop_pixels);
+    if state.outline
+        && let Some(corners) = state.corners
+    {
+        let fit = Fit::new(view.camera.size, size);
+        let ideal = |pixel: DVec2| {
+            let n = view.camera.normalized(pixel);
+            fit.to_view(DVec2::new(view.camera.fx * n.x + view.camera.cx, view.camera.fy * n.y + view.camera.cy))
+        };
+        let corners = corners.map(ideal);
+        for (i, &from) in corners.iter().enumerate() {
+            // The first side (top-left to top-right as printed) in red, the others in green.
+            let color = if i == 0 { [230, 40, 40, 255] } else { [40, 220, 60, 255] };
+            framebuffer.draw_line(from.as_vec2(), corners[(i + 1) % 4].as_vec2(), color);
+        }
+    }
 }
 
 impl DumpState for ArView {
@@ -331,6 +355,7 @@ impl DumpState for ArState {
             .collect();
         out.insert("shown".into(), json!(self.shown));
         out.insert("overlay_visible".into(), json!(self.pose.is_some()));
+        out.insert("outline".into(), json!(self.outline));
         out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
         out.insert("overlay_error_max_px".into(), json!(self.overlay_error_max_px));
         out.insert("poses".into(), Value::Array(records));

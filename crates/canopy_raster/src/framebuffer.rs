@@ -1,5 +1,6 @@
 //! The colour and depth targets the rasterizer draws into.
 
+use bevy_math::Vec2;
 use std::path::Path;
 
 /// Depth of an empty pixel: the far plane. Depth values are normalized device depth in
@@ -70,6 +71,22 @@ impl Framebuffer {
         for ((pixel, behind), depth) in pixels.zip(&self.depth) {
             if *depth == FAR_DEPTH {
                 pixel.copy_from_slice(behind);
+            }
+        }
+    }
+
+    /// Draws a line two pixels wide from `from` to `to` (pixel centres at whole numbers) in
+    /// `rgba` over the colours, leaving the depths: marks laid over a finished frame.
+    pub fn draw_line(&mut self, from: Vec2, to: Vec2, rgba: [u8; 4]) {
+        let steps = (to - from).abs().max_element().ceil().clamp(1.0, 16_384.0) as u32;
+        for step in 0..=steps {
+            let point = from.lerp(to, step as f32 / steps as f32);
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let (x, y) = ((point.x - 0.5 + dx).floor(), (point.y - 0.5 + dy).floor());
+                if x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32 {
+                    let i = (y as usize * self.width as usize + x as usize) * 4;
+                    self.color[i..i + 4].copy_from_slice(&rgba);
+                }
             }
         }
     }
@@ -188,6 +205,17 @@ mod tests {
         assert_eq!((framebuffer.pixel(0, 0), framebuffer.pixel(1, 0)), ([9, 9, 9, 255], [1, 2, 3, 255]));
         framebuffer.fill_empty(&[0; 4]);
         assert_eq!(framebuffer.pixel(0, 0), [9, 9, 9, 255], "a backdrop of another size is ignored");
+    }
+
+    #[test]
+    fn a_line_covers_the_pixels_between_its_ends_and_clips_at_the_edges() {
+        let mut framebuffer = Framebuffer::new(8, 4);
+        framebuffer.draw_line(Vec2::new(-3.0, 1.5), Vec2::new(20.0, 1.5), [9, 9, 9, 255]);
+        for x in 0..8 {
+            assert_eq!((framebuffer.pixel(x, 1), framebuffer.pixel(x, 2)), ([9, 9, 9, 255], [9, 9, 9, 255]));
+            assert_eq!((framebuffer.pixel(x, 0), framebuffer.pixel(x, 3)), ([0, 0, 0, 0], [0, 0, 0, 0]));
+        }
+        assert!(framebuffer.depth().iter().all(|&d| d == FAR_DEPTH));
     }
 
     #[test]

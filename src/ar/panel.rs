@@ -1,0 +1,54 @@
+//! The overlay's section of the window's panel: the frame shown, what became of the marker in
+//! it, its pose and errors, the time a frame's reading took, and a switch that outlines the
+//! marker found.
+
+use super::plugin::{ArState, ArView, Finding};
+use bevy::prelude::*;
+use bevy_egui::egui;
+
+/// Draws the overlay section for `entity`.
+pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
+    let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
+    let Some(view) = entity_mut.get::<ArView>() else { return };
+    let (frames, dictionary, marker_id) = (view.frames.clone(), view.dictionary.name, view.marker_id);
+    let Some(mut state) = entity_mut.get_mut::<ArState>() else { return };
+    let mut outline = state.outline;
+    if ui.checkbox(&mut outline, "Outline the marker found").on_hover_text("its first side in red").changed() {
+        state.outline = outline;
+    }
+    egui::Grid::new("ar-figures").num_columns(2).show(ui, |ui| {
+        let row = |ui: &mut egui::Ui, label: &str, value: String| {
+            ui.label(label);
+            ui.label(value);
+            ui.end_row();
+        };
+        let file = |index: usize| {
+            frames.files[index].file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+        };
+        let shown = state.records.back();
+        row(ui, "marker", format!("{dictionary} #{marker_id}"));
+        row(
+            ui,
+            "frame",
+            shown.map_or("none yet".into(), |r| format!("{} of {} ({})", r.frame + 1, frames.len(), file(r.frame))),
+        );
+        match shown.map(|r| &r.finding) {
+            Some(Finding::Found { pose, error_px, alternative_error_px, .. }) => {
+                let t = pose.translation;
+                let r = pose.rvec();
+                row(ui, "found", format!("{:.3} m away", t.length()));
+                row(ui, "tvec (m)", format!("{:.4} {:.4} {:.4}", t.x, t.y, t.z));
+                row(ui, "rvec (rad)", format!("{:.4} {:.4} {:.4}", r.x, r.y, r.z));
+                row(ui, "reprojection", format!("{error_px:.3} px (the other pose {alternative_error_px:.2} px)"));
+            }
+            Some(Finding::Lost { held: true }) => row(ui, "lost", "its last pose held".into()),
+            Some(Finding::Lost { held: false }) => row(ui, "lost", "only the photograph shows".into()),
+            Some(Finding::Unreadable(message)) => row(ui, "unreadable", message.clone()),
+            None => {}
+        }
+        if let Some(error) = state.overlay_error_px {
+            row(ui, "drawn marker", format!("{error:.3} px from the found one"));
+        }
+        row(ui, "reading", format!("{:.2} ms (decoding, detection, pose)", state.read_time.as_secs_f64() * 1e3));
+    });
+}
