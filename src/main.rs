@@ -168,6 +168,10 @@ struct SequenceArgs {
     /// The largest blur, standard deviation in pixels (0 to 5).
     #[arg(long, default_value_t = 1.0)]
     blur: f32,
+    /// The lens's radial distortion k1 (-0.5 to 0.5; negative for barrel distortion), written
+    /// to the calibration with the rest.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    k1: f64,
     /// Keep the light steady.
     #[arg(long)]
     steady_light: bool,
@@ -608,7 +612,7 @@ fn detect_markers(images: &[PathBuf], calibration: Option<&Path>, dictionary: &s
             detect(&gray, &dictionary, &Settings::default(), camera.as_ref(), &mut scratch)
                 .into_iter()
                 .map(|marker| {
-                    let corners = marker.corners.map(|c| c.as_dvec2());
+                    let corners = marker.corners_f64();
                     let mut entry = serde_json::json!({"id": marker.id, "corners": corners.map(|c| c.to_array())});
                     if let (Some(camera), Some(side)) = (camera.as_ref(), side)
                         && let Some(pose) = estimate(&corners, side, camera)

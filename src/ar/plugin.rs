@@ -200,7 +200,7 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
             state.image = Some(Arc::new(image));
             state.images_read += 1;
             let found = markers.iter().find(|m| m.id == view.marker_id).and_then(|marker| {
-                let corners = marker.corners.map(|c| c.as_dvec2());
+                let corners = marker.corners_f64();
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
             });
             match found {

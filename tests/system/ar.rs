@@ -187,3 +187,53 @@ fn bad_sources_and_calibrations_are_located_errors() {
     let error = check(&text);
     assert!(error.message.contains("entities[0].ar.calibration") && error.message.contains("another shape"), "{error}");
 }
+
+#[test]
+fn through_a_distorting_lens_the_straightened_frame_and_the_scene_line_up() {
+    use canopy::ar::sample::{FrameFormat, write_sequence};
+    use canopy_vision::camera::{Distortion, Intrinsics};
+    use canopy_vision::dictionary::Dictionary;
+    use canopy_vision::synth::SequenceSettings;
+    let folder = tempfile::tempdir().unwrap();
+    let camera = Intrinsics {
+        distortion: Distortion([-0.3, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ..Intrinsics::pinhole([480, 360], 60.0)
+    };
+    let settings = SequenceSettings {
+        camera,
+        dictionary: Dictionary::named("5x5_100").unwrap(),
+        id: 42,
+        side_m: 0.08,
+        frames: 12,
+        distance_m: [0.25, 0.5],
+        seed: 3,
+        noise: 2.0,
+        max_blur_px: 0.8,
+        lighting: true,
+        occlusion: false,
+        look_away: false,
+    };
+    write_sequence(&settings, &folder.path().join("clip"), FrameFormat::Png, 2).unwrap();
+    let scene = folder.path().join("scene.yaml");
+    std::fs::write(
+        &scene,
+        "entities:\n  - name: overlay\n    ar: {frames: clip, calibration: clip/calibration.yaml, dictionary: 5x5_100, \
+         marker_id: 42, marker_side_m: 0.08, scale: 0.02}\n  - shape: {primitive: box, size: [4, 1, 4]}\n",
+    )
+    .unwrap();
+    // A view of another shape than the frames': the straightened frame is scaled into it.
+    let dump = run(&scene, 0.4, UVec2::new(400, 400), true);
+    let overlay = entity(&dump, "overlay");
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.path().join("clip/truth.json")).unwrap()).unwrap();
+    for record in overlay["poses"].as_array().unwrap() {
+        let expected = &truth["frames"][record["frame"].as_u64().unwrap() as usize];
+        assert_eq!(record["marker"], "found", "{record}");
+        let true_pose = Pose::from_rvec(vector(&expected["rvec"]), vector(&expected["tvec"]));
+        let pose = Pose::from_rvec(vector(&record["rvec"]), vector(&record["tvec"]));
+        assert!(pose.translation.distance(true_pose.translation) < 0.01 * true_pose.translation.length());
+        assert!(pose.angle_to(&true_pose).to_degrees() < 1.0);
+    }
+    let drawn = overlay["overlay_error_max_px"].as_f64().unwrap();
+    assert!(drawn > 0.0 && drawn < 1.0, "the drawn marker is {drawn} px from the found one, its distortion removed");
+}

@@ -95,7 +95,7 @@ fn main() {
                     let gray = Gray::from_rgba(width, height, &frame.rgba);
                     let markers = detect(&gray, &dictionary, &detector, None, &mut scratch);
                     let marker = markers.into_iter().find(|m| m.id == ID)?;
-                    let corners = marker.corners.map(|c| c.as_dvec2());
+                    let corners = marker.corners_f64();
                     if with_pose {
                         black_box(estimate(&corners, 0.1, &settings.camera));
                     }

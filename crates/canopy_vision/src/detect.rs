@@ -82,6 +82,15 @@ pub struct Marker {
     pub corrected_cells: u32,
 }
 
+impl Marker {
+    /// The corners in double precision, to a ten-thousandth of a pixel (what their single
+    /// precision holds at image scale, without its binary tail: 302.36 rather than
+    /// 302.3599853515625).
+    pub fn corners_f64(&self) -> [DVec2; 4] {
+        self.corners.map(|c| (c.as_dvec2() * 1e4).round() / 1e4)
+    }
+}
+
 /// Reusable buffers, so that a sequence of frames allocates once.
 #[derive(Debug, Default)]
 pub struct Scratch {
