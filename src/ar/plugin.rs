@@ -251,10 +251,6 @@ fn place_camera(
     // Where the drawn scene puts the marker's corners, against where they were found (both
     // without the lens's distortion, as the backdrop shows them).
     let clip = render.camera.view_projection(size.x as f32 / size.y as f32);
-    let ideal = |pixel: DVec2| {
-        let n = view.camera.normalized(pixel);
-        DVec2::new(view.camera.fx * n.x + view.camera.cx, view.camera.fy * n.y + view.camera.cy)
-    };
     state.overlay_error_px = state.corners.map(|corners| {
         marker_corners(view.side_m)
             .iter()
@@ -265,7 +261,7 @@ fn place_camera(
                     f64::from((ndc.x + 1.0) * 0.5 * size.x as f32) - 0.5,
                     f64::from((1.0 - ndc.y) * 0.5 * size.y as f32) - 0.5,
                 );
-                drawn.distance(fit.to_view(ideal(found))) / fit.scale
+                drawn.distance(fit.to_view(view.camera.straightened(found))) / fit.scale
             })
             .fold(0.0, f64::max)
     });
@@ -303,11 +299,7 @@ fn lay_over_frame(
         && let Some(corners) = state.corners
     {
         let fit = Fit::new(view.camera.size, size);
-        let ideal = |pixel: DVec2| {
-            let n = view.camera.normalized(pixel);
-            fit.to_view(DVec2::new(view.camera.fx * n.x + view.camera.cx, view.camera.fy * n.y + view.camera.cy))
-        };
-        let corners = corners.map(ideal);
+        let corners = corners.map(|corner| fit.to_view(view.camera.straightened(corner)));
         for (i, &from) in corners.iter().enumerate() {
             // The first side (top-left to top-right as printed) in red, the others in green.
             let color = if i == 0 { [230, 40, 40, 255] } else { [40, 220, 60, 255] };

@@ -104,6 +104,19 @@ impl Intrinsics {
         self.distortion.remove(DVec2::new((pixel.x - self.cx) / self.fx, (pixel.y - self.cy) / self.fy))
     }
 
+    /// Where a pinhole camera with the same focal lengths and principal point would have seen
+    /// what this one saw at `pixel`: the pixel with the lens's distortion removed.
+    pub fn straightened(&self, pixel: DVec2) -> DVec2 {
+        let n = self.normalized(pixel);
+        DVec2::new(self.fx * n.x + self.cx, self.fy * n.y + self.cy)
+    }
+
+    /// The inverse of [`Intrinsics::straightened`]: where this camera sees what a pinhole
+    /// camera saw at `pixel`.
+    pub fn bent(&self, pixel: DVec2) -> DVec2 {
+        self.pixel_of(DVec2::new((pixel.x - self.cx) / self.fx, (pixel.y - self.cy) / self.fy))
+    }
+
     /// The same camera for images scaled to `size` (focal lengths and principal point scaled
     /// with the pixels, their edges kept: a pixel centre `c` maps to `(c + 0.5) s - 0.5`).
     pub fn scaled_to(&self, size: [u32; 2]) -> Self {

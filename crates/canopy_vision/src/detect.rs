@@ -308,20 +308,9 @@ fn otsu(samples: &[f32]) -> f32 {
 /// a third of a cell keeps its place. With a `lens`, the lines are fitted where a pinhole
 /// camera would have seen the edge points, and the corners taken back through the lens.
 fn refine(image: &Gray, corners: &[Vec2; 4], cells: u32, lens: Option<&Intrinsics>) -> [Vec2; 4] {
-    let straighten = |p: Vec2| match lens {
-        Some(lens) if !lens.distortion.is_none() => {
-            let n = lens.normalized(DVec2::new(f64::from(p.x), f64::from(p.y)));
-            Vec2::new((lens.fx * n.x + lens.cx) as f32, (lens.fy * n.y + lens.cy) as f32)
-        }
-        _ => p,
-    };
-    let bend = |p: Vec2| match lens {
-        Some(lens) if !lens.distortion.is_none() => {
-            let n = DVec2::new((f64::from(p.x) - lens.cx) / lens.fx, (f64::from(p.y) - lens.cy) / lens.fy);
-            lens.pixel_of(n).as_vec2()
-        }
-        _ => p,
-    };
+    let distorting = lens.filter(|lens| !lens.distortion.is_none());
+    let straighten = |p: Vec2| distorting.map_or(p, |lens| lens.straightened(p.as_dvec2()).as_vec2());
+    let bend = |p: Vec2| distorting.map_or(p, |lens| lens.bent(p.as_dvec2()).as_vec2());
     let centre = corners.iter().copied().sum::<Vec2>() / 4.0;
     let lines: Vec<Option<(Vec2, Vec2)>> =
         (0..4).map(|i| edge_line(image, corners[i], corners[(i + 1) % 4], centre, cells, &straighten)).collect();

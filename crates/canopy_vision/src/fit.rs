@@ -77,10 +77,7 @@ impl Remap {
         for y in 0..target[1] {
             for x in 0..target[0] {
                 let ideal = fit.to_frame(DVec2::new(f64::from(x), f64::from(y)));
-                let source = inside(ideal).then(|| {
-                    let normalized = DVec2::new((ideal.x - camera.cx) / camera.fx, (ideal.y - camera.cy) / camera.fy);
-                    camera.pixel_of(normalized)
-                });
+                let source = inside(ideal).then(|| camera.bent(ideal));
                 taps.push(source.filter(|&p| inside(p)).map(|p| {
                     let ((x0, fx), (y0, fy)) = (axis(p.x, w), axis(p.y, h));
                     Tap { offset: (y0 * w + x0) * 4, fx, fy }
