@@ -7,8 +7,9 @@
 //! | [`plugin`] | [`MusclePlugin`] and its set [`MuscleSystems`]: parameters, keys, the model in the fixed step, write-back, dump |
 //! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
 //! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
+//! | [`comparison`] | the real biceps' measurements, the model's radii at the same flexions, the source's Table 4.3 |
 //! | [`surface`] | the revolved surface with smooth profile normals |
-//! | [`panel`] | the window's muscle section: figures, node editor, model vs real plot |
+//! | [`panel`] | the window's muscle section: figures, node editor, model vs real plot, Table 4.3 |
 //!
 //! Where the source's rules live: the frustum volume and the quadratic whose root keeps the
 //! volume when the length changes (its `A` coefficient included) in [`model`]; the law of
@@ -19,6 +20,7 @@
 //! (flexes), S stretches, Q / E step the flexion by 15 degrees.
 
 pub mod carcass;
+pub mod comparison;
 pub mod def;
 pub mod model;
 pub mod panel;

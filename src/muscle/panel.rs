@@ -1,19 +1,12 @@
 //! The muscle's section of the window's panel: volume and its error, the radii, a node
-//! editor, and a plot of the model's radii against the real biceps measurements.
+//! editor, a plot of the model's radii against the real biceps measurements, and the source's
+//! Table 4.3 of their growth.
 
+use super::comparison::{REAL_BICEPS_RADII, growth_table, model_radii};
 use super::plugin::{MuscleBody, MuscleParams};
 use bevy::prelude::*;
 use bevy_egui::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints, Points};
-
-/// Node radii of a real biceps (ultrasound, OpenArm 2.0) at 0, 30, 60 and 90 degrees of
-/// elbow flexion: the nine measured nodes, which are nodes 1 to 9 of the eleven-node config.
-pub const REAL_BICEPS_RADII: [(f64, [f64; 9]); 4] = [
-    (0.0, [7.6, 18.2, 20.7, 21.2, 21.7, 24.3, 25.7, 20.7, 13.2]),
-    (30.0, [16.2, 18.7, 22.5, 26.2, 27.5, 31.3, 28.7, 26.6, 20.8]),
-    (60.0, [7.8, 16.2, 24.9, 32.4, 32.4, 32.0, 29.8, 22.0, 12.7]),
-    (90.0, [9.5, 15.2, 23.4, 27.7, 35.2, 35.8, 36.6, 24.2, 16.7]),
-];
 
 /// Colours of the four flexion angles in the plot.
 const ANGLE_COLORS: [egui::Color32; 4] = [
@@ -72,7 +65,8 @@ pub fn muscle_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     if edited && let Err(error) = body.model.edit_node(node, radius, mult) {
         body.message = Some(error.to_string());
     }
-    let curves = model_curves(&body);
+    let curves = model_radii(&body.model, &body.carcass);
+    let table = growth_table(&body.model, &body.carcass);
     entity_mut.insert(SelectedNode(node));
     if edited && let Some(mut params) = entity_mut.get_mut::<MuscleParams>() {
         // Re-applies the current flexion to the edited rest state.
@@ -97,15 +91,20 @@ pub fn muscle_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
                 plot.points(Points::new(name, points).color(color).radius(3.0));
             }
         });
-}
-
-/// The model's radii at each flexion of [`REAL_BICEPS_RADII`], where the model can reach it.
-fn model_curves(body: &MuscleBody) -> Vec<Option<Vec<f64>>> {
-    REAL_BICEPS_RADII
-        .iter()
-        .map(|(angle, _)| {
-            let length = body.carcass.length_from_flexion(angle.to_radians()).value;
-            body.model.radii_at(length).ok()
-        })
-        .collect()
+    if let Some(table) = table {
+        ui.label("growth from 0 to 90 degrees (the source's Table 4.3)");
+        egui::Grid::new("muscle-growth").num_columns(4).striped(true).show(ui, |ui| {
+            for heading in ["node", "real", "model", "real / model"] {
+                ui.strong(heading);
+            }
+            ui.end_row();
+            for row in table {
+                ui.label(row.node.to_string());
+                ui.label(format!("{:.1}", row.real));
+                ui.label(format!("{:.2}", row.model));
+                ui.label(row.ratio.map_or("-".to_string(), |ratio| format!("{ratio:.2}")));
+                ui.end_row();
+            }
+        });
+    }
 }

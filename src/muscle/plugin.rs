@@ -2,6 +2,7 @@
 //! fixed step, the write-back of its surface and rods, and its dump.
 
 use super::carcass::Carcass;
+use super::comparison::growth_table;
 use super::def::MuscleDef;
 use super::model::Muscle;
 use super::{panel, surface};
@@ -276,5 +277,12 @@ impl DumpState for MuscleBody {
         out.insert("volume".into(), json!(model.volume()));
         out.insert("rest_volume".into(), json!(model.rest_volume()));
         out.insert("node_spacing".into(), json!(model.node_spacing()));
+        if let Some(table) = growth_table(model, &self.carcass) {
+            let rows: Vec<Value> = table
+                .iter()
+                .map(|row| json!({"node": row.node, "real": row.real, "model": row.model, "ratio": row.ratio}))
+                .collect();
+            out.insert("growth_table".into(), Value::Array(rows));
+        }
     }
 }
