@@ -88,6 +88,10 @@ pub struct StemDef {
     /// The stem's length from the support's underside to the body's top, metres; 0.03 by default.
     #[serde(default = "default_stem")]
     pub length_m: PositiveMetres,
+    /// A hand taking hold of a support (an animal's passing) within this many metres of the
+    /// stem's anchor shakes the body loose; never by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shaken_loose_m: Option<PositiveMetres>,
 }
 
 fn default_stem() -> PositiveMetres {
@@ -218,6 +222,8 @@ pub struct ElasticBuilt {
     pub read: MeshReport,
     /// The side of its lattice's cells, metres.
     pub cell_m: f32,
+    /// Its stem's anchor and the distance from it within which a hand shakes it loose.
+    pub shaken_loose: Option<(Vec3, f32)>,
 }
 
 /// The `elastic_body` kind, built after the trees its stems may hang from.
@@ -291,7 +297,8 @@ impl EntityKind for ElasticBodyKind {
         if let Some(anchor) = anchor {
             body.stems = stems(&body, anchor, cell);
         }
-        Ok(Arc::new(ElasticBuilt { body, embedding, triangles: surface.triangles, read, cell_m: cell }))
+        let shaken_loose = anchor.zip(def.stem.as_ref().and_then(|stem| stem.shaken_loose_m)).map(|(a, m)| (a, m.0));
+        Ok(Arc::new(ElasticBuilt { body, embedding, triangles: surface.triangles, read, cell_m: cell, shaken_loose }))
     }
 
     fn spawn(def: &ElasticBodyDef, built: &Arc<ElasticBuilt>, entity: &mut EntityWorldMut) {

@@ -10,7 +10,7 @@ use crate::foundation::actions::RegisterActions;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
-use crate::foundation::messages::{DragPhase, SelectEntity, ViewDragged, ViewGrab};
+use crate::foundation::messages::{DragPhase, HandPlanted, SelectEntity, ViewDragged, ViewGrab};
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
@@ -93,13 +93,16 @@ impl ElasticBody {
         self.start.embedding.place(&self.body.rest, &self.body.positions, &mut self.surface);
     }
 
+    /// Releases its stems: it falls.
+    fn drop_from_stems(&mut self) {
+        self.body.stems.clear();
+        self.dropped = true;
+    }
+
     /// Performs `action`; returns why it could not be, if it could not.
     pub fn perform(&mut self, action: &ElasticAction) -> Result<(), String> {
         match action {
-            ElasticAction::Drop => {
-                self.body.stems.clear();
-                self.dropped = true;
-            }
+            ElasticAction::Drop => self.drop_from_stems(),
             ElasticAction::Reset => {
                 let params = self.body.material();
                 *self = Self::new(self.start.clone());
@@ -316,7 +319,7 @@ impl Plugin for ElasticPlugin {
             .add_systems(RunFixedMainLoop, apply_params.in_set(ControlSystems::Apply).in_set(ElasticSystems))
             .add_systems(
                 FixedUpdate,
-                (gather_solids, step_bodies).chain().in_set(SimSystems::Dynamics).in_set(ElasticSystems),
+                (shake_loose, gather_solids, step_bodies).chain().in_set(SimSystems::Dynamics).in_set(ElasticSystems),
             )
             .add_systems(PostUpdate, write_back_surfaces.in_set(WriteBackSystems).in_set(ElasticSystems));
     }
@@ -327,6 +330,19 @@ fn perform_action(world: &mut World, entity: Entity, action: ElasticAction) {
     let Some(mut body) = world.get_mut::<ElasticBody>(entity) else { return };
     if let Err(error) = body.perform(&action) {
         warn!("{error}");
+    }
+}
+
+/// Drops the bodies hanging on a stem that shakes loose when a hand takes hold within its reach
+/// of the anchor (sent by the animals' locomotion, earlier in the step).
+fn shake_loose(mut hands: MessageReader<HandPlanted>, mut bodies: Query<&mut ElasticBody>) {
+    for hand in hands.read() {
+        for mut body in &mut bodies {
+            let Some((anchor, reach)) = body.start.shaken_loose else { continue };
+            if !body.dropped && hand.point.distance(anchor) <= reach {
+                body.drop_from_stems();
+            }
+        }
     }
 }
 

@@ -55,6 +55,14 @@ pub struct ViewGrab {
 #[derive(Message, Debug, Clone, PartialEq, Eq)]
 pub struct SelectEntity(pub String);
 
+/// A hand took hold of a support at `point` (metres): what hangs from the support within reach
+/// of it may be shaken loose. Animals send it; what hangs answers it.
+#[derive(Message, Debug, Clone, Copy, PartialEq)]
+pub struct HandPlanted {
+    /// Where the hand grips.
+    pub point: Vec3,
+}
+
 /// Registers the messages.
 pub(crate) fn add_messages(app: &mut App) {
     app.add_message::<ReloadScene>()
@@ -62,5 +70,6 @@ pub(crate) fn add_messages(app: &mut App) {
         .add_message::<ViewClicked>()
         .add_message::<ViewDragged>()
         .add_message::<SelectEntity>()
+        .add_message::<HandPlanted>()
         .init_resource::<ViewGrab>();
 }

@@ -9,6 +9,7 @@ use super::supports::Supports;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
+use crate::foundation::messages::HandPlanted;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
@@ -162,7 +163,11 @@ fn place_sloths(
     }
 }
 
-fn walk_sloths(time: Res<Time>, mut sloths: Query<(&mut SlothBody, &mut SlothParams, &mut SlothInput)>) {
+fn walk_sloths(
+    time: Res<Time>,
+    mut sloths: Query<(&mut SlothBody, &mut SlothParams, &mut SlothInput)>,
+    mut hands: MessageWriter<HandPlanted>,
+) {
     let dt = time.delta_secs();
     for (mut body, mut params, mut input) in &mut sloths {
         let direction = if input.hold != 0.0 {
@@ -175,7 +180,14 @@ fn walk_sloths(time: Res<Time>, mut sloths: Query<(&mut SlothBody, &mut SlothPar
         let drive = Drive { direction, change: input.change.take(), around: input.around };
         let SlothBody { sloth, supports } = &mut *body;
         sloth.speed = params.speed;
+        let footfalls = sloth.footfalls.len();
         sloth.step(dt, drive, supports);
+        // Each hand that took hold in this step may shake loose what hangs near it.
+        for footfall in &sloth.footfalls[footfalls..] {
+            if matches!(footfall.limb, Limb::LeftFore | Limb::RightFore) {
+                hands.write(HandPlanted { point: sloth.feet[footfall.limb.index()].grip });
+            }
+        }
         if params.autorun && input.hold == 0.0 && sloth.blocked.is_some() {
             params.autorun = false;
         }

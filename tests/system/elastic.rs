@@ -172,3 +172,41 @@ fn a_drag_on_the_view_grabs_the_jelly_and_moves_it_with_the_pointer() {
     let falling = body(app.world_mut(), "jelly").body.centre_of_mass();
     assert!(falling.y < lifted.y - 0.1, "let go, it falls: {lifted} to {falling}");
 }
+
+#[test]
+fn the_sloth_s_hands_shake_the_plums_loose_as_it_passes_and_they_fall_onto_the_meadow() {
+    use canopy::sloth::plugin::SlothBody;
+    let mut app = small_app(&path("scenes/sloth_fruit.yaml"));
+    let hand_reach = |world: &mut World, name: &str| {
+        // The nearest a forehand's grip came to this plum's stem anchor.
+        let anchor = body(world, name).start.shaken_loose.unwrap().0;
+        let mut sloths = world.query::<&SlothBody>();
+        let sloth = &sloths.single(world).unwrap().sloth;
+        [1, 3].map(|limb| sloth.feet[limb].grip.distance(anchor)).into_iter().fold(f32::MAX, f32::min)
+    };
+    let mut dropped_at = [None; 3];
+    for step in 0..840 {
+        app.update();
+        let world = app.world_mut();
+        let depth = deepest(world);
+        assert!(depth < 1e-3, "step {step}: a particle {depth} m inside a solid");
+        for (i, name) in ["plum_1", "plum_2", "plum_3"].into_iter().enumerate() {
+            if dropped_at[i].is_none() && body(world, name).dropped {
+                // Shaken loose by a hand that had just taken hold within its reach.
+                let reach = hand_reach(world, name);
+                assert!(reach <= 0.25, "{name} dropped with the nearest hand {reach} m from its stem");
+                dropped_at[i] = Some(step);
+            }
+        }
+    }
+    assert!(dropped_at[0].is_some_and(|s| s > 60), "the first plum hangs until the sloth comes: {dropped_at:?}");
+    assert!(dropped_at[1] > dropped_at[0], "the second falls later, further along: {dropped_at:?}");
+    assert_eq!(dropped_at[2], None, "the third, beyond where the sloth has walked, still hangs");
+    let world = app.world_mut();
+    let names = world.resource::<Solids>().names.clone();
+    for name in ["plum_1", "plum_2"] {
+        let plum = body(world, name);
+        let on_meadow = names.iter().zip(plum.body.contacts()).any(|(n, &c)| n == "meadow" && c > 0);
+        assert!(on_meadow && plum.body.centre_of_mass().y < 1.0, "{name} lies on the meadow");
+    }
+}
