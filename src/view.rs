@@ -14,6 +14,7 @@
 //! `light.{azimuth_deg, elevation_deg, diffuse, ambient}`.
 
 use crate::foundation::dump::{DumpState, RegisterDump};
+use crate::foundation::entity::FocusPoint;
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, RenderSystems};
@@ -72,6 +73,9 @@ pub struct CameraParams {
     /// How fast Shift and the arrows fly the camera (eye and target together, level with the
     /// ground), metres per second.
     pub fly_speed_m_s: f32,
+    /// Whether the camera follows the scene's first focus point (an animal's body): its target
+    /// moves as the point does, so that the view keeps its offset and turns as the user turns it.
+    pub follow: bool,
 }
 
 impl From<&CameraDef> for CameraParams {
@@ -87,9 +91,17 @@ impl From<&CameraDef> for CameraParams {
             near: def.near.0,
             far: def.far.0,
             fly_speed_m_s: def.fly_speed_m_s.0,
+            follow: def.follow,
         }
     }
 }
+
+/// Where the followed point was when the camera last moved with it.
+#[derive(Component, Debug, Default)]
+struct Followed(Option<Vec3>);
+
+/// The key that switches following on and off.
+const FOLLOW_KEY: KeyCode = KeyCode::Home;
 
 impl CameraParams {
     /// The eye position, metres.
@@ -177,6 +189,7 @@ impl DumpState for CameraParams {
         out.insert("target".into(), json!(self.target.to_array()));
         out.insert("fov_deg".into(), json!(self.fov_deg));
         out.insert("fly_speed_m_s".into(), json!(self.fly_speed_m_s));
+        out.insert("follow".into(), json!(self.follow));
     }
 }
 
@@ -205,9 +218,15 @@ impl Plugin for ViewPlugin {
             .register_dump::<LightParams>()
             .register_keys(&camera_help)
             .register_keys(&light_help)
+            .register_keys(&[KeyHelp {
+                key: FOLLOW_KEY,
+                action: "camera follows the animal / stays",
+                scope: KeyScope::Global,
+            }])
             .add_observer(params_of_camera_section)
             .add_observer(params_of_light_section)
-            .add_systems(Update, (orbit_camera, turn_light).in_set(ControlSystems::Input))
+            .add_systems(Update, (orbit_camera, turn_light, switch_follow).in_set(ControlSystems::Input))
+            .add_systems(Update, follow_focus.after(ControlSystems::Input))
             .add_systems(PostUpdate, write_render_view.in_set(RenderSystems::Collect));
     }
 }
@@ -215,7 +234,7 @@ impl Plugin for ViewPlugin {
 /// Gives the scene's camera entity its parameters when it is spawned.
 fn params_of_camera_section(add: On<Add, CameraDef>, sections: Query<&CameraDef>, mut commands: Commands) {
     if let Ok(def) = sections.get(add.entity) {
-        commands.entity(add.entity).insert(CameraParams::from(def));
+        commands.entity(add.entity).insert((CameraParams::from(def), Followed::default()));
     }
 }
 
@@ -253,6 +272,32 @@ fn orbit_camera(keys: Res<ButtonInput<KeyCode>>, time: Res<Time>, mut cameras: Q
         }
         *camera = camera.orbited(yaw * ORBIT_DEG_PER_S * dt, pitch * ORBIT_DEG_PER_S * dt);
         camera.distance = (camera.distance * ZOOM_PER_S.powf(zoom * dt)).max(camera.near * 2.0);
+    }
+}
+
+fn switch_follow(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut CameraParams>) {
+    if keys.just_pressed(FOLLOW_KEY) {
+        for mut camera in &mut cameras {
+            camera.follow = !camera.follow;
+        }
+    }
+}
+
+/// Moves a following camera's target with the focus point, after the frame's fixed steps have
+/// moved it.
+fn follow_focus(mut cameras: Query<(&mut CameraParams, &mut Followed)>, foci: Query<&FocusPoint>) {
+    let point = foci.iter().next().map(|focus| focus.0);
+    for (mut camera, mut followed) in &mut cameras {
+        if !camera.follow || point.is_none() {
+            followed.0 = None;
+            continue;
+        }
+        if let (Some(now), Some(before)) = (point, followed.0)
+            && now != before
+        {
+            camera.target += now - before;
+        }
+        followed.0 = point;
     }
 }
 
@@ -302,6 +347,7 @@ mod tests {
             near: PositiveMetres(0.1),
             far: PositiveMetres(100.0),
             fly_speed_m_s: PositiveMetres(10.0),
+            follow: false,
         };
         let camera = CameraParams::from(&def).camera();
         assert!((camera.eye - def.position.0).length() < 1e-5, "{}", camera.eye);

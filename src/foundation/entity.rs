@@ -1,4 +1,4 @@
-//! The marker every entity spawned from a scene file carries.
+//! The marker every entity spawned from a scene file carries, and the point a camera can follow.
 
 use bevy::prelude::*;
 
@@ -12,3 +12,8 @@ pub struct SceneEntity {
     /// The kind (`camera`, `light`, `render`, or an entity kind's key).
     pub kind: &'static str,
 }
+
+/// A point of an entity that the camera can follow (an animal's body), metres, kept up to date
+/// by the entity's kind.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct FocusPoint(pub Vec3);

@@ -56,6 +56,10 @@ pub struct CameraDef {
     pub far: PositiveMetres,
     /// How fast Shift and the arrows fly the camera, metres per second.
     pub fly_speed_m_s: PositiveMetres,
+    /// Whether the camera follows the scene's animal (its first sloth), keeping its offset
+    /// from it; off by default (Home switches it).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub follow: bool,
 }
 
 impl Default for CameraDef {
@@ -67,6 +71,7 @@ impl Default for CameraDef {
             near: PositiveMetres(0.1),
             far: PositiveMetres(1000.0),
             fly_speed_m_s: PositiveMetres(10.0),
+            follow: false,
         }
     }
 }

@@ -7,7 +7,7 @@ use super::mesh;
 use super::rig::{JOINTS, Limb};
 use super::supports::Supports;
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::entity::SceneEntity;
+use crate::foundation::entity::{FocusPoint, SceneEntity};
 use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::messages::HandPlanted;
 use crate::foundation::params::RegisterParams;
@@ -64,6 +64,7 @@ pub(super) fn spawn_sloth(entity: &mut EntityWorldMut, def: &SlothDef, sloth: Sl
         SlothSource(def.clone()),
         SlothParams { speed: def.speed.0, autorun: def.autorun, direction: def.direction },
         SlothInput::default(),
+        FocusPoint(sloth.frame.centre),
         SlothBody { sloth, supports },
     ));
 }
@@ -165,11 +166,11 @@ fn place_sloths(
 
 fn walk_sloths(
     time: Res<Time>,
-    mut sloths: Query<(&mut SlothBody, &mut SlothParams, &mut SlothInput)>,
+    mut sloths: Query<(&mut SlothBody, &mut SlothParams, &mut SlothInput, &mut FocusPoint)>,
     mut hands: MessageWriter<HandPlanted>,
 ) {
     let dt = time.delta_secs();
-    for (mut body, mut params, mut input) in &mut sloths {
+    for (mut body, mut params, mut input, mut focus) in &mut sloths {
         let direction = if input.hold != 0.0 {
             input.hold
         } else if params.autorun {
@@ -188,6 +189,7 @@ fn walk_sloths(
                 hands.write(HandPlanted { point: sloth.feet[footfall.limb.index()].grip });
             }
         }
+        focus.0 = sloth.frame.centre;
         if params.autorun && input.hold == 0.0 && sloth.blocked.is_some() {
             params.autorun = false;
         }

@@ -67,3 +67,24 @@ fn shadows_and_shading_switch_at_run_time_by_parameter_and_key() {
         frames.push(output.framebuffer.color().to_vec());
     }
 }
+
+#[test]
+fn a_following_camera_moves_with_the_sloth_and_a_free_one_stays() {
+    let start = run("scenes/sloth_fruit.yaml", 1, None, SMALL);
+    let (target0, body0) =
+        (vec3(&entity(&start.dump, "camera")["target"]), vec3(&entity(&start.dump, "sloth")["body_position"]));
+    let follow = "- { at: 0.0, set: { camera.follow: true } }\n";
+    for (timeline, following) in [(Some(follow), true), (None, false)] {
+        let output = run("scenes/sloth_fruit.yaml", 300, timeline, SMALL);
+        let camera = entity(&output.dump, "camera");
+        assert_eq!(camera["follow"], following);
+        let moved = vec3(&camera["target"]) - target0;
+        let walked = vec3(&entity(&output.dump, "sloth")["body_position"]) - body0;
+        assert!(walked.length() > 0.3, "the sloth walks: {walked}");
+        if following {
+            assert!((moved - walked).length() < 0.02, "the target moved {moved} as the sloth {walked}");
+        } else {
+            assert_eq!(moved, bevy::math::Vec3::ZERO);
+        }
+    }
+}
