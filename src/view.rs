@@ -365,6 +365,7 @@ mod tests {
             near: 0.1,
             far: 500.0,
             fly_speed_m_s: 30.0,
+            follow: false,
         };
         let turned = camera.looked_around(-90.0, -10.0);
         assert!((turned.eye() - camera.eye()).length() < 1e-4, "the eye stays");
