@@ -2,10 +2,11 @@
 
 use super::bands::{Band, BandBlend, BandRule};
 use super::generate::{Function, Layer, Recipe};
+use super::ground::{Ground, placement, section_barycentre};
 use super::heightmap::Heightmap;
 use super::image_io;
 use super::plugin::{TerrainPlugin, spawn_terrain};
-use super::section::Section;
+use super::section::{Geometry, Section};
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::values::{Degrees, FolderFile, Point, PositiveMetres, checked_number};
 use crate::foundation::yaml::FileError;
@@ -311,6 +312,8 @@ pub struct TerrainBuilt {
     pub map: Arc<Heightmap>,
     /// The seed a generated map was made with (drawn when the file says -1).
     pub seed: Option<u64>,
+    /// The ground of the section as the scene places it when it loads: where trees are rooted.
+    pub ground: Arc<Ground>,
 }
 
 /// A seed from the clock, for `seed: -1`.
@@ -359,7 +362,13 @@ impl EntityKind for TerrainKind {
             return Err(cx.entity.field_error("section", 0, "section.origin", message));
         }
         def.bands.rule().check().map_err(|message| cx.entity.field_error("bands", 0, "bands", message))?;
-        Ok(TerrainBuilt { map: Arc::new(map), seed })
+        let geometry =
+            Geometry { cell_m: def.cell_m.0, height_m: def.height_m.0, texture_cells: def.bands.texture_cells.0 };
+        let barycentre = section_barycentre(&map, section, geometry);
+        let scale = Vec3::from_array(def.scale.map(|f| f.0));
+        let place = placement(def.position.0, def.rotation_deg.0, scale, barycentre).compute_affine();
+        let ground = Arc::new(Ground::of_section(&map, section, geometry, barycentre, place));
+        Ok(TerrainBuilt { map: Arc::new(map), seed, ground })
     }
 
     fn spawn(def: &TerrainDef, built: &TerrainBuilt, entity: &mut EntityWorldMut) {

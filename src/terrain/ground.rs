@@ -3,7 +3,33 @@
 
 use super::Heightmap;
 use super::section::{Geometry, Section};
-use bevy::math::{Affine3A, Vec3};
+use bevy::math::{Affine3A, Quat, Vec3};
+use bevy::transform::components::Transform;
+
+/// Where a section's mesh stands: its barycentre (`barycentre`, measured with vertex `(i, j)` at
+/// `(i, height, j)` times the geometry's metres) at `position` raised by the barycentre's height,
+/// turned `rotation_deg` about the vertical and scaled about it.
+pub fn placement(position: Vec3, rotation_deg: f32, scale: Vec3, barycentre: Vec3) -> Transform {
+    Transform {
+        translation: position + Vec3::Y * barycentre.y,
+        rotation: Quat::from_rotation_y(rotation_deg.to_radians()),
+        scale: scale.max(Vec3::splat(1e-3)),
+    }
+}
+
+/// The mean of a section's vertices, measured as [`placement`] measures them: the point the
+/// mesh is drawn about.
+pub fn section_barycentre(map: &Heightmap, section: Section, geometry: Geometry) -> Vec3 {
+    let [x0, z0] = section.origin.map(|n| n as usize);
+    let [w, h] = section.size.map(|n| n as usize);
+    let mut sum = Vec3::ZERO;
+    for j in 0..h {
+        for (i, height) in map.row((z0 + j) as u32)[x0..x0 + w].iter().enumerate() {
+            sum += Vec3::new(i as f32 * geometry.cell_m, height * geometry.height_m, j as f32 * geometry.cell_m);
+        }
+    }
+    sum / (w * h) as f32
+}
 
 /// The ground of a section, placed in the world.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +88,14 @@ impl Ground {
         Some((height, normal))
     }
 
+    /// The height of the ground under the world point `(x, z)`, metres; `None` outside the
+    /// section.
+    pub fn height_under(&self, x: f32, z: f32) -> Option<f32> {
+        let local = self.to_local.transform_point3(Vec3::new(x, 0.0, z));
+        let (height, _) = self.surface(local.x, local.z)?;
+        Some(self.to_world.transform_point3(Vec3::new(local.x, height, local.z)).y)
+    }
+
     /// How deep the world point `p` lies under the ground, metres, and the unit direction out
     /// (towards the nearest point of the triangle's plane), if it does.
     pub fn penetration(&self, p: Vec3) -> Option<(f32, Vec3)> {
@@ -109,6 +143,7 @@ mod tests {
             Vec3::new(3.0, -1.0, 2.0),
         );
         let ground = Ground::of_section(&map, section, geometry, mesh.barycentre, place);
+        assert!(section_barycentre(&map, section, geometry).distance(mesh.barycentre) < 1e-5);
         let mut checked = 0;
         for surface in mesh.into_surfaces() {
             for triangle in &surface.triangles {
@@ -126,6 +161,10 @@ mod tests {
                     let back = place.inverse().transform_point3(under + out * depth);
                     assert!((back - p).dot(normal).abs() < 1e-4, "onto the plane");
                     assert!(ground.penetration(place.transform_point3(p + Vec3::Y * 0.01)).is_none());
+                    // The height under the placed point is the placed point's.
+                    let placed = place.transform_point3(p);
+                    let height = ground.height_under(placed.x, placed.z).expect("over the section");
+                    assert!((height - placed.y).abs() < 1e-4, "{height} against {}", placed.y);
                     checked += 1;
                 }
             }

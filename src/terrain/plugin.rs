@@ -5,6 +5,7 @@
 use super::bands::{Band, BandRule, band_texture};
 use super::def::{BandsDef, TerrainBuilt, TerrainDef};
 use super::generate::{PerlinLayer, Recipe};
+use super::ground::placement;
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
 use super::panel;
@@ -95,11 +96,7 @@ impl TerrainParams {
     /// The model transform: the section's centre at `position` (heights above it), turned and
     /// scaled about the centre.
     fn transform(&self, barycentre: Vec3) -> Transform {
-        Transform {
-            translation: self.position + Vec3::Y * barycentre.y,
-            rotation: Quat::from_rotation_y(self.rotation_deg.to_radians()),
-            scale: self.scale.max(Vec3::splat(1e-3)),
-        }
+        placement(self.position, self.rotation_deg, self.scale, barycentre)
     }
 }
 

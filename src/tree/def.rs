@@ -8,6 +8,8 @@ use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, Reference
 use crate::foundation::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
 use crate::foundation::yaml::FileError;
 use crate::raster::texture::TextureDef;
+use crate::terrain::TerrainKind;
+use crate::terrain::def::TerrainBuilt;
 use bevy::color::Srgba;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use serde::{Deserialize, Serialize};
@@ -33,6 +35,15 @@ pub struct TreeDef {
     /// Or: generated from these settings (see `canopy tree generate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub generate: Option<GeneratorSettings>,
+    /// The terrain it stands on, by entity name: every support that forks from no other (a
+    /// written-out polyline, a generated trunk) is raised by the ground's height under its
+    /// first point when the scene loads, so that its heights count from the ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<String>,
+    /// How far each such support was raised, by name: found when the scene is built, and kept
+    /// through edits in the window.
+    #[serde(skip)]
+    pub lifts: Vec<(String, f32)>,
 }
 
 fn bark() -> Color {
@@ -181,29 +192,72 @@ impl SupportDef {
 impl TreeDef {
     /// The tree this definition describes, or the support and field at fault and why.
     pub fn build(&self) -> Result<Tree, TreeError> {
+        let mut specs = self.specs()?;
+        for spec in &mut specs {
+            let lift = self.lifts.iter().find(|(name, _)| *name == spec.name).map_or(0.0, |(_, lift)| *lift);
+            if let Shape::Polyline { points, .. } = &mut spec.shape {
+                points.iter_mut().for_each(|p| p.y += lift);
+            }
+        }
+        let mut tree = Tree::build(&specs)?;
+        tree.lifts = self.lifts.clone();
+        Ok(tree)
+    }
+
+    /// The supports described, before any lift.
+    fn specs(&self) -> Result<Vec<SupportSpec>, TreeError> {
         let tree_error = |field, message: String| TreeError { support: None, field, message };
         match (&self.generate, self.supports.is_empty()) {
             (Some(_), false) => Err(tree_error("generate", "give either supports or generate, not both".into())),
             (None, true) => Err(tree_error("supports", "a tree needs supports, or generate settings".into())),
             (Some(settings), true) => {
                 settings.check().map_err(|message| tree_error("generate", message))?;
-                Tree::build(
-                    &generate::generate(settings).into_iter().enumerate().flat_map(prefixed).collect::<Vec<_>>(),
-                )
+                Ok(generate::generate(settings).into_iter().enumerate().flat_map(prefixed).collect())
             }
-            (None, false) => {
-                let specs = self
-                    .supports
-                    .iter()
-                    .enumerate()
-                    .map(|(support, def)| {
-                        def.spec().map_err(|(field, message)| TreeError { support: Some(support), field, message })
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
-                Tree::build(&specs)
-            }
+            (None, false) => self
+                .supports
+                .iter()
+                .enumerate()
+                .map(|(support, def)| {
+                    def.spec().map_err(|(field, message)| TreeError { support: Some(support), field, message })
+                })
+                .collect(),
         }
     }
+}
+
+/// How far each support that forks from no other must be raised to stand on the terrain named
+/// `ground`: the ground's height under its first point. An unknown terrain, or a support
+/// standing off its section, is an error at the tree's `ground`. (A tree whose supports do not
+/// build is left to the build to report.)
+fn lifts_on(def: &TreeDef, ground: &str, cx: &BuildContext) -> Result<Vec<(String, f32)>, FileError> {
+    let entity = &cx.entity;
+    let nth = cx.earlier::<TreeKind>().filter(|tree| tree.ground.is_some()).count();
+    let error =
+        |message: String| entity.locate("ground", nth, format!("entities[{}].tree.ground: {message}", entity.index));
+    let terrains: Vec<(&str, &TerrainBuilt)> = cx.built::<TerrainKind>().collect();
+    let Some((_, terrain)) = terrains.iter().find(|(name, _)| *name == ground) else {
+        let names: Vec<&str> = terrains.iter().map(|(name, _)| *name).collect();
+        return Err(error(format!(
+            "no terrain named `{ground}` (terrains: {})",
+            if names.is_empty() { "none".into() } else { names.join(", ") }
+        )));
+    };
+    let Ok(specs) = def.specs() else { return Ok(Vec::new()) };
+    let mut lifts = Vec::new();
+    for spec in &specs {
+        if let Shape::Polyline { points, .. } = &spec.shape {
+            let base = points[0];
+            let height = terrain.ground.height_under(base.x, base.z).ok_or_else(|| {
+                error(format!(
+                    "support `{}` starts at x {:.2}, z {:.2}, off the terrain `{ground}`'s section",
+                    spec.name, base.x, base.z
+                ))
+            })?;
+            lifts.push((spec.name.clone(), height));
+        }
+    }
+    Ok(lifts)
 }
 
 /// The supports of generated tree `index`, renamed `t<index + 1>-<name>` so that the supports of
@@ -242,6 +296,14 @@ impl EntityKind for TreeKind {
     /// Builds the tree; an error is located at its support's field, the nth occurrence of that
     /// key among the supports of the file's trees, or at the tree's `generate` or `tree` key.
     fn build(def: &TreeDef, cx: &BuildContext) -> Result<Tree, FileError> {
+        let rooted;
+        let def = match &def.ground {
+            Some(ground) => {
+                rooted = TreeDef { lifts: lifts_on(def, ground, cx)?, ..def.clone() };
+                &rooted
+            }
+            None => def,
+        };
         let error = match def.build() {
             Ok(tree) => return Ok(tree),
             Err(error) => error,
@@ -270,7 +332,8 @@ impl EntityKind for TreeKind {
     }
 
     fn spawn(def: &TreeDef, tree: &Tree, entity: &mut EntityWorldMut) {
-        plugin::spawn_tree(entity, def, tree.clone());
+        let def = TreeDef { lifts: tree.lifts.clone(), ..def.clone() };
+        plugin::spawn_tree(entity, &def, tree.clone());
     }
 
     fn save_live(def: &mut TreeDef, entity: EntityRef) {

@@ -155,6 +155,9 @@ impl fmt::Display for TreeError {
 pub struct Tree {
     /// The supports.
     pub supports: Vec<Support>,
+    /// How far each support that forks from no other was raised to stand on a terrain, by
+    /// name (see the `ground` of a tree in a scene file); empty for a tree on nothing.
+    pub lifts: Vec<(String, f32)>,
 }
 
 impl Tree {
@@ -171,7 +174,8 @@ impl Tree {
         for index in 0..specs.len() {
             build_support(specs, index, &mut built, &mut Vec::new())?;
         }
-        Ok(Self { supports: built.into_iter().map(|s| s.expect("every support was built")).collect() })
+        let supports = built.into_iter().map(|s| s.expect("every support was built")).collect();
+        Ok(Self { supports, lifts: Vec::new() })
     }
 
     /// Every segment of every support, with its support's index.

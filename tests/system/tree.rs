@@ -160,3 +160,55 @@ fn saving_an_edited_tree_keeps_a_backup_and_reloads_as_edited() {
     assert_eq!(names, ["trunk", "limb", "limb-1"]);
     assert!((built.supports[1].length() - 2.5).abs() < 1e-5);
 }
+
+#[test]
+fn trees_on_a_terrain_stand_on_its_ground_through_edits_and_say_when_they_cannot() {
+    use canopy::terrain::def::TerrainBuilt;
+    use canopy::tree::edit::{Edit, ForkField};
+    use canopy::tree::{Tree, TreeBody, edit_tree};
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("hill.yaml");
+    let text = "entities:\n  - name: land\n    terrain:\n      height: {size: [40, 40], seed: 5, layers: [{perlin: {scale: 16, octaves: 2}}], apply: [normalize]}\n      \
+        section: {origin: [4, 4], size: [32, 32]}\n      cell_m: 0.5\n      height_m: 3\n      position: [1, 0.5, 0]\n      rotation_deg: 20\n  \
+        - name: oak\n    tree:\n      ground: land\n      supports:\n        \
+        - { name: trunk, points: [[2.0, 0, -1.5], [2.1, 3, -1.5]], radii: [0.2, 0.1] }\n        \
+        - { name: limb, parent: trunk, at: 0.6, length: 1.2, radius: [0.08, 0.03] }\n  \
+        - name: grove\n    tree:\n      ground: land\n      generate: {seed: 4, trunks: 4, height: 3, spacing: 3, depth: 1}\n";
+    std::fs::write(&scene, text).unwrap();
+    let loaded = canopy::app::entity_kinds().load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let terrain = loaded.built[0].downcast_ref::<TerrainBuilt>().unwrap();
+    for index in [1, 2] {
+        let tree = loaded.built[index].downcast_ref::<Tree>().unwrap();
+        let trunks: Vec<_> =
+            tree.supports.iter().filter(|s| tree.lifts.iter().any(|(name, _)| *name == s.name)).collect();
+        assert!(!trunks.is_empty());
+        for trunk in trunks {
+            let base = trunk.points[0];
+            let ground = terrain.ground.height_under(base.x, base.z).unwrap();
+            assert!((base.y - ground).abs() < 1e-5, "{} stands at {} over ground at {ground}", trunk.name, base.y);
+        }
+    }
+    // Edited in the window, the tree keeps standing on the ground.
+    let mut app = small_app(&scene);
+    let world = app.world_mut();
+    let mut oaks = world.query::<(bevy::prelude::Entity, &TreeBody)>();
+    let (oak, body) = oaks.iter(world).find(|(_, body)| body.tree.supports.len() == 2).unwrap();
+    let base = body.tree.supports[0].points[0];
+    assert!(base.y.abs() > 1e-3, "raised off y = 0: {base}");
+    edit_tree(world, oak, Edit::Fork { support: 1, field: ForkField::Length, value: 2.0 }).unwrap();
+    assert_eq!(world.get::<TreeBody>(oak).unwrap().tree.supports[0].points[0], base);
+
+    for (from, to, expected) in [
+        ("ground: land\n      supports", "ground: lamd\n      supports", "no terrain named `lamd` (terrains: land)"),
+        (
+            "[[2.0, 0, -1.5], [2.1, 3, -1.5]]",
+            "[[40, 0, 0], [40, 3, 0]]",
+            "support `trunk` starts at x 40.00, z 0.00, off the terrain `land`'s section",
+        ),
+    ] {
+        std::fs::write(&scene, text.replace(from, to)).unwrap();
+        let error = canopy::app::entity_kinds().load(&scene).unwrap_err();
+        assert!(error.message.contains("entities[1].tree.ground") && error.message.contains(expected), "{error}");
+        assert_eq!(error.location.map(|l| l.0), Some(12), "{error}");
+    }
+}
