@@ -568,6 +568,7 @@ fn write_sequence(args: &SequenceArgs) -> ExitCode {
 /// `canopy ar detect`: prints the JSON; exit 0 if every image was read, 1 if some could not
 /// be, 2 for bad settings.
 fn detect_markers(images: &[PathBuf], calibration: Option<&Path>, dictionary: &str, side: Option<f64>) -> ExitCode {
+    use canopy::ar::plugin::marker_json;
     use canopy::ar::{calibration as calib, frames::load_image};
     use canopy_vision::{Dictionary, Gray, Scratch, Settings, detect, pose::estimate};
     let dictionary = match Dictionary::named(dictionary) {
@@ -613,15 +614,9 @@ fn detect_markers(images: &[PathBuf], calibration: Option<&Path>, dictionary: &s
                 .into_iter()
                 .map(|marker| {
                     let corners = marker.corners_f64();
-                    let mut entry = serde_json::json!({"id": marker.id, "corners": corners.map(|c| c.to_array())});
-                    if let (Some(camera), Some(side)) = (camera.as_ref(), side)
-                        && let Some(pose) = estimate(&corners, side, camera)
-                    {
-                        entry["rvec"] = serde_json::json!(pose.pose.rvec().to_array());
-                        entry["tvec"] = serde_json::json!(pose.pose.translation.to_array());
-                        entry["reprojection_error_px"] = serde_json::json!(pose.error_px);
-                        entry["alternative_error_px"] = serde_json::json!(pose.alternative_error_px);
-                    }
+                    let pose = camera.as_ref().zip(side).and_then(|(camera, side)| estimate(&corners, side, camera));
+                    let mut entry = marker_json(&corners, pose.as_ref());
+                    entry["id"] = serde_json::json!(marker.id);
                     entry
                 })
                 .collect();

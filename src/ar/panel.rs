@@ -33,9 +33,9 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             shown.map_or("none yet".into(), |r| format!("{} of {} ({})", r.frame + 1, frames.len(), file(r.frame))),
         );
         match shown.map(|r| &r.finding) {
-            Some(Finding::Found { pose, error_px, alternative_error_px, .. }) => {
-                let t = pose.translation;
-                let r = pose.rvec();
+            Some(Finding::Found { estimate, .. }) => {
+                let (t, r) = (estimate.pose.translation, estimate.pose.rvec());
+                let (error_px, alternative_error_px) = (estimate.error_px, estimate.alternative_error_px);
                 row(ui, "found", format!("{:.3} m away", t.length()));
                 row(ui, "tvec (m)", format!("{:.4} {:.4} {:.4}", t.x, t.y, t.z));
                 row(ui, "rvec (rad)", format!("{:.4} {:.4} {:.4}", r.x, r.y, r.z));

@@ -16,14 +16,14 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
-use bevy::math::{DVec2, DVec3};
+use bevy::math::DVec2;
 use bevy::prelude::*;
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::detect::{Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
 use canopy_vision::fit::{Fit, Remap};
 use canopy_vision::gray::Gray;
-use canopy_vision::pose::{Pose, estimate, marker_corners};
+use canopy_vision::pose::{Pose, PoseEstimate, estimate, marker_corners};
 use image::RgbaImage;
 use serde_json::{Map, Value, json};
 use std::collections::VecDeque;
@@ -107,12 +107,8 @@ pub enum Finding {
     Found {
         /// The corners.
         corners: [DVec2; 4],
-        /// The pose.
-        pose: Pose,
-        /// Root-mean-square reprojection error, pixels.
-        error_px: f64,
-        /// The other planar solution's error, pixels.
-        alternative_error_px: f64,
+        /// The pose, its error and the other planar solution's.
+        estimate: PoseEstimate,
     },
     /// Not found; the last pose is shown while it is held.
     Lost {
@@ -150,8 +146,6 @@ pub struct ArState {
     tracker: Tracker,
     /// The pose the scene is drawn at; `None` hides it.
     pub pose: Option<Pose>,
-    /// The detected corners in the frame shown, if found in it.
-    corners: Option<[DVec2; 4]>,
     /// The shown frames' records, in order: the last [`MAX_RECORDS`].
     pub records: VecDeque<FrameRecord>,
     /// Records dropped from the front to keep [`MAX_RECORDS`].
@@ -171,6 +165,29 @@ pub struct ArState {
     backdrop: Option<Remap>,
     backdrop_pixels: Vec<u8>,
     backdrop_of: Option<(u64, [u8; 4])>,
+}
+
+impl ArState {
+    /// The marker's corners in the frame shown, if it was found there.
+    fn found_corners(&self) -> Option<[DVec2; 4]> {
+        match self.records.back()?.finding {
+            Finding::Found { corners, .. } => Some(corners),
+            _ => None,
+        }
+    }
+}
+
+/// A marker as `canopy ar detect` prints it and the dump records it: its corners (pixels,
+/// OpenCV's order) and, with a pose, OpenCV's `rvec` and `tvec` and both solutions' errors.
+pub fn marker_json(corners: &[DVec2; 4], estimate: Option<&PoseEstimate>) -> Value {
+    let mut out = json!({"corners": corners.map(|c| c.to_array())});
+    if let Some(estimate) = estimate {
+        out["rvec"] = json!(estimate.pose.rvec().to_array());
+        out["tvec"] = json!(estimate.pose.translation.to_array());
+        out["reprojection_error_px"] = json!(estimate.error_px);
+        out["alternative_error_px"] = json!(estimate.alternative_error_px);
+    }
+    out
 }
 
 fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
@@ -204,23 +221,17 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
             });
             match found {
-                Some((corners, estimate)) => Finding::Found {
-                    corners,
-                    pose: estimate.pose,
-                    error_px: estimate.error_px,
-                    alternative_error_px: estimate.alternative_error_px,
-                },
+                Some((corners, estimate)) => Finding::Found { corners, estimate },
                 None => Finding::Lost { held: false },
             }
         }
     };
-    let (found_pose, corners) = match &finding {
-        Finding::Found { pose, corners, .. } => (Some(*pose), Some(*corners)),
-        _ => (None, None),
+    let found_pose = match &finding {
+        Finding::Found { estimate, .. } => Some(estimate.pose),
+        _ => None,
     };
     let shown = state.tracker.update(found_pose, state.time_s, view.hold_s);
     state.pose = shown.map(|(pose, _)| pose);
-    state.corners = corners;
     let finding = match finding {
         Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
         other => other,
@@ -251,7 +262,7 @@ fn place_camera(
     // Where the drawn scene puts the marker's corners, against where they were found (both
     // without the lens's distortion, as the backdrop shows them).
     let clip = render.camera.view_projection(size.x as f32 / size.y as f32);
-    state.overlay_error_px = state.corners.map(|corners| {
+    state.overlay_error_px = state.found_corners().map(|corners| {
         marker_corners(view.side_m)
             .iter()
             .zip(corners)
@@ -296,7 +307,7 @@ fn lay_over_frame(
     }
     framebuffer.fill_empty(&state.backdrop_pixels);
     if state.outline
-        && let Some(corners) = state.corners
+        && let Some(corners) = state.found_corners()
     {
         let fit = Fit::new(view.camera.size, size);
         let corners = corners.map(|corner| fit.to_view(view.camera.straightened(corner)));
@@ -320,21 +331,17 @@ impl DumpState for ArView {
 
 impl DumpState for ArState {
     fn dump(&self, out: &mut Map<String, Value>) {
-        let vector = |v: DVec3| json!(v.to_array());
         let records: Vec<Value> = self
             .records
             .iter()
             .map(|record| {
                 let mut entry = json!({"frame": record.frame, "time_s": record.time_s});
                 let fields = match &record.finding {
-                    Finding::Found { corners, pose, error_px, alternative_error_px } => json!({
-                        "marker": "found",
-                        "corners": corners.map(|c| c.to_array()),
-                        "rvec": vector(pose.rvec()),
-                        "tvec": vector(pose.translation),
-                        "reprojection_error_px": error_px,
-                        "alternative_error_px": alternative_error_px,
-                    }),
+                    Finding::Found { corners, estimate } => {
+                        let mut found = marker_json(corners, Some(estimate));
+                        found["marker"] = json!("found");
+                        found
+                    }
                     Finding::Lost { held: true } => json!({"marker": "held"}),
                     Finding::Lost { held: false } => json!({"marker": "not found"}),
                     Finding::Unreadable(message) => json!({"marker": "unreadable", "error": message}),
