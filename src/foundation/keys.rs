@@ -1,5 +1,6 @@
 //! Key help: every key a plugin reacts to is registered with [`RegisterKeys::register_keys`],
-//! so that the help overlay and the README list exactly the keys that work.
+//! so that the help overlay and the key reference (`docs/reference.md`) list exactly the keys that
+//! work.
 
 use bevy::prelude::*;
 

@@ -1,4 +1,4 @@
-//! Timelines, pause and step, determinism, and the key help against the README.
+//! Timelines, pause and step, determinism, and the key help against the key reference.
 
 use super::common::*;
 use bevy::math::Vec3;
@@ -44,10 +44,10 @@ fn runs_are_deterministic() {
 }
 
 #[test]
-fn the_readme_key_table_lists_every_registered_key() {
+fn the_key_reference_lists_every_registered_key() {
     let app = canopy::app::headless_app(&path("scenes/demo.yaml"), SMALL, false).unwrap();
-    let readme = std::fs::read_to_string(path("README.md")).unwrap();
-    let keys_section = readme.split("## Keys").nth(1).unwrap().split("\n## ").next().unwrap();
+    let reference = std::fs::read_to_string(path("docs/reference.md")).unwrap();
+    let keys_section = reference.split("## Keys").nth(1).unwrap().split("\n## ").next().unwrap();
     let key_map = app.world().resource::<canopy::foundation::keys::KeyMap>();
     assert!(key_map.0.len() >= 15);
     for help in &key_map.0 {
@@ -56,7 +56,7 @@ fn the_readme_key_table_lists_every_registered_key() {
             line.starts_with('|')
                 && line.split('|').nth(1).is_some_and(|cell| cell.split(" / ").any(|k| k.trim() == name))
         });
-        assert!(listed, "the README's key table does not list {name} ({})", help.action);
+        assert!(listed, "the key table of docs/reference.md does not list {name} ({})", help.action);
     }
 }
 
