@@ -107,8 +107,9 @@ pub enum Finding {
     Found {
         /// The corners.
         corners: [DVec2; 4],
-        /// The pose, its error and the other planar solution's.
-        estimate: PoseEstimate,
+        /// The pose, its error and the other planar solution's (boxed: the records of frames
+        /// without the marker stay small).
+        estimate: Box<PoseEstimate>,
     },
     /// Not found; the last pose is shown while it is held.
     Lost {
@@ -221,7 +222,7 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
             });
             match found {
-                Some((corners, estimate)) => Finding::Found { corners, estimate },
+                Some((corners, estimate)) => Finding::Found { corners, estimate: Box::new(estimate) },
                 None => Finding::Lost { held: false },
             }
         }
