@@ -84,6 +84,14 @@ pub struct CarcassConfig {
     pub thickness: ConfigLength,
 }
 
+impl CarcassConfig {
+    /// The arm these values describe.
+    pub fn carcass(&self) -> Carcass {
+        let [[a1, b1], [a2, b2]] = self.data;
+        Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: self.thickness.0 }
+    }
+}
+
 fn default_min_part() -> Part {
     Part(0.5)
 }
@@ -165,10 +173,7 @@ impl MuscleDef {
         let (Some(config), Some(arm)) = (&self.muscle_config, &self.carcass_config) else {
             return Err(model::ConfigError::Missing);
         };
-        let muscle = config.model(self.min_part.0, self.max_part.0)?;
-        let [[a1, b1], [a2, b2]] = arm.data;
-        let carcass = Carcass { a1: a1.0, b1: b1.0, a2: a2.0, b2: b2.0, thickness: arm.thickness.0 };
-        Ok((muscle, carcass))
+        Ok((config.model(self.min_part.0, self.max_part.0)?, arm.carcass()))
     }
 
     /// Takes the configurations from a referenced file's contents.
@@ -189,6 +194,23 @@ pub struct ConfigFile {
 }
 
 impl ConfigFile {
+    /// The source program's first configuration: a ten-node biceps of rest length 250 on rods
+    /// of 260 and 150 units (`scenes/biceps_config.yaml` holds the same).
+    pub fn source_first() -> Self {
+        let lengths = |values: &[f64]| values.iter().map(|&v| ConfigLength(v)).collect();
+        Self {
+            muscle_config: MuscleConfig {
+                radiuses: lengths(&[5.0, 5.0, 10.0, 15.0, 18.0, 18.0, 15.0, 10.0, 5.0, 5.0]),
+                grow_mults: [0.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 1.0, 1.0, 0.0].map(Multiplier).to_vec(),
+                len: ConfigLength(250.0),
+            },
+            carcass_config: CarcassConfig {
+                data: [[ConfigLength(30.0), ConfigLength(230.0)], [ConfigLength(30.0), ConfigLength(120.0)]],
+                thickness: ConfigLength(5.0),
+            },
+        }
+    }
+
     /// Reads a configuration file, its node model checked so that its errors point into it.
     fn read(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
         let config: ConfigFile = parse_yaml(path, bytes, "a muscle configuration")?;
@@ -284,6 +306,13 @@ mod tests {
                 assert!(error.to_string().contains("a whole number of segments from 3 to 256"), "{error}");
             }
         }
+    }
+
+    #[test]
+    fn the_source_first_configuration_is_the_one_in_the_sample_file() {
+        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/biceps_config.yaml")).unwrap();
+        let file: ConfigFile = serde_yaml::from_str(&text).unwrap();
+        assert_eq!(file, ConfigFile::source_first());
     }
 
     #[test]

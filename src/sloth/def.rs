@@ -1,6 +1,7 @@
 //! The `sloth:` entry of a scene file, and the kind that places it on the scene's trees
 //! (once, while checking) and spawns it.
 
+use super::biceps::Biceps;
 use super::gait;
 use super::locomotion::{Placement, Sloth};
 use super::plugin::{self, SlothPlugin};
@@ -9,6 +10,7 @@ use super::supports::Supports;
 use crate::foundation::kind::{BuildContext, EntityKind};
 use crate::foundation::values::{Color, Degrees, UnitInterval, checked_number};
 use crate::foundation::yaml::FileError;
+use crate::muscle::ConfigFile;
 use crate::tree::TreeKind;
 use bevy::color::Srgba;
 use bevy::ecs::world::EntityWorldMut;
@@ -105,6 +107,11 @@ pub struct SlothDef {
     /// Fur colour; a greyish brown by default.
     #[serde(default = "fur")]
     pub color: Color,
+    /// Each forelimb's biceps: a `muscle_config` and `carcass_config` as the muscle kind
+    /// reads them, the carcass's rod 1 scaled onto the upper arm; the source program's first
+    /// configuration when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub biceps: Option<ConfigFile>,
 }
 
 fn middle() -> UnitInterval {
@@ -135,6 +142,14 @@ impl SlothDef {
             proportions.hang = hang.0;
         }
         proportions
+    }
+
+    /// The left and right forelimbs' biceps, or why the configuration cannot follow the elbow.
+    pub fn biceps(&self) -> Result<[Biceps; 2], String> {
+        let config = self.biceps.clone().unwrap_or_else(ConfigFile::source_first);
+        let bones = self.proportions().fore_bones;
+        let biceps = Biceps::new(&config, bones[1], bones[2])?;
+        Ok([biceps.clone(), biceps])
     }
 
     /// The index of the support it names among `supports`, or why there is none.
@@ -177,21 +192,23 @@ pub struct SlothKind;
 impl EntityKind for SlothKind {
     const KEY: &'static str = "sloth";
     type Def = SlothDef;
-    type Built = (Sloth, Arc<Supports>);
+    type Built = (Sloth, Arc<Supports>, [Biceps; 2]);
     type Plugin = SlothPlugin;
 
     /// Places the sloth on the scene's trees (built by the tree kind before, gathered once for
-    /// all the sloths); an error is located at the sloth's `support` key.
-    fn build(def: &SlothDef, cx: &BuildContext) -> Result<(Sloth, Arc<Supports>), FileError> {
+    /// all the sloths) and builds its biceps; an error is located at the sloth's `support` or
+    /// `biceps` key.
+    fn build(def: &SlothDef, cx: &BuildContext) -> Result<Self::Built, FileError> {
         let supports = cx.shared(|| Supports::new(cx.built::<TreeKind>()));
         let entity = &cx.entity;
         let sloth = def.place(&supports, def.speed.0).map_err(|error| {
             entity.locate("support", entity.kind_index, format!("{}: {error}", entity.field("support")))
         })?;
-        Ok((sloth, supports))
+        let biceps = def.biceps().map_err(|error| entity.field_error("biceps", 0, "biceps", error))?;
+        Ok((sloth, supports, biceps))
     }
 
-    fn spawn(def: &SlothDef, (sloth, supports): &(Sloth, Arc<Supports>), entity: &mut EntityWorldMut) {
-        plugin::spawn_sloth(entity, def, sloth.clone(), supports.clone());
+    fn spawn(def: &SlothDef, (sloth, supports, biceps): &Self::Built, entity: &mut EntityWorldMut) {
+        plugin::spawn_sloth(entity, def, sloth.clone(), supports.clone(), biceps.clone());
     }
 }

@@ -1,8 +1,10 @@
 //! The sloth's render mesh, rebuilt from its pose each frame: tapered capsules for the torso,
-//! neck, head and every bone, a pale face with dark eye patches, and curved claws (two on each
-//! hand, three on each foot, as in *Choloepus*). Colours are per vertex, in the rasterizer's
-//! colour space (the scene's sRGB values, as for every other mesh).
+//! neck, head and every bone, a pale face with dark eye patches, curved claws (two on each
+//! hand, three on each foot, as in *Choloepus*), and each forelimb's biceps on the flexor side
+//! of its upper arm. Colours are per vertex, in the rasterizer's colour space (the scene's
+//! sRGB values, as for every other mesh).
 
+use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::locomotion::Sloth;
 use super::rig::{BodyFrame, JOINTS, Limb};
 use crate::raster::MeshData;
@@ -16,6 +18,10 @@ const SIDES: usize = 10;
 const FACE: Vec3 = Vec3::new(0.88, 0.82, 0.66);
 const EYE_PATCH: Vec3 = Vec3::new(0.08, 0.06, 0.05);
 const CLAW: Vec3 = Vec3::new(0.12, 0.1, 0.08);
+const MUSCLE: Vec3 = Vec3::new(0.7, 0.22, 0.2);
+
+/// Vertices around each ring of a biceps.
+const BICEPS_SEGMENTS: usize = 12;
 
 /// Limb thickness at the girdle, shoulder or hip, elbow or knee, wrist or ankle, and palm,
 /// metres, for an animal of default proportions (scaled with the torso).
@@ -27,8 +33,8 @@ fn part(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], color: Vec3) {
     mesh.colors.resize(mesh.positions.len(), color);
 }
 
-/// The mesh of `sloth` in its current pose, `fur` its coat colour.
-pub fn sloth_mesh(sloth: &Sloth, fur: Vec3) -> MeshData {
+/// The mesh of `sloth` in its current pose with its forelimbs' `biceps`, `fur` its coat colour.
+pub fn sloth_mesh(sloth: &Sloth, biceps: &[Biceps; 2], fur: Vec3) -> MeshData {
     let mut mesh = MeshData::default();
     let p = &sloth.proportions;
     let frame = &sloth.frame;
@@ -49,6 +55,19 @@ pub fn sloth_mesh(sloth: &Sloth, fur: Vec3) -> MeshData {
         chain[JOINTS - 1] = palm;
         part(&mut mesh, &chain, &LIMB_RADII.map(|radius| radius * scale), fur);
         claws(&mut mesh, frame, limb, palm, grip, scale);
+    }
+    // Each biceps lies along its attachments, lifted towards the forearm's side by the upper
+    // arm's radius less its belly, so that the belly shows through the fur (more as it
+    // thickens) and its ends stay in the limb.
+    let upper_arm_radius = (LIMB_RADII[1] + LIMB_RADII[2]) * 0.5 * scale;
+    for (muscle, limb) in biceps.iter().zip(BICEPS_LIMBS) {
+        let arm = arm_points(sloth, limb);
+        let upper = (arm.elbow - arm.shoulder).normalize_or_zero();
+        let fore = (arm.wrist - arm.elbow).normalize_or_zero();
+        let (_, flex) = sloth.rigs[limb.index()].axes(frame, sloth.feet[limb.index()].angles[0]);
+        let side = (fore - upper * upper.dot(fore)).try_normalize().unwrap_or_else(|| upper.cross(flex).normalize());
+        let lift = side * (upper_arm_radius - muscle.rest_thickness_m() as f32);
+        muscle.append_surface(&arm, lift, BICEPS_SEGMENTS, MUSCLE, &mut mesh);
     }
     mesh
 }
@@ -109,7 +128,8 @@ mod tests {
         let supports = Supports::new([("t", &tree)]);
         let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
         let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
-        let mesh = sloth_mesh(&sloth, Vec3::new(0.4, 0.3, 0.2));
+        let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
+        let mesh = sloth_mesh(&sloth, &def.biceps().unwrap(), Vec3::new(0.4, 0.3, 0.2));
         assert_eq!(mesh.colors.len(), mesh.positions.len());
         assert_eq!(mesh.normals.len(), mesh.positions.len());
         assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < mesh.positions.len()));
@@ -119,5 +139,37 @@ mod tests {
         }
         let centre = mesh.positions.iter().copied().sum::<Vec3>() / mesh.positions.len() as f32;
         assert!(centre.distance(sloth.frame.centre) < 0.3);
+    }
+
+    #[test]
+    fn each_biceps_lies_on_its_upper_arm() {
+        let shape = Shape::Polyline {
+            points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)],
+            radii: vec![0.04, 0.04],
+        };
+        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
+        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
+        let biceps = def.biceps().unwrap();
+        let mesh = sloth_mesh(&sloth, &biceps, Vec3::ONE);
+        let muscle: Vec<Vec3> =
+            mesh.positions.iter().zip(&mesh.colors).filter(|(_, c)| **c == MUSCLE).map(|(p, _)| *p).collect();
+        assert!(!muscle.is_empty() && muscle.len() % 2 == 0, "both muscles are drawn alike");
+        let (arm_radius, belly) = (LIMB_RADII[1], biceps[0].rest_thickness_m() as f32);
+        for (half, limb) in muscle.chunks(muscle.len() / 2).zip(BICEPS_LIMBS) {
+            let arm = arm_points(&sloth, limb);
+            let axis = arm.elbow - arm.shoulder;
+            let from_bone = |p: Vec3| {
+                let t = ((p - arm.shoulder).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
+                p.distance(arm.shoulder + axis * t)
+            };
+            // Along the upper arm, nowhere farther from its fur than two thicknesses of the belly...
+            let far = half.iter().map(|&p| from_bone(p)).fold(0.0, f32::max);
+            assert!(far < arm_radius + 2.0 * belly, "{limb:?} strays from its arm: {far} m from the bone");
+            // ...and showing through it.
+            assert!(half.iter().any(|&p| from_bone(p) > arm_radius), "{limb:?} is hidden in the fur");
+        }
     }
 }

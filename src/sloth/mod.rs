@@ -15,6 +15,7 @@
 //! | [`body`] | the body hanging from its grips, its heading and clearance |
 //! | [`locomotion`] | one sloth, one fixed step at a time |
 //! | [`transfer`] | planned moves between a branch and the trunk it grows from |
+//! | [`biceps`] | each forelimb's biceps: the muscle kind's node model, its length set by the elbow |
 //! | [`mesh`] | the render mesh from the pose |
 //!
 //! Where the source's rules live: the diagonal sequence and its timing in [`gait`]; the leg
@@ -24,6 +25,7 @@
 //!
 //! The pure modules are tested and benchmarked without a world.
 
+pub mod biceps;
 pub mod body;
 pub mod ccd;
 pub mod def;
@@ -38,5 +40,5 @@ pub mod transfer;
 
 pub use def::{Facing, SlothDef, SlothKind, WalkDirection};
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
-pub use plugin::{SlothBody, SlothInput, SlothParams, SlothPlugin, SlothSource, SlothSystems};
+pub use plugin::{SlothBody, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSource, SlothSystems};
 pub use supports::Supports;

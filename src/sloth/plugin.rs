@@ -1,6 +1,7 @@
 //! The sloth kind's plugin: its parameters and keys, the walk in the fixed step, the
 //! write-back of its mesh, and its dump.
 
+use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::def::{SlothDef, WalkDirection};
 use super::locomotion::{Drive, Sloth};
 use super::mesh;
@@ -56,9 +57,26 @@ pub struct SlothBody {
     pub supports: Arc<Supports>,
 }
 
-/// Spawns a sloth entity of `def`, placed as `sloth` among `supports`.
-pub(super) fn spawn_sloth(entity: &mut EntityWorldMut, def: &SlothDef, sloth: Sloth, supports: Arc<Supports>) {
+/// The sloth's muscles: the left and right forelimbs' biceps, following the elbows.
+#[derive(Component, Debug, Clone)]
+pub struct SlothMuscles {
+    /// The biceps of [`Limb::LeftFore`] and [`Limb::RightFore`].
+    pub biceps: [Biceps; 2],
+}
+
+/// Spawns a sloth entity of `def`, placed as `sloth` among `supports`, with its `biceps`.
+pub(super) fn spawn_sloth(
+    entity: &mut EntityWorldMut,
+    def: &SlothDef,
+    sloth: Sloth,
+    supports: Arc<Supports>,
+    mut biceps: [Biceps; 2],
+) {
+    for (muscle, limb) in biceps.iter_mut().zip(BICEPS_LIMBS) {
+        muscle.follow(&arm_points(&sloth, limb));
+    }
     entity.insert((
+        SlothMuscles { biceps },
         Transform::IDENTITY,
         RasterMesh { mesh: Arc::default(), material: Material::colored(Vec3::ONE) },
         SlothSource(def.clone()),
@@ -90,6 +108,7 @@ impl Plugin for SlothPlugin {
         let scope = KeyScope::Kind("sloth");
         app.register_params::<SlothParams>()
             .register_dump::<SlothBody>()
+            .register_dump::<SlothMuscles>()
             .register_keys(&[
                 KeyHelp { key: FORWARD_KEY, action: "walk forward, or climb up a trunk (hold)", scope },
                 KeyHelp { key: BACK_KEY, action: "walk back, or climb down a trunk (hold)", scope },
@@ -107,7 +126,10 @@ impl Plugin for SlothPlugin {
             ])
             .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input).in_set(SlothSystems))
             .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply).in_set(SlothSystems))
-            .add_systems(FixedUpdate, walk_sloths.in_set(SimSystems::Locomotion).in_set(SlothSystems))
+            .add_systems(
+                FixedUpdate,
+                (walk_sloths, flex_biceps).chain().in_set(SimSystems::Locomotion).in_set(SlothSystems),
+            )
             .add_systems(PostUpdate, write_back_sloths.in_set(WriteBackSystems).in_set(SlothSystems));
     }
 }
@@ -196,15 +218,50 @@ fn walk_sloths(
     }
 }
 
+/// Sets each biceps' length from the elbow the walk left, keeping its volume.
+fn flex_biceps(mut sloths: Query<(&SlothBody, &mut SlothMuscles), Changed<SlothBody>>) {
+    for (body, mut muscles) in &mut sloths {
+        for (biceps, limb) in muscles.biceps.iter_mut().zip(BICEPS_LIMBS) {
+            biceps.follow(&arm_points(&body.sloth, limb));
+            if let Some(refusal) = &biceps.refusal {
+                warn!("sloth biceps ({}): {refusal}", limb.key());
+            }
+        }
+    }
+}
+
 /// Meshes sloths whose pose changed.
-fn write_back_sloths(mut sloths: Query<(&SlothBody, &SlothSource, &mut RasterMesh), Changed<SlothBody>>) {
-    for (body, source, mut raster) in &mut sloths {
-        raster.mesh = Arc::new(mesh::sloth_mesh(&body.sloth, srgb_channels(source.0.color.0)));
+fn write_back_sloths(
+    mut sloths: Query<(&SlothBody, &SlothSource, &SlothMuscles, &mut RasterMesh), Changed<SlothBody>>,
+) {
+    for (body, source, muscles, mut raster) in &mut sloths {
+        raster.mesh = Arc::new(mesh::sloth_mesh(&body.sloth, &muscles.biceps, srgb_channels(source.0.color.0)));
     }
 }
 
 fn vec3(v: Vec3) -> Value {
     json!([v.x, v.y, v.z])
+}
+
+impl DumpState for SlothMuscles {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let biceps: Map<String, Value> = self
+            .biceps
+            .iter()
+            .zip(BICEPS_LIMBS)
+            .map(|(muscle, limb)| {
+                let value = json!({
+                    "length_m": muscle.length_m(),
+                    "flexion_deg": muscle.flexion.to_degrees(),
+                    "volume_relative_error": muscle.relative_volume_error(),
+                    "radii_m": muscle.model.radii().iter().map(|r| r * muscle.metres_per_unit).collect::<Vec<_>>(),
+                    "refused": muscle.refusal.map(|refusal| refusal.to_string()),
+                });
+                (limb.key().to_string(), value)
+            })
+            .collect();
+        out.insert("biceps".into(), Value::Object(biceps));
+    }
 }
 
 impl DumpState for SlothBody {

@@ -1,10 +1,12 @@
 //! The sloth's scenario scenes, run headless through the real plugins with a timeline, checked
 //! at every fixed step: planted feet on their support's surface, joints within limits, the body
-//! never inside a support, no NaN; and at the end: progress, speed, gait order.
+//! never inside a support, no NaN, each forelimb's biceps keeping its volume at the length its
+//! elbow gives; and at the end: progress, speed, gait order.
 
 use bevy::math::{UVec2, Vec3};
 use canopy::controls::timeline::Timeline;
-use canopy::sloth::SlothBody;
+use canopy::sloth::biceps::{BICEPS_LIMBS, arm_points};
+use canopy::sloth::{SlothBody, SlothMuscles};
 use canopy::sloth::rig::Limb;
 use std::path::{Path, PathBuf};
 
@@ -12,6 +14,13 @@ const SIZE: UVec2 = UVec2::new(64, 48);
 
 /// Farthest a planted foot's grip point may be from its support's surface, metres.
 const GRIP_LIMIT: f32 = 0.01;
+
+/// Largest relative volume error a biceps may show.
+const VOLUME_LIMIT: f64 = 1e-9;
+
+/// Largest difference between a biceps' length and the distance between its attachments on
+/// the posed arm, metres (the pose is f32).
+const LENGTH_LIMIT: f64 = 1e-6;
 
 /// The free speed and the tolerance the studies give, metres per second.
 const FREE_SPEED: (f32, f32) = (0.11, 0.04);
@@ -80,7 +89,8 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
     for _ in 0..steps {
         app.update();
         let world = app.world_mut();
-        let (body, params) = world.query::<(&SlothBody, &canopy::sloth::SlothParams)>().single(world).unwrap();
+        let (body, params, muscles) =
+            world.query::<(&SlothBody, &canopy::sloth::SlothParams, &SlothMuscles)>().single(world).unwrap();
         let sloth = &body.sloth;
         let time = sloth.time;
 
@@ -97,6 +107,15 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
             let distance = body.supports.paths[foot.support].distance(foot.position);
             if foot.planted() && distance.abs() > GRIP_LIMIT {
                 fail(format!("planted {} is {distance:.4} m from its support's surface", limb.key()));
+            }
+        }
+        for (biceps, limb) in muscles.biceps.iter().zip(BICEPS_LIMBS) {
+            let (start, end) = arm_points(sloth, limb).attachments(&biceps.carcass, biceps.metres_per_unit);
+            if (start.distance(end) - biceps.length_m()).abs() > LENGTH_LIMIT || biceps.refusal.is_some() {
+                fail(format!("{} biceps {} m long between attachments {} m apart", limb.key(), biceps.length_m(), start.distance(end)));
+            }
+            if biceps.relative_volume_error() > VOLUME_LIMIT {
+                fail(format!("{} biceps volume off by {:e}", limb.key(), biceps.relative_volume_error()));
             }
         }
         if !sloth.frame.centre.is_finite() || !sloth.frame.forward.is_finite() {
