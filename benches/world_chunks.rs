@@ -23,7 +23,7 @@ fn main() {
          {perlin: {scale: 400, octaves: 3}, weight: 0.9, apply: [{power: 3}]}]}",
     )
     .expect("the world's recipe");
-    let heights = WorldHeights::Unbounded { recipe: std::sync::Arc::new(recipe), seed: 11 };
+    let heights = WorldHeights::unbounded(std::sync::Arc::new(recipe), 11);
     let geometry = Geometry { cell_m: 1.0, height_m: 60.0, texture_cells: 8.0 };
     let rule = BandRule {
         thresholds: [0.32, 0.36, 0.62, 0.8],

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// The scene played when none is named.
-const DEFAULT_SCENE: &str = "scenes/demo.yaml";
+const DEFAULT_SCENE: &str = "scenes/canopy.yaml";
 
 /// Canopy plays interactive 3D scenes described in YAML files, drawn by a CPU rasterizer.
 #[derive(Parser, Debug)]
@@ -37,7 +37,7 @@ enum Command {
     /// Play a scene in a window with keyboard controls (the default). Without a display,
     /// render it headless to a PNG and print where.
     Play {
-        /// The scene file [default: scenes/demo.yaml]
+        /// The scene file [default: scenes/canopy.yaml]
         scene: Option<PathBuf>,
         /// Save a screenshot of the whole window to this file after `--frames` frames, then
         /// exit.
@@ -681,7 +681,7 @@ fn deform_mesh(args: &DeformArgs) -> ExitCode {
     }
 }
 
-/// `scenes/demo.yaml` from the working directory, else from the source tree.
+/// `scenes/canopy.yaml` from the working directory, else from the source tree.
 fn default_scene() -> PathBuf {
     let local = PathBuf::from(DEFAULT_SCENE);
     if local.exists() { local } else { Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE) }

@@ -1,8 +1,11 @@
 //! The static solids a body's particles stay out of: planes, balls and boxes, the scene's
-//! shapes as they are placed, the terrain's ground and the trees' supports.
+//! shapes as they are placed, the terrain's and the streamed world's ground and the trees'
+//! supports.
 
 use crate::raster::primitives::Primitive;
+use crate::terrain::chunk::WorldHeights;
 use crate::terrain::ground::Ground;
+use crate::terrain::section::Geometry;
 use crate::tree::SegmentBvh;
 use bevy::math::{Affine3A, Vec3};
 use std::sync::Arc;
@@ -44,6 +47,13 @@ pub enum Collider {
     },
     /// The terrain's visible section.
     Ground(Arc<Ground>),
+    /// A streamed world's ground, everywhere, as its finest level draws it.
+    World {
+        /// The world's heights.
+        heights: WorldHeights,
+        /// Its metres between samples and for a height of 1.
+        geometry: Geometry,
+    },
     /// The trees' supports, every segment of them.
     Supports(Arc<SegmentBvh>),
 }
@@ -83,6 +93,12 @@ impl Collider {
                 (depth > 0.0).then(|| (depth, out / depth))
             }
             Collider::Ground(ground) => ground.penetration(p),
+            Collider::World { heights, geometry } => {
+                let (height, normal) = heights.ground_surface(p.x, p.z, *geometry);
+                // Out along the normal to the triangle's plane.
+                let depth = (height - p.y) * normal.y;
+                (depth > 0.0).then_some((depth, normal))
+            }
             Collider::Supports(bvh) => {
                 let nearest = bvh.nearest(p, 0.0)?;
                 let depth = -nearest.surface.distance;

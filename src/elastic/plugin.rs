@@ -20,6 +20,7 @@ use crate::shape::Shape;
 use crate::soft_body::draw::surface_mesh;
 use crate::soft_body::pick::SurfaceBvh;
 use crate::terrain::TerrainBody;
+use crate::world::WorldBody;
 use crate::terrain::ground::Ground;
 use crate::terrain::section::Geometry;
 use crate::tree::mesh::add_tube;
@@ -346,13 +347,14 @@ fn shake_loose(mut hands: MessageReader<HandPlanted>, mut bodies: Query<&mut Ela
     }
 }
 
-/// Gathers the solids: shapes as they are placed now, and the terrains' grounds and the
-/// trees' supports, made again only when they changed.
+/// Gathers the solids: shapes as they are placed now, and the terrains' and worlds' grounds
+/// and the trees' supports, made again only when they changed.
 fn gather_solids(
     mut solids: ResMut<Solids>,
     shapes: Query<(&SceneEntity, &Shape, &GlobalTransform)>,
     terrains: Query<(Entity, &SceneEntity, Ref<TerrainBody>, Ref<GlobalTransform>)>,
     trees: Query<(Entity, &SceneEntity, Ref<TreeBody>)>,
+    worlds: Query<(Entity, &SceneEntity, Ref<WorldBody>)>,
 ) {
     let mut colliders = Vec::new();
     let mut names = Vec::new();
@@ -393,6 +395,17 @@ fn gather_solids(
             names.push(scene.name.clone());
         }
     }
+    for (entity, scene, world) in &worlds {
+        // Chunks come and go, but the ground they draw is the world's heights: made once.
+        let ground = reuse(entity, world.is_added(), &|| {
+            let (heights, geometry) = world.ground();
+            Some(Collider::World { heights: heights.clone(), geometry })
+        });
+        if let Some(ground) = ground {
+            colliders.push(ground);
+            names.push(scene.name.clone());
+        }
+    }
     for (entity, scene, tree) in &trees {
         let supports = reuse(entity, tree.is_changed(), &|| Some(Collider::Supports(Arc::new(tree.bvh.clone()))));
         if let Some(supports) = supports {
@@ -400,7 +413,7 @@ fn gather_solids(
             names.push(scene.name.clone());
         }
     }
-    made.retain(|(entity, _)| terrains.contains(*entity) || trees.contains(*entity));
+    made.retain(|(entity, _)| terrains.contains(*entity) || trees.contains(*entity) || worlds.contains(*entity));
     *solids = Solids { colliders: Arc::new(colliders), names: Arc::new(names), made };
 }
 

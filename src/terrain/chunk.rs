@@ -17,7 +17,9 @@
 
 use super::bands::BandRule;
 use super::generate::Recipe;
+use super::ground::cell_surface;
 use super::heightmap::Heightmap;
+use super::noise::Fbm;
 use super::section::{
     Geometry, MorphTargets, Placement, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals,
 };
@@ -49,13 +51,15 @@ pub struct MorphBand {
 /// Where a world's heights come from.
 #[derive(Debug, Clone)]
 pub enum WorldHeights {
-    /// A recipe (checked, and unbounded by [`Recipe::check_unbounded`]) and its seed: heights
-    /// of their position alone, without bounds.
+    /// A recipe (checked, and unbounded by [`Recipe::check_unbounded`]) and its seed:
+    /// heights of their position alone, without bounds. Made by [`WorldHeights::unbounded`].
     Unbounded {
         /// The recipe.
         recipe: Arc<Recipe>,
         /// Its seed.
         seed: u64,
+        /// The recipe's noises for the seed, made once.
+        noises: Arc<[Option<Fbm>]>,
     },
     /// A finite map, its first sample at world sample `(0, 0)`; a sample beyond its edges has
     /// the height of the nearest one on them.
@@ -63,11 +67,17 @@ pub enum WorldHeights {
 }
 
 impl WorldHeights {
+    /// The heights of a checked, unbounded `recipe` with `seed`.
+    pub fn unbounded(recipe: Arc<Recipe>, seed: u64) -> Self {
+        let noises = recipe.noises(seed).into();
+        Self::Unbounded { recipe, seed, noises }
+    }
+
     /// The heights at the world samples `(x0 + i * step, z0 + j * step)` for `i < width`,
     /// `j < depth`, row by row; grids that share a sample give it bit for bit.
     pub fn sample_grid(&self, origin: [i32; 2], step: i32, size: [usize; 2]) -> Vec<f32> {
         match self {
-            Self::Unbounded { recipe, seed } => recipe.sample_grid(*seed, origin, step, size),
+            Self::Unbounded { recipe, noises, .. } => recipe.sample_grid_with(noises, origin, step, size),
             Self::Map(map) => {
                 let [x0, z0] = origin.map(i64::from);
                 let step = i64::from(step.max(1));
@@ -78,6 +88,23 @@ impl WorldHeights {
                     .collect()
             }
         }
+    }
+
+    /// The height of the ground at world point `(x, z)`, metres, as the finest level draws it
+    /// with `geometry`'s metres (a chunk's vertex at world sample `(i, j)` stands at
+    /// `(i * cell_m, height * height_m, j * cell_m)`).
+    pub fn ground_height(&self, x: f32, z: f32, geometry: Geometry) -> f32 {
+        self.ground_surface(x, z, geometry).0
+    }
+
+    /// The height of the ground at world point `(x, z)`, metres, and its upward unit normal,
+    /// as [`ground_height`](Self::ground_height) finds them.
+    pub fn ground_surface(&self, x: f32, z: f32, geometry: Geometry) -> (f32, Vec3) {
+        let (u, v) = (x / geometry.cell_m, z / geometry.cell_m);
+        let (i, j) = (u.floor(), v.floor());
+        let samples = self.sample_grid([i as i32, j as i32], 1, [2, 2]);
+        let corners = [samples[0], samples[1], samples[2], samples[3]].map(|h| h * geometry.height_m);
+        cell_surface(corners, u - i, v - j, geometry.cell_m)
     }
 
     /// Chunks of `cells` cells along x and z that cover a finite map, from chunk `(0, 0)`
@@ -298,7 +325,7 @@ mod tests {
              {perlin: {scale: 150, octaves: 2}, weight: 0.8, apply: [{power: 3}]}]}",
         )
         .unwrap();
-        WorldHeights::Unbounded { recipe: Arc::new(recipe), seed }
+        WorldHeights::unbounded(Arc::new(recipe), seed)
     }
 
     fn world() -> WorldHeights {

@@ -415,13 +415,31 @@ impl Recipe {
     /// `seed` at the world samples `(x0 + i * step, z0 + j * step)` for `i < width`,
     /// `j < depth`, row by row. A sample's height depends on its position alone: grids that
     /// share a sample give it bit for bit.
-    pub fn sample_grid(&self, seed: u64, [x0, z0]: [i32; 2], step: i32, [width, depth]: [usize; 2]) -> Vec<f32> {
+    pub fn sample_grid(&self, seed: u64, origin: [i32; 2], step: i32, size: [usize; 2]) -> Vec<f32> {
+        self.sample_grid_with(&self.noises(seed), origin, step, size)
+    }
+
+    /// Each layer's fractal sum for `seed` (none for a layer without Perlin noise): what
+    /// [`sample_grid_with`](Self::sample_grid_with) samples, made once for many small grids
+    /// (making them costs far more than sampling a few points).
+    pub fn noises(&self, seed: u64) -> Vec<Option<Fbm>> {
+        let noise = |(index, layer): (usize, &Layer)| layer.perlin.map(|p| Fbm::new(fbm_settings(p, layer_seed(seed, index))));
+        self.layers.iter().enumerate().map(noise).collect()
+    }
+
+    /// [`sample_grid`](Self::sample_grid) with the layers' `noises` made already.
+    pub fn sample_grid_with(
+        &self,
+        noises: &[Option<Fbm>],
+        [x0, z0]: [i32; 2],
+        step: i32,
+        [width, depth]: [usize; 2],
+    ) -> Vec<f32> {
         let step = step.max(1);
         let mut grid = vec![0.0; width * depth];
         let mut layer_heights = vec![0.0; width * depth];
-        for (index, layer) in self.layers.iter().enumerate() {
-            let Some(perlin) = layer.perlin else { continue };
-            let fbm = Fbm::new(fbm_settings(perlin, layer_seed(seed, index)));
+        for ((index, layer), fbm) in self.layers.iter().enumerate().zip(noises) {
+            let Some(fbm) = fbm else { continue };
             for (j, row) in layer_heights.chunks_exact_mut(width.max(1)).enumerate() {
                 fbm.fill_row_every(x0, step, z0 + j as i32 * step, row);
             }

@@ -31,6 +31,17 @@ pub fn section_barycentre(map: &Heightmap, section: Section, geometry: Geometry)
     sum / (w * h) as f32
 }
 
+/// The height and upward unit normal of the surface a mesh draws over one cell, at `(fu, fv)`
+/// (0 to 1) across it: `corners` are the heights at its first corner `a`, the next along x
+/// `b`, along z `c` and across `d`, metres; the cell is the triangles `a c d` and `a d b`,
+/// `cell_m` metres a side.
+pub fn cell_surface([a, b, c, d]: [f32; 4], fu: f32, fv: f32, cell_m: f32) -> (f32, Vec3) {
+    // Slopes of the height along u and v, per cell.
+    let (along_u, along_v) = if fv >= fu { (d - c, c - a) } else { (b - a, d - b) };
+    let height = a + along_u * fu + along_v * fv;
+    (height, Vec3::new(-along_u / cell_m, 1.0, -along_v / cell_m).normalize())
+}
+
 /// The ground of a section, placed in the world.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ground {
@@ -78,14 +89,10 @@ impl Ground {
             return None;
         }
         let (i, j) = ((u as usize).min(w - 2), (v as usize).min(h - 2));
-        let (fu, fv) = (u - i as f32, v - j as f32);
         let at = |di: usize, dj: usize| self.heights[(j + dj) * w + i + di];
-        let (a, b, c, d) = (at(0, 0), at(1, 0), at(0, 1), at(1, 1));
-        // Slopes of the height along u and v, per cell.
-        let (along_u, along_v) = if fv >= fu { (d - c, c - a) } else { (b - a, d - b) };
-        let height = self.origin.y + a + along_u * fu + along_v * fv;
-        let normal = Vec3::new(-along_u / self.cell_m, 1.0, -along_v / self.cell_m).normalize();
-        Some((height, normal))
+        let corners = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+        let (height, normal) = cell_surface(corners, u - i as f32, v - j as f32, self.cell_m);
+        Some((self.origin.y + height, normal))
     }
 
     /// The height of the ground under the world point `(x, z)`, metres; `None` outside the

@@ -10,6 +10,7 @@ use crate::foundation::yaml::FileError;
 use crate::raster::texture::TextureDef;
 use crate::terrain::TerrainKind;
 use crate::terrain::def::TerrainBuilt;
+use crate::world::{WorldBuilt, WorldKind};
 use bevy::color::Srgba;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use serde::{Deserialize, Serialize};
@@ -226,29 +227,36 @@ impl TreeDef {
     }
 }
 
-/// How far each support that forks from no other must be raised to stand on the terrain named
-/// `ground`: the ground's height under its first point. An unknown terrain, or a support
-/// standing off its section, is an error at the tree's `ground`. (A tree whose supports do not
-/// build is left to the build to report.)
+/// How far each support that forks from no other must be raised to stand on the ground named
+/// `ground` (a terrain or a streamed world): the ground's height under its first point. An
+/// unknown ground, or a support standing off a terrain's section, is an error at the tree's
+/// `ground`. (A tree whose supports do not build is left to the build to report.)
 fn lifts_on(def: &TreeDef, ground: &str, cx: &BuildContext) -> Result<Vec<(String, f32)>, FileError> {
     let entity = &cx.entity;
     let nth = cx.earlier::<TreeKind>().filter(|tree| tree.ground.is_some()).count();
     let error =
         |message: String| entity.locate("ground", nth, format!("entities[{}].tree.ground: {message}", entity.index));
     let terrains: Vec<(&str, &TerrainBuilt)> = cx.built::<TerrainKind>().collect();
-    let Some((_, terrain)) = terrains.iter().find(|(name, _)| *name == ground) else {
-        let names: Vec<&str> = terrains.iter().map(|(name, _)| *name).collect();
-        return Err(error(format!(
-            "no terrain named `{ground}` (terrains: {})",
-            if names.is_empty() { "none".into() } else { names.join(", ") }
-        )));
-    };
+    let worlds: Vec<(&str, &WorldBuilt)> = cx.built::<WorldKind>().collect();
+    let height_under: Box<dyn Fn(f32, f32) -> Option<f32>> =
+        if let Some((_, terrain)) = terrains.iter().find(|(name, _)| *name == ground) {
+            Box::new(|x, z| terrain.ground.height_under(x, z))
+        } else if let Some((_, world)) = worlds.iter().find(|(name, _)| *name == ground) {
+            Box::new(|x, z| Some(world.height_under(x, z)))
+        } else {
+            let names: Vec<&str> =
+                terrains.iter().map(|(name, _)| *name).chain(worlds.iter().map(|(name, _)| *name)).collect();
+            return Err(error(format!(
+                "no terrain or world named `{ground}` (grounds: {})",
+                if names.is_empty() { "none".into() } else { names.join(", ") }
+            )));
+        };
     let Ok(specs) = def.specs() else { return Ok(Vec::new()) };
     let mut lifts = Vec::new();
     for spec in &specs {
         if let Shape::Polyline { points, .. } = &spec.shape {
             let base = points[0];
-            let height = terrain.ground.height_under(base.x, base.z).ok_or_else(|| {
+            let height = height_under(base.x, base.z).ok_or_else(|| {
                 error(format!(
                     "support `{}` starts at x {:.2}, z {:.2}, off the terrain `{ground}`'s section",
                     spec.name, base.x, base.z

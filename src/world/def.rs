@@ -8,6 +8,7 @@ use crate::foundation::yaml::FileError;
 use crate::terrain::chunk::{CHUNK_CELLS, LEVELS, WorldHeights};
 use crate::terrain::def::{BandsDef, HeightDef, draw_seed};
 use crate::terrain::generate::{Function, Layer, Recipe};
+use crate::terrain::section::Geometry;
 use crate::terrain::stream::StreamSettings;
 use bevy::ecs::world::EntityWorldMut;
 use serde::{Deserialize, Serialize};
@@ -123,7 +124,7 @@ impl WorldDef {
         if recipe.seed == -1 {
             println!("{}: seed -1 drew seed {seed}", cx.entity.field("seed"));
         }
-        Ok((WorldHeights::Unbounded { recipe: Arc::new(recipe), seed }, Some(seed)))
+        Ok((WorldHeights::unbounded(Arc::new(recipe), seed), Some(seed)))
     }
 }
 
@@ -136,6 +137,16 @@ pub struct WorldBuilt {
     pub seed: Option<u64>,
     /// Where chunks are wanted.
     pub stream: StreamSettings,
+    /// Metres between samples and for a height of 1 (and the bands' texture repeat).
+    pub geometry: Geometry,
+}
+
+impl WorldBuilt {
+    /// The height of the ground under the world point `(x, z)`, metres, as the finest level
+    /// of detail draws it.
+    pub fn height_under(&self, x: f32, z: f32) -> f32 {
+        self.heights.ground_height(x, z, self.geometry)
+    }
 }
 
 /// The `world` kind.
@@ -203,7 +214,9 @@ impl EntityKind for WorldKind {
             return Err(cx.entity.field_error("spawn_budget", 0, "spawn_budget", message));
         }
         def.bands.rule().check().map_err(|message| cx.entity.field_error("bands", 0, "bands", message))?;
-        Ok(WorldBuilt { heights, seed, stream })
+        let geometry =
+            Geometry { cell_m: def.cell_m.0, height_m: def.height_m.0, texture_cells: def.bands.texture_cells.0 };
+        Ok(WorldBuilt { heights, seed, stream, geometry })
     }
 
     fn spawn(def: &WorldDef, built: &WorldBuilt, entity: &mut EntityWorldMut) {

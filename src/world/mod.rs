@@ -13,5 +13,5 @@ pub mod def;
 pub mod panel;
 pub mod plugin;
 
-pub use def::{WorldDef, WorldKind};
+pub use def::{WorldBuilt, WorldDef, WorldKind};
 pub use plugin::{ChunkSkirt, WorldBody, WorldChunk, WorldPlugin, WorldSystems};

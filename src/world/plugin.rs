@@ -159,6 +159,11 @@ pub struct WorldBody {
 }
 
 impl WorldBody {
+    /// Where the heights come from, and the metres between samples and for a height of 1.
+    pub fn ground(&self) -> (&WorldHeights, Geometry) {
+        (&self.maker.heights, self.maker.geometry)
+    }
+
     /// Resident chunks at each level of detail.
     pub fn per_level(&self) -> [usize; LEVELS as usize] {
         let mut counts = [0; LEVELS as usize];
@@ -221,11 +226,7 @@ pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &W
             maker: Arc::new(ChunkMaker {
                 heights: built.heights.clone(),
                 stream: built.stream,
-                geometry: Geometry {
-                    cell_m: def.cell_m.0,
-                    height_m: def.height_m.0,
-                    texture_cells: def.bands.texture_cells.0,
-                },
+                geometry: built.geometry,
                 rule: def.bands.rule(),
                 skirt_m: def.skirt_m.0,
                 cells: def.chunk_cells,
