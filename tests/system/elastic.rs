@@ -12,7 +12,7 @@ use canopy::view::CameraParams;
 /// The deepest any particle of any elastic body lies inside any solid, metres. The particles
 /// are taken as coming from above, so that a plane shape (which has no inside of its own)
 /// counts what lies under it.
-fn deepest(world: &mut World) -> f32 {
+pub fn deepest(world: &mut World) -> f32 {
     let solids = world.resource::<Solids>().colliders.clone();
     let mut bodies = world.query::<&ElasticBody>();
     let mut worst = 0.0f32;

@@ -3,6 +3,7 @@
 //! run in parallel.
 
 mod ar;
+mod canopy;
 mod common;
 mod controls;
 mod elastic;

@@ -70,6 +70,47 @@ struct Record {
     body: Option<SlothBody>,
 }
 
+/// Checks a sloth's state after a fixed step, calling `fail` with each violation: no NaN,
+/// joints within limits, planted grips on their support's surface, the body outside every
+/// support, and each biceps keeping its volume at the length its elbow gives.
+pub fn check_step(body: &SlothBody, muscles: &SlothMuscles, fail: &mut impl FnMut(String)) {
+    let sloth = &body.sloth;
+    for limb in Limb::ALL {
+        let foot = &sloth.feet[limb.index()];
+        let rig = &sloth.rigs[limb.index()];
+        if !foot.position.is_finite() || foot.angles.iter().any(|a| !a.is_finite()) {
+            fail(format!("{} is NaN", limb.key()));
+        }
+        if !rig.within_limits(&foot.angles, 1e-5) {
+            fail(format!("{} joints {:?} outside limits", limb.key(), foot.angles));
+        }
+        let distance = body.supports.paths[foot.support].distance(foot.position);
+        if foot.planted() && distance.abs() > GRIP_LIMIT {
+            fail(format!("planted {} is {distance:.4} m from its support's surface", limb.key()));
+        }
+    }
+    for (biceps, limb) in muscles.biceps.iter().zip(BICEPS_LIMBS) {
+        let (start, end) = arm_points(sloth, limb).attachments(&biceps.carcass, biceps.metres_per_unit);
+        if (start.distance(end) - biceps.length_m()).abs() > LENGTH_LIMIT || biceps.refusal.is_some() {
+            fail(format!(
+                "{} biceps {} m long between attachments {} m apart",
+                limb.key(),
+                biceps.length_m(),
+                start.distance(end)
+            ));
+        }
+        if biceps.relative_volume_error() > VOLUME_LIMIT {
+            fail(format!("{} biceps volume off by {:e}", limb.key(), biceps.relative_volume_error()));
+        }
+    }
+    if !sloth.frame.centre.is_finite() || !sloth.frame.forward.is_finite() {
+        fail("body is NaN".into());
+    }
+    if sloth.clearance < 0.0 {
+        fail(format!("body {:.4} m inside a support", -sloth.clearance));
+    }
+}
+
 /// Runs `text` (a scene in `scenes/sloth`) for `seconds` with a timeline given as YAML.
 fn run(text: &str, timeline: &str, seconds: f32) -> Record {
     let folder = tempfile::tempdir().unwrap();
@@ -95,35 +136,7 @@ fn run(text: &str, timeline: &str, seconds: f32) -> Record {
         let time = sloth.time;
 
         let mut fail = |what: String| record.violations.push(format!("t={time:.2}s: {what}"));
-        for limb in Limb::ALL {
-            let foot = &sloth.feet[limb.index()];
-            let rig = &sloth.rigs[limb.index()];
-            if !foot.position.is_finite() || foot.angles.iter().any(|a| !a.is_finite()) {
-                fail(format!("{} is NaN", limb.key()));
-            }
-            if !rig.within_limits(&foot.angles, 1e-5) {
-                fail(format!("{} joints {:?} outside limits", limb.key(), foot.angles));
-            }
-            let distance = body.supports.paths[foot.support].distance(foot.position);
-            if foot.planted() && distance.abs() > GRIP_LIMIT {
-                fail(format!("planted {} is {distance:.4} m from its support's surface", limb.key()));
-            }
-        }
-        for (biceps, limb) in muscles.biceps.iter().zip(BICEPS_LIMBS) {
-            let (start, end) = arm_points(sloth, limb).attachments(&biceps.carcass, biceps.metres_per_unit);
-            if (start.distance(end) - biceps.length_m()).abs() > LENGTH_LIMIT || biceps.refusal.is_some() {
-                fail(format!("{} biceps {} m long between attachments {} m apart", limb.key(), biceps.length_m(), start.distance(end)));
-            }
-            if biceps.relative_volume_error() > VOLUME_LIMIT {
-                fail(format!("{} biceps volume off by {:e}", limb.key(), biceps.relative_volume_error()));
-            }
-        }
-        if !sloth.frame.centre.is_finite() || !sloth.frame.forward.is_finite() {
-            fail("body is NaN".into());
-        }
-        if sloth.clearance < 0.0 {
-            fail(format!("body {:.4} m inside a support", -sloth.clearance));
-        }
+        check_step(body, muscles, &mut fail);
         let one_support = sloth.feet.iter().all(|f| f.support == sloth.feet[0].support);
         let straight = one_support && body.supports.paths[sloth.feet[0].support].is_straight();
         // A footfall counts when the sloth walked steadily both before and after the step it
