@@ -64,6 +64,21 @@ impl Collider {
         Collider::Shape { primitive, to_world, to_local: to_world.inverse() }
     }
 
+    /// Whether a point of the box from `min` to `max` could lie inside: false only where none
+    /// can, so that a body whose particles all lie in the box skips this solid (checked once
+    /// a substep, where [`penetration`](Self::penetration) is asked of every particle).
+    pub fn may_touch(&self, min: Vec3, max: Vec3) -> bool {
+        match self {
+            Collider::Supports(bvh) => {
+                let mut found = Vec::new();
+                bvh.within((min + max) * 0.5, (max - min).length() * 0.5, &mut found);
+                !found.is_empty()
+            }
+            Collider::World { heights, geometry } => min.y <= heights.highest_over([min.x, min.z], [max.x, max.z], *geometry),
+            _ => true,
+        }
+    }
+
     /// How deep `p` lies inside, metres, and the unit direction out, if it is inside;
     /// `previous` is where the particle was before this move (only a plane shape, which has
     /// no inside of its own, looks at it).

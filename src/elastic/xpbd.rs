@@ -329,6 +329,9 @@ impl Material {
     }
 }
 
+/// What the broad phase adds around a body's particles, metres.
+const BROAD_MARGIN_M: f32 = 0.01;
+
 /// How many times a particle is pushed out of the solids in a substep at most.
 const CONTACT_ROUNDS: usize = 4;
 
@@ -683,6 +686,13 @@ impl Body {
     fn collide(&mut self, colliders: &[Collider], friction: f32) {
         self.contacts.fill(0);
         let mut touched = vec![false; colliders.len()];
+        // A broad phase: the solids a particle could meet, from the box of the particles
+        // grown by the farthest move of the substep (a push out of one solid moves a particle
+        // at most that far back, plus a margin).
+        let reach = self.positions.iter().zip(&self.previous).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
+        let grow = Vec3::splat(reach + BROAD_MARGIN_M);
+        let (min, max) = self.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let near: Vec<bool> = colliders.iter().map(|c| c.may_touch(min - grow, max + grow)).collect();
         for p in 0..self.positions.len() {
             if self.inverse_mass[p] == 0.0 {
                 continue;
@@ -690,7 +700,7 @@ impl Body {
             touched.fill(false);
             for _ in 0..CONTACT_ROUNDS {
                 let mut pushed = false;
-                for (index, collider) in colliders.iter().enumerate() {
+                for (index, collider) in colliders.iter().enumerate().filter(|(index, _)| near[*index]) {
                     let Some((depth, out)) = collider.penetration(self.positions[p], self.previous[p]) else {
                         continue;
                     };

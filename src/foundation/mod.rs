@@ -18,6 +18,7 @@
 pub mod actions;
 pub mod dump;
 pub mod entity;
+pub mod frame_times;
 pub mod keys;
 pub mod kind;
 pub mod messages;

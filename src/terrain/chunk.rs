@@ -107,6 +107,21 @@ impl WorldHeights {
         cell_surface(corners, u - i, v - j, geometry.cell_m)
     }
 
+    /// The highest the ground drawn at the finest level can stand anywhere over the world
+    /// rectangle from `min` to `max` (x and z, metres): the highest sample of the cells it
+    /// covers, as every triangle lies between its corners. Rectangles of more than
+    /// [`HIGHEST_CELLS`] cells get infinity (no bound worth the sampling).
+    pub fn highest_over(&self, min: [f32; 2], max: [f32; 2], geometry: Geometry) -> f32 {
+        let cell = |v: f32| (v / geometry.cell_m).floor();
+        let (i0, j0, i1, j1) = (cell(min[0]), cell(min[1]), cell(max[0]) + 1.0, cell(max[1]) + 1.0);
+        let size = [i1 - i0 + 1.0, j1 - j0 + 1.0];
+        if !(size[0] * size[1] <= HIGHEST_CELLS as f32) {
+            return f32::INFINITY;
+        }
+        let samples = self.sample_grid([i0 as i32, j0 as i32], 1, size.map(|n| n as usize));
+        samples.into_iter().fold(f32::NEG_INFINITY, f32::max) * geometry.height_m
+    }
+
     /// Chunks of `cells` cells along x and z that cover a finite map, from chunk `(0, 0)`
     /// (its far edges extended by their samples to whole chunks); `None` without bounds.
     pub fn chunks(&self, cells: u32) -> Option<[u32; 2]> {
@@ -116,6 +131,9 @@ impl WorldHeights {
         }
     }
 }
+
+/// The most samples [`WorldHeights::highest_over`] reads.
+pub const HIGHEST_CELLS: usize = 64;
 
 /// The four sides of a chunk, as the step to the chunk across each: -x, +x, -z, +z.
 pub const SIDES: [[i32; 2]; 4] = [[-1, 0], [1, 0], [0, -1], [0, 1]];

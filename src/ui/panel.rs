@@ -8,6 +8,7 @@ use super::{ViewArea, WindowTimes};
 use crate::controls::HelpVisible;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::keys::KeyMap;
+use crate::foundation::frame_times::{FrameLog, Summary};
 use crate::foundation::messages::{DragPhase, ReloadScene, SelectEntity, ViewClicked, ViewDragged, ViewGrab};
 use crate::foundation::panel::{PanelSection, PanelSections};
 use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};
@@ -35,39 +36,17 @@ pub(super) struct UiState {
     /// Name of the entity whose parameters are shown.
     selected: Option<String>,
     /// Where the frame's time went, smoothed.
-    times: PhaseTimes,
+    /// The last frames' times by phase.
+    times: FrameLog<7>,
     /// Wall-clock time building the panel took last frame.
     panel: Duration,
     /// What the last save did.
     saved: Option<String>,
 }
 
-/// Wall-clock milliseconds of a frame and of its phases, each smoothed over about ten frames.
-#[derive(Debug, Clone, Copy, Default)]
-struct PhaseTimes {
-    frame: f32,
-    /// In the order the panel lists them: simulation, raster, panel, paint, present, wait.
-    phases: [f32; 6],
-}
-
-/// The names of [`PhaseTimes::phases`].
-const PHASES: [&str; 6] = ["simulation", "raster", "panel", "panel paint", "present", "frame cap wait"];
-
-impl PhaseTimes {
-    /// Takes in the latest frame's times.
-    fn update(&mut self, frame: Duration, phases: [Duration; 6]) {
-        let smooth = |average: &mut f32, time: Duration| *average += (time.as_secs_f32() * 1000.0 - *average) * 0.1;
-        smooth(&mut self.frame, frame);
-        for (average, time) in self.phases.iter_mut().zip(phases) {
-            smooth(average, time);
-        }
-    }
-
-    /// What the phases do not account for: input, scene loading, Bevy's own systems.
-    fn rest(&self) -> f32 {
-        (self.frame - self.phases.iter().sum::<f32>()).max(0.0)
-    }
-}
+/// The phases of a window frame the panel lists, in order; "other" is what they do not account
+/// for: input, streaming, write-back, scene loading, Bevy's own systems.
+const PHASES: [&str; 7] = ["simulation", "raster", "panel", "panel paint", "present", "frame cap wait", "other"];
 
 /// Everything the panel shows, read from the world before drawing.
 struct PanelData {
@@ -144,7 +123,9 @@ pub(super) fn draw_ui(world: &mut World) {
     let raster = world.resource::<RasterTarget>().raster_time;
     let window = *world.resource::<WindowTimes>();
     let panel_time = state.panel;
-    state.times.update(frame, [simulation, raster, panel_time, window.paint, window.present, window.wait]);
+    let phases = [simulation, raster, panel_time, window.paint, window.present, window.wait];
+    let other = frame.saturating_sub(phases.iter().sum());
+    state.times.push(frame, [simulation, raster, panel_time, window.paint, window.present, window.wait, other]);
     if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {
         state.selected = Some(name);
     }
@@ -359,14 +340,19 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
     ui.separator();
     egui::Grid::new("figures").show(ui, |ui| {
         let times = &state.times;
-        ui.label("frame time");
-        ui.label(format!("{:.1} ms", times.frame));
-        ui.end_row();
-        let phases = PHASES.into_iter().zip(times.phases).chain([("other", times.rest())]);
-        for (phase, ms) in phases {
-            ui.label(format!("    {phase}"));
-            ui.label(format!("{ms:.2} ms"));
+        let shown = |ui: &mut egui::Ui, name: &str, summary: Summary| {
+            ui.label(name);
+            ui.label(format!("{:.2} ms", summary.mean));
+            ui.label(format!("{:.2} ms", summary.quantile));
             ui.end_row();
+        };
+        ui.label(format!("last {} frames", times.len()));
+        ui.label("mean");
+        ui.label("99th pct");
+        ui.end_row();
+        shown(ui, "frame", times.frame(0.99));
+        for (phase, name) in PHASES.iter().enumerate() {
+            shown(ui, &format!("    {name}"), times.phase(phase, 0.99));
         }
         ui.label("triangles");
         ui.label(format!("{} ({} drawn)", data.stats.triangles_submitted, data.stats.triangles_rasterized));
