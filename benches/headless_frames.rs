@@ -39,7 +39,8 @@ fn frame_times(scene: &Path) -> Result<FrameLog<3>, String> {
         app.update();
         let frame = started.elapsed();
         let world = app.world();
-        let (simulation, raster) = (world.resource::<FixedStepTime>().last, world.resource::<RasterTarget>().raster_time);
+        let (simulation, raster) =
+            (world.resource::<FixedStepTime>().last, world.resource::<RasterTarget>().raster_time);
         log.push(frame, [simulation, raster, frame.saturating_sub(simulation + raster)]);
     }
     Ok(log)

@@ -74,7 +74,9 @@ impl Collider {
                 bvh.within((min + max) * 0.5, (max - min).length() * 0.5, &mut found);
                 !found.is_empty()
             }
-            Collider::World { heights, geometry } => min.y <= heights.highest_over([min.x, min.z], [max.x, max.z], *geometry),
+            Collider::World { heights, geometry } => {
+                min.y <= heights.highest_over([min.x, min.z], [max.x, max.z], *geometry)
+            }
             _ => true,
         }
     }

@@ -691,7 +691,8 @@ impl Body {
         // at most that far back, plus a margin).
         let reach = self.positions.iter().zip(&self.previous).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
         let grow = Vec3::splat(reach + BROAD_MARGIN_M);
-        let (min, max) = self.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let (min, max) =
+            self.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
         let near: Vec<bool> = colliders.iter().map(|c| c.may_touch(min - grow, max + grow)).collect();
         for p in 0..self.positions.len() {
             if self.inverse_mass[p] == 0.0 {

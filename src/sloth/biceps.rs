@@ -174,7 +174,12 @@ mod tests {
             biceps.follow(&arm);
             assert!((biceps.flexion.to_degrees() - degrees).abs() < 1e-4, "{degrees}: {}", biceps.flexion);
             let (a, b) = arm.attachments(&biceps.carcass, biceps.metres_per_unit);
-            assert!((a.distance(b) - biceps.length_m()).abs() < 1e-7, "{degrees}: {} vs {}", a.distance(b), biceps.length_m());
+            assert!(
+                (a.distance(b) - biceps.length_m()).abs() < 1e-7,
+                "{degrees}: {} vs {}",
+                a.distance(b),
+                biceps.length_m()
+            );
             assert!(biceps.relative_volume_error() < 1e-12);
             assert!(((biceps.model.volume() - rest) / rest).abs() < 1e-12);
         }

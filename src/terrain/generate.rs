@@ -423,7 +423,8 @@ impl Recipe {
     /// [`sample_grid_with`](Self::sample_grid_with) samples, made once for many small grids
     /// (making them costs far more than sampling a few points).
     pub fn noises(&self, seed: u64) -> Vec<Option<Fbm>> {
-        let noise = |(index, layer): (usize, &Layer)| layer.perlin.map(|p| Fbm::new(fbm_settings(p, layer_seed(seed, index))));
+        let noise =
+            |(index, layer): (usize, &Layer)| layer.perlin.map(|p| Fbm::new(fbm_settings(p, layer_seed(seed, index))));
         self.layers.iter().enumerate().map(noise).collect()
     }
 

@@ -7,8 +7,8 @@
 use super::{ViewArea, WindowTimes};
 use crate::controls::HelpVisible;
 use crate::foundation::entity::SceneEntity;
-use crate::foundation::keys::KeyMap;
 use crate::foundation::frame_times::{FrameLog, Summary};
+use crate::foundation::keys::KeyMap;
 use crate::foundation::messages::{DragPhase, ReloadScene, SelectEntity, ViewClicked, ViewDragged, ViewGrab};
 use crate::foundation::panel::{PanelSection, PanelSections};
 use crate::foundation::params::{ParamEntry, ParamValue, list_params, set_param};

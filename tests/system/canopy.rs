@@ -56,13 +56,23 @@ fn a_minute_of_the_living_canopy_keeps_every_invariant_and_plays_alike_each_time
             assert!(root < ROOT_LIMIT, "step {step}: a trunk starts {root} m off the ground");
         }
     }
-    assert!(violations.is_empty(), "{} violations, the first: {:?}", violations.len(), &violations[..violations.len().min(3)]);
+    assert!(
+        violations.is_empty(),
+        "{} violations, the first: {:?}",
+        violations.len(),
+        &violations[..violations.len().min(3)]
+    );
 
     let world = app.world_mut();
     let (body, _) = world.query::<(&SlothBody, &SlothMuscles)>().single(world).unwrap();
     // It walked on by itself, at about its speed, and had not come to the end of the limb.
     let sloth = &body.sloth;
-    assert!(sloth.distance > 5.0 && sloth.blocked.is_none(), "walked {} m, blocked {:?}", sloth.distance, sloth.blocked);
+    assert!(
+        sloth.distance > 5.0 && sloth.blocked.is_none(),
+        "walked {} m, blocked {:?}",
+        sloth.distance,
+        sloth.blocked
+    );
     // The minute's walk passes every plum: each was shaken loose and lies on the ground.
     let mut plums = world.query::<(&ElasticBody, &SceneEntity)>();
     let mut dropped: Vec<&str> = plums.iter(world).filter(|(b, _)| b.dropped).map(|(_, s)| s.name.as_str()).collect();

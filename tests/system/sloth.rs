@@ -6,8 +6,8 @@
 use bevy::math::{UVec2, Vec3};
 use canopy::controls::timeline::Timeline;
 use canopy::sloth::biceps::{BICEPS_LIMBS, arm_points};
-use canopy::sloth::{SlothBody, SlothMuscles};
 use canopy::sloth::rig::Limb;
+use canopy::sloth::{SlothBody, SlothMuscles};
 use std::path::{Path, PathBuf};
 
 const SIZE: UVec2 = UVec2::new(64, 48);

@@ -199,7 +199,11 @@ fn trees_on_a_terrain_stand_on_its_ground_through_edits_and_say_when_they_cannot
     assert_eq!(world.get::<TreeBody>(oak).unwrap().tree.supports[0].points[0], base);
 
     for (from, to, expected) in [
-        ("ground: land\n      supports", "ground: lamd\n      supports", "no terrain or world named `lamd` (grounds: land)"),
+        (
+            "ground: land\n      supports",
+            "ground: lamd\n      supports",
+            "no terrain or world named `lamd` (grounds: land)",
+        ),
         (
             "[[2.0, 0, -1.5], [2.1, 3, -1.5]]",
             "[[40, 0, 0], [40, 3, 0]]",
