@@ -156,7 +156,7 @@ mod tests {
         let mesh = sloth_mesh(&sloth, &biceps, Vec3::ONE);
         let muscle: Vec<Vec3> =
             mesh.positions.iter().zip(&mesh.colors).filter(|(_, c)| **c == MUSCLE).map(|(p, _)| *p).collect();
-        assert!(!muscle.is_empty() && muscle.len() % 2 == 0, "both muscles are drawn alike");
+        assert!(!muscle.is_empty() && muscle.len().is_multiple_of(2), "both muscles are drawn alike");
         let (arm_radius, belly) = (LIMB_RADII[1], biceps[0].rest_thickness_m() as f32);
         for (half, limb) in muscle.chunks(muscle.len() / 2).zip(BICEPS_LIMBS) {
             let arm = arm_points(&sloth, limb);

@@ -115,7 +115,8 @@ impl WorldHeights {
         let cell = |v: f32| (v / geometry.cell_m).floor();
         let (i0, j0, i1, j1) = (cell(min[0]), cell(min[1]), cell(max[0]) + 1.0, cell(max[1]) + 1.0);
         let size = [i1 - i0 + 1.0, j1 - j0 + 1.0];
-        if !(size[0] * size[1] <= HIGHEST_CELLS as f32) {
+        let cells = size[0] * size[1];
+        if cells.is_nan() || cells > HIGHEST_CELLS as f32 {
             return f32::INFINITY;
         }
         let samples = self.sample_grid([i0 as i32, j0 as i32], 1, size.map(|n| n as usize));
