@@ -118,8 +118,8 @@ mod tests {
     use crate::sloth::supports::Supports;
     use crate::tree::{Shape, SupportSpec, Tree};
 
-    #[test]
-    fn the_mesh_covers_the_body_and_reaches_every_grip() {
+    /// A sloth of default proportions in the middle of a straight bough, and its biceps.
+    fn sloth_on_a_bough() -> (Sloth, [Biceps; 2]) {
         let shape = Shape::Polyline {
             points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)],
             radii: vec![0.04, 0.04],
@@ -129,7 +129,13 @@ mod tests {
         let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
         let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
         let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
-        let mesh = sloth_mesh(&sloth, &def.biceps().unwrap(), Vec3::new(0.4, 0.3, 0.2));
+        (sloth, def.biceps().unwrap())
+    }
+
+    #[test]
+    fn the_mesh_covers_the_body_and_reaches_every_grip() {
+        let (sloth, biceps) = sloth_on_a_bough();
+        let mesh = sloth_mesh(&sloth, &biceps, Vec3::new(0.4, 0.3, 0.2));
         assert_eq!(mesh.colors.len(), mesh.positions.len());
         assert_eq!(mesh.normals.len(), mesh.positions.len());
         assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < mesh.positions.len()));
@@ -143,16 +149,7 @@ mod tests {
 
     #[test]
     fn each_biceps_lies_on_its_upper_arm() {
-        let shape = Shape::Polyline {
-            points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)],
-            radii: vec![0.04, 0.04],
-        };
-        let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
-        let supports = Supports::new([("t", &tree)]);
-        let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
-        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
-        let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
-        let biceps = def.biceps().unwrap();
+        let (sloth, biceps) = sloth_on_a_bough();
         let mesh = sloth_mesh(&sloth, &biceps, Vec3::ONE);
         let muscle: Vec<Vec3> =
             mesh.positions.iter().zip(&mesh.colors).filter(|(_, c)| **c == MUSCLE).map(|(p, _)| *p).collect();
