@@ -6,7 +6,6 @@ use std::process::{Command, Output};
 fn canopy(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_canopy"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .output()

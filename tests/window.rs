@@ -6,7 +6,7 @@
 //! `cargo test --test window -- --ignored`.
 
 use std::io::{BufRead, BufReader};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::thread::sleep;
 use std::time::{Duration, Instant};
@@ -128,6 +128,12 @@ fn wait_for_exit(mut app: Child) {
     assert!(status.success(), "the app failed: {status}");
 }
 
+/// A file of the project by its path from the project's root, where cargo runs its tests; made
+/// absolute for the app, which runs in a scratch folder.
+fn project_file(relative: &str) -> PathBuf {
+    std::fs::canonicalize(relative).unwrap_or_else(|error| panic!("{relative}: {error}"))
+}
+
 /// A JSON file.
 fn read(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
@@ -142,7 +148,7 @@ fn entity(state: &serde_json::Value, name: &str) -> serde_json::Value {
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn keys_clicks_and_drags_reach_the_scene_through_the_window() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
+    let scene = project_file(SCENE);
     let (shot, dump) = (dir.path().join("window.png"), dir.path().join("state.json"));
     // The state before any input, from a headless run.
     let initial = dir.path().join("initial.json");
@@ -238,7 +244,7 @@ const BELLY_MIDDLE: (u32, u32) = (470, 465);
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn a_region_clicked_on_the_torso_is_shrunk_and_compared_in_the_window() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/torso.yaml");
+    let scene = project_file("scenes/torso.yaml");
     let x = Xvfb::start();
     let (app, window) = play(&x, &scene, dir.path(), 600);
     for point in BELLY {
@@ -270,7 +276,7 @@ const JELLY: (u32, u32) = (608, 375);
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn the_jelly_is_dragged_off_its_crate_with_the_mouse_and_let_fall_on_the_floor() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/softbody.yaml");
+    let scene = project_file("scenes/softbody.yaml");
     let x = Xvfb::start();
     let (app, window) = play(&x, &scene, dir.path(), 700);
     // Let the jelly land and settle on the crate.
@@ -314,7 +320,7 @@ const OUTLINE_SWITCH: (u32, u32) = (1060, 532);
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
 fn the_ar_scene_plays_its_camera_frames_with_the_scene_on_the_marker() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ar.yaml");
+    let scene = project_file("scenes/ar.yaml");
     let x = Xvfb::start();
     let (app, window) = play(&x, &scene, dir.path(), 240);
     // Select the overlay in the panel's entity list, then switch its outline on.

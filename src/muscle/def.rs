@@ -310,7 +310,7 @@ mod tests {
 
     #[test]
     fn the_source_first_configuration_is_the_one_in_the_sample_file() {
-        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/biceps_config.yaml")).unwrap();
+        let text = std::fs::read_to_string("scenes/biceps_config.yaml").unwrap();
         let file: ConfigFile = serde_yaml::from_str(&text).unwrap();
         assert_eq!(file, ConfigFile::source_first());
     }

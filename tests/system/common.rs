@@ -14,8 +14,12 @@ use std::time::{Duration, Instant};
 pub const SMALL: UVec2 = UVec2::new(160, 120);
 
 /// A file of the project, by its path from the project's root.
+///
+/// The root is read when the test runs, not when it is built: a build shared by two clones of
+/// the project then reads the files of the clone it runs in.
 pub fn path(relative: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+    let root = std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR for the tests it runs");
+    Path::new(&root).join(relative)
 }
 
 /// Runs `scene` for `frames` steps with an optional timeline given as YAML text.

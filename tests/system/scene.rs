@@ -25,7 +25,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<SceneDef, FileError> {
 }
 
 fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    path("")
 }
 
 #[test]

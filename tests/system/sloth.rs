@@ -26,7 +26,7 @@ const LENGTH_LIMIT: f64 = 1e-6;
 const FREE_SPEED: (f32, f32) = (0.11, 0.04);
 
 fn scene_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sloth").join(name)
+    super::common::path("scenes/sloth").join(name)
 }
 
 /// `text` with the number on the line marked `swept` replaced by `value`.
@@ -324,7 +324,7 @@ fn climbs_a_trunk_head_up_down_tail_first_and_round_it() {
 }
 
 fn forest() -> String {
-    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/forest.yaml")).unwrap()
+    std::fs::read_to_string(super::common::path("scenes/forest.yaml")).unwrap()
 }
 
 #[test]

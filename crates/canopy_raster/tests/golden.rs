@@ -24,8 +24,9 @@ const MAX_DIFFERENT_SHARE: f64 = 0.002;
 
 const SKY: [u8; 4] = [40, 60, 90, 255];
 
+/// The reference image `name`, from the crate's folder, where cargo runs its tests.
 fn golden_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"))
+    PathBuf::from("tests/golden").join(format!("{name}.png"))
 }
 
 /// Compares `image` with the reference `name`, or writes it when blessing.
