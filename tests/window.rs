@@ -31,8 +31,8 @@ mod at {
     pub const TRUNK: (u32, u32) = (490, 350);
     /// The tree's row in the panel's entity list, and the ground's above it (selected at
     /// start).
-    pub const TREE_ROW: (u32, u32) = (995, 422);
-    pub const GROUND_ROW: (u32, u32) = (995, 401);
+    pub const TREE_ROW: (u32, u32) = (995, 443);
+    pub const GROUND_ROW: (u32, u32) = (995, 422);
     /// Inside the key help window, which opens at the view's top-left corner (the window's).
     pub const HELP: (u32, u32) = (30, 30);
     /// Empty ground in the view, where a drag starts.
@@ -313,8 +313,8 @@ fn the_jelly_is_dragged_off_its_crate_with_the_mouse_and_let_fall_on_the_floor()
 
 /// Where the overlay's entry is in the panel's entity list of `scenes/ar.yaml`, and its outline
 /// switch once it is selected, in the 1280 x 720 window.
-const OVERLAY_ENTRY: (u32, u32) = (1015, 401);
-const OUTLINE_SWITCH: (u32, u32) = (1060, 532);
+const OVERLAY_ENTRY: (u32, u32) = (1015, 422);
+const OUTLINE_SWITCH: (u32, u32) = (1060, 554);
 
 #[test]
 #[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
