@@ -131,7 +131,7 @@ fn unit_scale() -> Scale {
 }
 
 fn fur() -> Color {
-    Color(Srgba::rgb(0.7, 0.63, 0.52))
+    Color(Srgba::rgb(0.56, 0.45, 0.33))
 }
 
 impl SlothDef {

@@ -1,31 +1,26 @@
-//! The sloth's render mesh, rebuilt from its pose each frame: tapered capsules for the torso,
-//! neck, head and every bone, a pale face with dark eye patches, curved claws (two on each
-//! hand, three on each foot, as in *Choloepus*), and each forelimb's biceps on the flexor side
-//! of its upper arm. Colours are per vertex, in the rasterizer's colour space (the scene's
-//! sRGB values, as for every other mesh).
+//! The sloth's render mesh, rebuilt from its pose each frame: its [`Skin`] posed by the rig
+//! (one surface over the torso, neck, head and limbs, with a pale face, dark eye patches and a
+//! streaky coat), curved claws (two on each hand, three on each foot, as in *Choloepus*), and
+//! each forelimb's biceps on the flexor side of its upper arm. Colours are per vertex, in the
+//! rasterizer's colour space (the scene's sRGB values, as for every other mesh).
 
 use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::locomotion::Sloth;
 use super::rig::{BodyFrame, JOINTS, Limb};
-use crate::raster::MeshData;
+use super::skin::{LIMB_RADII, Skin, palm, thickness_scale};
+use crate::raster::{MeshData, vertex_normals};
 use crate::tree::mesh::add_tube;
 use bevy::math::Vec3;
 
-/// Vertices around each capsule.
+/// Vertices around each claw.
 const SIDES: usize = 10;
 
-/// Colours of the parts that are not fur.
-const FACE: Vec3 = Vec3::new(0.88, 0.82, 0.66);
-const EYE_PATCH: Vec3 = Vec3::new(0.08, 0.06, 0.05);
+/// Colours of the parts that are not skin.
 const CLAW: Vec3 = Vec3::new(0.12, 0.1, 0.08);
 const MUSCLE: Vec3 = Vec3::new(0.7, 0.22, 0.2);
 
 /// Vertices around each ring of a biceps.
 const BICEPS_SEGMENTS: usize = 12;
-
-/// Limb thickness at the girdle, shoulder or hip, elbow or knee, wrist or ankle, and palm,
-/// metres, for an animal of default proportions (scaled with the torso).
-const LIMB_RADII: [f32; JOINTS] = [0.045, 0.04, 0.032, 0.022, 0.016];
 
 /// Appends a capsule chain along `points` with `radii` in `color`.
 fn part(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], color: Vec3) {
@@ -33,28 +28,23 @@ fn part(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], color: Vec3) {
     mesh.colors.resize(mesh.positions.len(), color);
 }
 
-/// The mesh of `sloth` in its current pose with its forelimbs' `biceps`, `fur` its coat colour.
-pub fn sloth_mesh(sloth: &Sloth, biceps: &[Biceps; 2], fur: Vec3) -> MeshData {
-    let mut mesh = MeshData::default();
-    let p = &sloth.proportions;
+/// The mesh of `sloth` in its current pose, its `skin` (made for its proportions) in the coat
+/// colour `fur`, with its forelimbs' `biceps`.
+pub fn sloth_mesh(sloth: &Sloth, skin: &Skin, biceps: &[Biceps; 2], fur: Vec3) -> MeshData {
     let frame = &sloth.frame;
-    let (hips, shoulders, head) = (frame.hips(p), frame.shoulders(p), frame.head(p));
-    let r = p.torso_radius;
-    part(&mut mesh, &[hips, frame.centre, shoulders], &[r * 0.92, r, r * 0.85], fur);
-    part(&mut mesh, &[shoulders, head], &[p.head_radius * 0.7, p.head_radius * 0.6], fur);
-    face(&mut mesh, frame, head, p.head_radius, fur);
-    let scale = r / 0.085;
+    let positions = skin.posed(frame, &sloth.rigs, &sloth.feet.each_ref().map(|foot| foot.angles));
+    let mut mesh = MeshData {
+        normals: vertex_normals(&positions, skin.triangles()),
+        positions,
+        colors: skin.colors(fur),
+        triangles: skin.triangles().to_vec(),
+        ..Default::default()
+    };
+    let p = &sloth.proportions;
+    let scale = thickness_scale(p);
     for limb in Limb::ALL {
-        let rig = &sloth.rigs[limb.index()];
-        let angles = &sloth.feet[limb.index()].angles;
-        let points = rig.points(frame, angles);
-        let grip = points[JOINTS - 1];
-        let hand = (grip - points[JOINTS - 2]).normalize_or_zero();
-        let palm = grip - hand * p.claw;
-        let mut chain = points;
-        chain[JOINTS - 1] = palm;
-        part(&mut mesh, &chain, &LIMB_RADII.map(|radius| radius * scale), fur);
-        claws(&mut mesh, frame, limb, palm, grip, scale);
+        let points = sloth.rigs[limb.index()].points(frame, &sloth.feet[limb.index()].angles);
+        claws(&mut mesh, frame, limb, palm(&points, p.claw), points[JOINTS - 1], scale);
     }
     // Each biceps lies along its attachments, lifted towards the forearm's side by the upper
     // arm's radius less its belly, so that the belly shows through the fur (more as it
@@ -70,28 +60,6 @@ pub fn sloth_mesh(sloth: &Sloth, biceps: &[Biceps; 2], fur: Vec3) -> MeshData {
         muscle.append_surface(&arm, lift, BICEPS_SEGMENTS, MUSCLE, &mut mesh);
     }
     mesh
-}
-
-/// Head, snout and eye patches.
-fn face(mesh: &mut MeshData, frame: &BodyFrame, head: Vec3, radius: f32, fur: Vec3) {
-    let (forward, down, right) = (frame.forward, -frame.up, frame.right());
-    part(mesh, &[head - forward * radius * 0.3, head + forward * radius * 0.3], &[radius, radius * 0.9], fur);
-    let snout = head + forward * radius * 0.75 + down * radius * 0.15;
-    part(
-        mesh,
-        &[snout - forward * radius * 0.3, snout + forward * radius * 0.15],
-        &[radius * 0.62, radius * 0.45],
-        FACE,
-    );
-    for side in [-1.0, 1.0] {
-        let eye = head + forward * radius * 0.62 + down * radius * 0.45 + right * (side * radius * 0.38);
-        part(
-            mesh,
-            &[eye - forward * radius * 0.08, eye + forward * radius * 0.08],
-            &[radius * 0.2, radius * 0.18],
-            EYE_PATCH,
-        );
-    }
 }
 
 /// Two claws on a hand, three on a foot, spread across the grip and tapering to points.
@@ -119,7 +87,7 @@ mod tests {
     use crate::tree::{Shape, SupportSpec, Tree};
 
     /// A sloth of default proportions in the middle of a straight bough, and its biceps.
-    fn sloth_on_a_bough() -> (Sloth, [Biceps; 2]) {
+    fn sloth_on_a_bough() -> (Sloth, Skin, [Biceps; 2]) {
         let shape = Shape::Polyline {
             points: vec![Vec3::new(-2.0, 2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)],
             radii: vec![0.04, 0.04],
@@ -129,13 +97,14 @@ mod tests {
         let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
         let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
         let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
-        (sloth, def.biceps().unwrap())
+        let skin = Skin::new(&sloth.proportions, &sloth.rigs);
+        (sloth, skin, def.biceps().unwrap())
     }
 
     #[test]
     fn the_mesh_covers_the_body_and_reaches_every_grip() {
-        let (sloth, biceps) = sloth_on_a_bough();
-        let mesh = sloth_mesh(&sloth, &biceps, Vec3::new(0.4, 0.3, 0.2));
+        let (sloth, skin, biceps) = sloth_on_a_bough();
+        let mesh = sloth_mesh(&sloth, &skin, &biceps, Vec3::new(0.4, 0.3, 0.2));
         assert_eq!(mesh.colors.len(), mesh.positions.len());
         assert_eq!(mesh.normals.len(), mesh.positions.len());
         assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < mesh.positions.len()));
@@ -149,8 +118,8 @@ mod tests {
 
     #[test]
     fn each_biceps_lies_on_its_upper_arm() {
-        let (sloth, biceps) = sloth_on_a_bough();
-        let mesh = sloth_mesh(&sloth, &biceps, Vec3::ONE);
+        let (sloth, skin, biceps) = sloth_on_a_bough();
+        let mesh = sloth_mesh(&sloth, &skin, &biceps, Vec3::ONE);
         let muscle: Vec<Vec3> =
             mesh.positions.iter().zip(&mesh.colors).filter(|(_, c)| **c == MUSCLE).map(|(p, _)| *p).collect();
         assert!(!muscle.is_empty() && muscle.len().is_multiple_of(2), "both muscles are drawn alike");

@@ -16,7 +16,8 @@
 //! | [`locomotion`] | one sloth, one fixed step at a time |
 //! | [`transfer`] | planned moves between a branch and the trunk it grows from |
 //! | [`biceps`] | each forelimb's biceps: the muscle kind's node model, its length set by the elbow |
-//! | [`mesh`] | the render mesh from the pose |
+//! | [`skin`] | one smooth surface over body and limbs, made once and posed by the rig (linear blend skinning), with its coat and face |
+//! | [`mesh`] | the render mesh from the pose: skin, claws, biceps |
 //!
 //! Where the source's rules live: the diagonal sequence and its timing in [`gait`]; the leg
 //! order ("hind feet never ahead of fore feet") with the step lengths and margins it works
@@ -35,10 +36,11 @@ pub mod locomotion;
 pub mod mesh;
 pub mod plugin;
 pub mod rig;
+pub mod skin;
 pub mod supports;
 pub mod transfer;
 
 pub use def::{Facing, SlothDef, SlothKind, WalkDirection};
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
-pub use plugin::{SlothBody, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSource, SlothSystems};
+pub use plugin::{SlothBody, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSkin, SlothSource, SlothSystems};
 pub use supports::Supports;

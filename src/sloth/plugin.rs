@@ -6,6 +6,7 @@ use super::def::{SlothDef, WalkDirection};
 use super::locomotion::{Drive, Sloth};
 use super::mesh;
 use super::rig::{JOINTS, Limb};
+use super::skin::Skin;
 use super::supports::Supports;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::{FocusPoint, SceneEntity};
@@ -64,6 +65,10 @@ pub struct SlothMuscles {
     pub biceps: [Biceps; 2],
 }
 
+/// A sloth's skin, made once for its proportions and posed by its rig every frame.
+#[derive(Component, Debug, Clone)]
+pub struct SlothSkin(pub Arc<Skin>);
+
 /// Spawns a sloth entity of `def`, placed as `sloth` among `supports`, with its `biceps`.
 pub(super) fn spawn_sloth(
     entity: &mut EntityWorldMut,
@@ -77,6 +82,7 @@ pub(super) fn spawn_sloth(
     }
     entity.insert((
         SlothMuscles { biceps },
+        SlothSkin(Arc::new(Skin::new(&sloth.proportions, &sloth.rigs))),
         Transform::IDENTITY,
         RasterMesh { mesh: Arc::default(), material: Material::colored(Vec3::ONE) },
         SlothSource(def.clone()),
@@ -232,10 +238,11 @@ fn flex_biceps(mut sloths: Query<(&SlothBody, &mut SlothMuscles), Changed<SlothB
 
 /// Meshes sloths whose pose changed.
 fn write_back_sloths(
-    mut sloths: Query<(&SlothBody, &SlothSource, &SlothMuscles, &mut RasterMesh), Changed<SlothBody>>,
+    mut sloths: Query<(&SlothBody, &SlothSkin, &SlothSource, &SlothMuscles, &mut RasterMesh), Changed<SlothBody>>,
 ) {
-    for (body, source, muscles, mut raster) in &mut sloths {
-        raster.mesh = Arc::new(mesh::sloth_mesh(&body.sloth, &muscles.biceps, srgb_channels(source.0.color.0)));
+    for (body, skin, source, muscles, mut raster) in &mut sloths {
+        let fur = srgb_channels(source.0.color.0);
+        raster.mesh = Arc::new(mesh::sloth_mesh(&body.sloth, &skin.0, &muscles.biceps, fur));
     }
 }
 

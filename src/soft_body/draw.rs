@@ -1,7 +1,7 @@
 //! What a soft body shows, as rasterizer meshes: the surface with its region tinted or its
 //! shift from the original as a heat map, and the marks as small balls.
 
-use crate::raster::MeshData;
+use crate::raster::{MeshData, vertex_normals};
 use bevy::math::Vec3;
 
 /// The tint of the region's inside (multiplies the surface colour).
@@ -10,19 +10,6 @@ pub const REGION_TINT: Vec3 = Vec3::new(0.5, 0.8, 1.25);
 pub const OUTLINE_TINT: Vec3 = Vec3::new(1.0, 0.35, 0.25);
 /// The tint of the vertex that moved farthest from the original, in the overlay.
 pub const FARTHEST_TINT: Vec3 = Vec3::new(1.0, 0.15, 0.05);
-
-/// Area-weighted unit vertex normals of a surface (a vertex of no triangle points up).
-pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    for &[a, b, c] in triangles {
-        let [pa, pb, pc] = [a, b, c].map(|v| positions[v as usize]);
-        let cross = (pb - pa).cross(pc - pa);
-        for v in [a, b, c] {
-            normals[v as usize] += cross;
-        }
-    }
-    normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect()
-}
 
 /// The surface at `positions` as a mesh with a tint per vertex (white leaves the surface's
 /// colour as it is).

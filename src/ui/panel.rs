@@ -4,7 +4,7 @@
 //! wheel zooms, both through the camera's parameters like every other edit; a click is handed
 //! to the scene's kinds (trees pick the support under it).
 
-use super::{ViewArea, WindowTimes};
+use super::{ViewArea, WindowCapture, WindowTimes};
 use crate::controls::HelpVisible;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::frame_times::{FrameLog, Summary};
@@ -35,7 +35,6 @@ const WHEEL_ZOOM_PER_POINT: f32 = 0.998;
 pub(super) struct UiState {
     /// Name of the entity whose parameters are shown.
     selected: Option<String>,
-    /// Where the frame's time went, smoothed.
     /// The last frames' times by phase.
     times: FrameLog<7>,
     /// Wall-clock time building the panel took last frame.
@@ -47,6 +46,14 @@ pub(super) struct UiState {
 /// The phases of a window frame the panel lists, in order; "other" is what they do not account
 /// for: input, streaming, write-back, scene loading, Bevy's own systems.
 const PHASES: [&str; 7] = ["simulation", "raster", "panel", "panel paint", "present", "frame cap wait", "other"];
+
+/// The whole frame's and each phase's mean and 99th percentile, milliseconds, on one line:
+/// what the panel shows, logged with a capture for measurements.
+fn budget(times: &FrameLog<7>) -> String {
+    let line = |name: &str, summary: Summary| format!("{name} {:.2} / {:.2} ms", summary.mean, summary.quantile);
+    let phases = PHASES.iter().enumerate().map(|(phase, name)| line(name, times.phase(phase, 0.99)));
+    std::iter::once(line("frame", times.frame(0.99))).chain(phases).collect::<Vec<_>>().join(", ")
+}
 
 /// Everything the panel shows, read from the world before drawing.
 struct PanelData {
@@ -126,6 +133,13 @@ pub(super) fn draw_ui(world: &mut World) {
     let phases = [simulation, raster, panel_time, window.paint, window.present, window.wait];
     let other = frame.saturating_sub(phases.iter().sum());
     state.times.push(frame, [simulation, raster, panel_time, window.paint, window.present, window.wait, other]);
+    if world.get_resource::<WindowCapture>().is_some_and(|capture| capture.due()) {
+        info!(
+            "frame budget over the last {} frames, mean / 99th percentile: {}",
+            state.times.len(),
+            budget(&state.times)
+        );
+    }
     if let Some(SelectEntity(name)) = world.resource_mut::<Messages<SelectEntity>>().drain().last() {
         state.selected = Some(name);
     }

@@ -53,7 +53,7 @@ mod work_queue;
 pub use camera::{Camera, Lens, Light, Pinhole};
 pub use frame::{Fog, Frame, Instance, RenderSettings, RenderStats};
 pub use framebuffer::Framebuffer;
-pub use mesh::{MeshData, Morph};
+pub use mesh::{MeshData, Morph, vertex_normals};
 pub use pipeline::Renderer;
 pub use screen::MAX_TARGET_SIZE;
 pub use shade::{Material, Shading};

@@ -199,6 +199,19 @@ impl MeshData {
     }
 }
 
+/// Area-weighted unit vertex normals of a surface (a vertex of no triangle points up).
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for &[a, b, c] in triangles {
+        let [pa, pb, pc] = [a, b, c].map(|v| positions[v as usize]);
+        let cross = (pb - pa).cross(pc - pa);
+        for v in [a, b, c] {
+            normals[v as usize] += cross;
+        }
+    }
+    normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
