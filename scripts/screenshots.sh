@@ -26,6 +26,9 @@ cargo run --quiet -- run scenes/fruit.yaml --seconds 1.5 --size 640x360 --screen
 cargo run --quiet -- run scenes/fruit.yaml --input timelines/fruit_drop.yaml --seconds 6 \
     --size 640x360 --screenshot docs/images/fruit_dropped.png
 echo "docs/images/softbody.png docs/images/fruit.png docs/images/fruit_dropped.png"
+# The default scene, at the window's size, eight seconds in.
+cargo run --quiet -- run scenes/canopy.yaml --seconds 8 --size 1280x720 --screenshot docs/images/canopy.png
+echo "docs/images/canopy.png"
 # A plum falling from where the sloth's hand took hold.
 cargo run --quiet -- run scenes/sloth_fruit.yaml --seconds 6.5 --size 640x360 --screenshot docs/images/sloth_fruit.png
 echo "docs/images/sloth_fruit.png"
