@@ -8,7 +8,7 @@ use canopy::controls::timeline::Timeline;
 use canopy::sloth::biceps::{BICEPS_LIMBS, arm_points};
 use canopy::sloth::rig::Limb;
 use canopy::sloth::{SlothBody, SlothMuscles};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 const SIZE: UVec2 = UVec2::new(64, 48);
 
