@@ -1,7 +1,7 @@
 //! The `tree:` entry of a scene file (supports written out, or generator settings), its
 //! checks, and the kind that reads, builds, spawns and saves it.
 
-use super::generate::{self, GeneratorSettings};
+use super::generate::{self, GeneratorSettings, ScatterSettings};
 use super::model::{Shape, SupportKind, SupportSpec, Tree, TreeError};
 use super::plugin::{self, TreePlugin, TreeSource};
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
@@ -36,6 +36,10 @@ pub struct TreeDef {
     /// Or: generated from these settings (see `canopy tree generate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub generate: Option<GeneratorSettings>,
+    /// Or: trees grown on each chunk of the streamed world named in `ground` as the chunk
+    /// streams in at the finest level of detail, and gone with it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scatter: Option<ScatterSettings>,
     /// The terrain it stands on, by entity name: every support that forks from no other (a
     /// written-out polyline, a generated trunk) is raised by the ground's height under its
     /// first point when the scene loads, so that its heights count from the ground.
@@ -208,6 +212,14 @@ impl TreeDef {
     /// The supports described, before any lift.
     fn specs(&self) -> Result<Vec<SupportSpec>, TreeError> {
         let tree_error = |field, message: String| TreeError { support: None, field, message };
+        if let Some(settings) = &self.scatter {
+            if self.generate.is_some() || !self.supports.is_empty() {
+                return Err(tree_error("scatter", "give scatter alone, without supports or generate".into()));
+            }
+            settings.check().map_err(|message| tree_error("scatter", message))?;
+            // Its trees grow on the world's chunks as they stream in: the entity has none.
+            return Ok(Vec::new());
+        }
         match (&self.generate, self.supports.is_empty()) {
             (Some(_), false) => Err(tree_error("generate", "give either supports or generate, not both".into())),
             (None, true) => Err(tree_error("supports", "a tree needs supports, or generate settings".into())),
@@ -268,9 +280,26 @@ fn lifts_on(def: &TreeDef, ground: &str, cx: &BuildContext) -> Result<Vec<(Strin
     Ok(lifts)
 }
 
+/// Checks that a scattering tree's `ground` names a streamed world: its trees grow on chunks.
+fn scattered_on_a_world(def: &TreeDef, cx: &BuildContext) -> Result<(), FileError> {
+    let worlds: Vec<&str> = cx.built::<WorldKind>().map(|(name, _)| name).collect();
+    if def.ground.as_deref().is_some_and(|ground| worlds.contains(&ground)) {
+        return Ok(());
+    }
+    let entity = &cx.entity;
+    let nth = cx.earlier::<TreeKind>().filter(|tree| tree.scatter.is_some()).count();
+    let message = format!(
+        "entities[{}].tree.scatter: trees are scattered over the chunks of a streamed world: name one in `ground` \
+         (worlds: {})",
+        entity.index,
+        if worlds.is_empty() { "none".into() } else { worlds.join(", ") }
+    );
+    Err(entity.locate("scatter", nth, message))
+}
+
 /// The supports of generated tree `index`, renamed `t<index + 1>-<name>` so that the supports of
 /// all the trees generated into one entity have distinct names.
-fn prefixed((index, supports): (usize, Vec<SupportSpec>)) -> Vec<SupportSpec> {
+pub(super) fn prefixed((index, supports): (usize, Vec<SupportSpec>)) -> Vec<SupportSpec> {
     let rename = |name: &str| format!("t{}-{name}", index + 1);
     supports
         .into_iter()
@@ -304,6 +333,9 @@ impl EntityKind for TreeKind {
     /// Builds the tree; an error is located at its support's field, the nth occurrence of that
     /// key among the supports of the file's trees, or at the tree's `generate` or `tree` key.
     fn build(def: &TreeDef, cx: &BuildContext) -> Result<Tree, FileError> {
+        if def.scatter.is_some() {
+            scattered_on_a_world(def, cx)?;
+        }
         let rooted;
         let def = match &def.ground {
             Some(ground) => {
@@ -325,6 +357,10 @@ impl EntityKind for TreeKind {
                 "generate" => {
                     let nth = earlier.iter().filter(|tree| tree.generate.is_some()).count();
                     entity.locate("generate", nth, message)
+                }
+                "scatter" => {
+                    let nth = earlier.iter().filter(|tree| tree.scatter.is_some()).count();
+                    entity.locate("scatter", nth, message)
                 }
                 _ => entity.locate("tree", earlier.len(), message),
             });

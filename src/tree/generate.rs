@@ -81,6 +81,72 @@ pub fn generate(settings: &GeneratorSettings) -> Vec<Vec<SupportSpec>> {
         .collect()
 }
 
+/// Trees scattered over a streamed world: each chunk of the finest level of detail gets its
+/// own, placed and grown from the seed and the chunk alone, so that a chunk that streams out
+/// and back in has the same trees.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScatterSettings {
+    /// The seed: equal seeds give equal forests.
+    pub seed: u64,
+    /// Trees on each chunk.
+    pub per_chunk: u32,
+    /// Trunk height, metres.
+    pub height: f32,
+    /// Forks per support.
+    pub branches: u32,
+    /// Levels of forks below the trunk.
+    pub depth: u32,
+}
+
+impl Default for ScatterSettings {
+    fn default() -> Self {
+        Self { seed: 1, per_chunk: 1, height: 8.0, branches: 4, depth: 2 }
+    }
+}
+
+/// Most trees a chunk may have.
+pub const MAX_PER_CHUNK: u32 = 8;
+
+impl ScatterSettings {
+    /// The settings one tree of a chunk is grown with.
+    fn tree(&self) -> GeneratorSettings {
+        GeneratorSettings {
+            seed: self.seed,
+            trunks: 1,
+            height: self.height,
+            branches: self.branches,
+            depth: self.depth,
+            spacing: 1.0,
+        }
+    }
+
+    /// Why these settings cannot be scattered with, if they cannot.
+    pub fn check(&self) -> Result<(), String> {
+        if !(1..=MAX_PER_CHUNK).contains(&self.per_chunk) {
+            return Err(format!("per_chunk: expected 1 to {MAX_PER_CHUNK} trees, found {}", self.per_chunk));
+        }
+        self.tree().check()
+    }
+}
+
+/// The trees of the chunk `(x, z)` whose square starts at `min` (x, z, metres) and is `size`
+/// metres a side, standing at height 0 (each trunk is raised onto the ground by its caller).
+/// Trunks keep a tenth of the side from the chunk's edges, so neighbouring chunks' trunks do
+/// not meet.
+pub fn scatter(settings: &ScatterSettings, (x, z): (i32, i32), min: (f32, f32), size: f32) -> Vec<Vec<SupportSpec>> {
+    let key = (u64::from(x as u32) << 32) | u64::from(z as u32);
+    let mut random = Random::new(settings.seed ^ key.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    let (low, high) = (size * 0.1, size * 0.9);
+    let tree_settings = settings.tree();
+    (0..settings.per_chunk)
+        .map(|_| {
+            let base = Vec3::new(min.0 + random.between(low, high), 0.0, min.1 + random.between(low, high));
+            tree(&tree_settings, base, &mut random)
+        })
+        .collect()
+}
+
 /// One tree standing at `base`.
 fn tree(settings: &GeneratorSettings, base: Vec3, random: &mut Random) -> Vec<SupportSpec> {
     let height = settings.height * random.between(0.8, 1.2);
@@ -184,6 +250,22 @@ fn support_yaml(support: &SupportSpec) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_chunk_always_gets_the_same_trees_inside_it_and_its_neighbour_others() {
+        let settings = ScatterSettings { per_chunk: 3, ..ScatterSettings::default() };
+        let trees = scatter(&settings, (-2, 5), (-32.0, 80.0), 16.0);
+        assert_eq!(trees.len(), 3);
+        assert_eq!(trees, scatter(&settings, (-2, 5), (-32.0, 80.0), 16.0));
+        for tree in &trees {
+            let Shape::Polyline { points, .. } = &tree[0].shape else { panic!("a trunk is a polyline") };
+            assert!((-30.4..=-17.6).contains(&points[0].x) && (81.6..=94.4).contains(&points[0].z), "{}", points[0]);
+            assert_eq!(points[0].y, 0.0);
+        }
+        assert_ne!(trees, scatter(&settings, (-2, 6), (-32.0, 96.0), 16.0));
+        assert!(ScatterSettings { per_chunk: 0, ..settings }.check().is_err());
+        assert!(settings.check().is_ok());
+    }
     use crate::tree::model::Tree;
 
     #[test]

@@ -29,9 +29,10 @@ pub mod plugin;
 
 pub use bvh::{Bvh, Nearest, Primitive, RayHit, SegmentBvh};
 pub use def::{SupportDef, TreeDef, TreeKind};
-pub use generate::GeneratorSettings;
+pub use generate::{GeneratorSettings, ScatterSettings};
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 pub use plugin::{
-    Pick, SelectedSupport, TreeBody, TreePlugin, TreeSource, TreeSystems, edit_tree, pick, undo_tree_edit,
+    ChunkTrees, Pick, ScatteredTrees, SelectedSupport, TreeBody, TreePlugin, TreeSource, TreeSystems, edit_tree, pick,
+    undo_tree_edit,
 };

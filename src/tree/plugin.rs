@@ -2,9 +2,10 @@
 //! checked edits with undo, the write-back of its mesh, and its dump.
 
 use super::bvh::SegmentBvh;
-use super::def::TreeDef;
+use super::def::{TreeDef, prefixed};
+use super::generate::{ScatterSettings, scatter};
 use super::geometry::TaperedSegment;
-use super::model::Tree;
+use super::model::{Shape, SupportSpec, Tree};
 use super::{edit, mesh, panel};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
@@ -15,6 +16,7 @@ use crate::foundation::values::srgb_channels;
 use crate::raster::RasterMesh;
 use crate::raster::texture::material;
 use crate::view::CameraParams;
+use crate::world::{WorldBody, WorldChunk, WorldSystems};
 use bevy::ecs::world::EntityWorldMut;
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
@@ -108,6 +110,9 @@ pub fn pick<'a>(
 /// the frame.
 pub(super) fn spawn_tree(entity: &mut EntityWorldMut, def: &TreeDef, tree: Tree) {
     let material = material(srgb_channels(def.color.0), def.texture.as_ref());
+    if let (Some(settings), Some(world)) = (def.scatter, &def.ground) {
+        entity.insert(ScatteredTrees { world: world.clone(), settings });
+    }
     entity.insert((
         Transform::IDENTITY,
         RasterMesh { mesh: Arc::default(), material },
@@ -189,7 +194,68 @@ impl Plugin for TreePlugin {
         app.register_dump::<TreeBody>()
             .register_panel_section("tree", panel::tree_section)
             .add_systems(RunFixedMainLoop, select_clicked_support.in_set(ControlSystems::Input).in_set(TreeSystems))
+            .add_systems(Update, grow_on_new_chunks.after(WorldSystems).in_set(TreeSystems))
             .add_systems(PostUpdate, write_back_trees.in_set(WriteBackSystems).in_set(TreeSystems));
+    }
+}
+
+/// Trees scattered over a streamed world's chunks: the world, by entity name, and how they
+/// grow.
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct ScatteredTrees {
+    /// The world whose chunks they grow on.
+    pub world: String,
+    /// How many grow on a chunk, and how.
+    pub settings: ScatterSettings,
+}
+
+/// The trees grown on one chunk: a child of the chunk, so that they stream out with it.
+#[derive(Component, Debug, Clone)]
+pub struct ChunkTrees {
+    /// Their supports, trunks standing on the ground.
+    pub tree: Tree,
+}
+
+/// Grows the scattered trees of each chunk that came in at the finest level of detail, as a
+/// child of the chunk.
+fn grow_on_new_chunks(
+    chunks: Query<(Entity, &WorldChunk, &ChildOf), Added<WorldChunk>>,
+    worlds: Query<(&WorldBody, &SceneEntity)>,
+    forests: Query<(&ScatteredTrees, &TreeSource, &RasterMesh)>,
+    mut commands: Commands,
+) {
+    for (chunk_entity, chunk, child_of) in &chunks {
+        let Ok((world, world_entity)) = worlds.get(child_of.parent()) else { continue };
+        if chunk.level != 0 {
+            continue;
+        }
+        for (forest, source, raster) in forests.iter().filter(|(forest, ..)| forest.world == world_entity.name) {
+            let (corner, side) = world.chunk_square(chunk.key);
+            let (heights, geometry) = world.ground();
+            let specs: Vec<SupportSpec> = scatter(&forest.settings, (chunk.key.x, chunk.key.z), corner, side)
+                .into_iter()
+                .map(|mut supports| {
+                    if let Shape::Polyline { points, .. } = &mut supports[0].shape {
+                        let lift = heights.ground_height(points[0].x, points[0].z, geometry);
+                        points.iter_mut().for_each(|point| point.y += lift);
+                    }
+                    supports
+                })
+                .enumerate()
+                .flat_map(prefixed)
+                .collect();
+            match Tree::build(&specs) {
+                Ok(tree) => {
+                    let mesh = Arc::new(mesh::tree_mesh(&tree, source.def.sides));
+                    commands.spawn((
+                        ChunkTrees { tree },
+                        RasterMesh { mesh, material: raster.material.clone() },
+                        ChildOf(chunk_entity),
+                    ));
+                }
+                Err(error) => warn!("trees of chunk {:?}: {}", chunk.key, error.message),
+            }
+        }
     }
 }
 

@@ -164,6 +164,12 @@ impl WorldBody {
         (&self.maker.heights, self.maker.geometry)
     }
 
+    /// The square chunk `key` covers: its corner's x and z and its side, metres.
+    pub fn chunk_square(&self, key: ChunkKey) -> ((f32, f32), f32) {
+        let side = self.maker.cells as f32 * self.maker.geometry.cell_m;
+        ((key.x as f32 * side, key.z as f32 * side), side)
+    }
+
     /// Resident chunks at each level of detail.
     pub fn per_level(&self) -> [usize; LEVELS as usize] {
         let mut counts = [0; LEVELS as usize];

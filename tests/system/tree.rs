@@ -216,3 +216,32 @@ fn trees_on_a_terrain_stand_on_its_ground_through_edits_and_say_when_they_cannot
         assert_eq!(error.location.map(|l| l.0), Some(12), "{error}");
     }
 }
+
+#[test]
+fn trees_are_scattered_only_over_a_streamed_world_with_sensible_settings() {
+    // The scene as written loads; each change below is refused at `scatter`.
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("scatter.yaml");
+    let text = "entities:\n  - name: land\n    world:\n      seed: 7\n      layers: [{perlin: {scale: 90}}]\n  \
+        - name: woods\n    tree:\n      ground: land\n      scatter: {seed: 4, per_chunk: 2}\n";
+    std::fs::write(&scene, text).unwrap();
+    canopy::app::entity_kinds().load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    for (from, to, expected) in [
+        (
+            "ground: land",
+            "ground: lamd",
+            "trees are scattered over the chunks of a streamed world: name one in `ground` (worlds: land)",
+        ),
+        ("per_chunk: 2", "per_chunk: 0", "per_chunk: expected 1 to 8 trees, found 0"),
+        (
+            "per_chunk: 2}",
+            "per_chunk: 2}\n      generate: {seed: 1}",
+            "give scatter alone, without supports or generate",
+        ),
+    ] {
+        std::fs::write(&scene, text.replace(from, to)).unwrap();
+        let error = canopy::app::entity_kinds().load(&scene).unwrap_err();
+        assert!(error.message.contains("entities[1].tree.scatter") && error.message.contains(expected), "{error}");
+        assert_eq!(error.location.map(|l| l.0), Some(9), "{error}");
+    }
+}

@@ -1,12 +1,15 @@
 //! The streamed world: chunks around the camera at their levels, the same chunks for the same
 //! camera path, new chunks ahead of a moving camera and far ones let go, the per-frame spawn
-//! budget, and finite worlds (a generated map, an image) streamed within their bounds.
+//! budget, finite worlds (a generated map, an image) streamed within their bounds, and trees
+//! scattered over the near chunks, streaming with them.
 
 use super::common::*;
 use canopy::run::{RunOptions, run_headless};
 use canopy::terrain::chunk::{ChunkHeights, ChunkKey, SIDES, WorldHeights};
 use canopy::terrain::heightmap::Heightmap;
 use canopy::terrain::image_io::{self, Encoding};
+use canopy::tree::{ChunkTrees, SupportKind};
+use canopy::view::CameraParams;
 use canopy::world::{ChunkSkirt, WorldBody, WorldChunk};
 use serde_json::Value;
 
@@ -283,4 +286,59 @@ fn skirts_hang_where_levels_meet_and_nowhere_else() {
     wanted.sort();
     assert!(wanted.len() > 20, "levels meet along many sides: {}", wanted.len());
     assert_eq!(hung, wanted, "a skirt on both sides of every border between levels, and on no other side");
+}
+
+/// The world scene's scattered trees: each chunk holding some, its level, and its trunks' bases.
+fn scattered(app: &mut bevy::app::App) -> Vec<((i32, i32), u8, Vec<bevy::math::Vec3>)> {
+    let mut trees = app.world_mut().query::<(&ChunkTrees, &bevy::prelude::ChildOf)>();
+    let world = app.world();
+    let mut found: Vec<_> = trees
+        .iter(world)
+        .map(|(trees, child_of)| {
+            let chunk = world.get::<WorldChunk>(child_of.parent()).expect("trees are a chunk's children");
+            let bases = trees.tree.supports.iter().filter(|s| s.kind == SupportKind::Trunk).map(|s| s.points[0]);
+            ((chunk.key.x, chunk.key.z), chunk.level, bases.collect())
+        })
+        .collect();
+    found.sort_by_key(|(key, ..)| *key);
+    found
+}
+
+#[test]
+fn trees_grow_on_the_near_chunks_stand_on_the_ground_and_stream_with_them() {
+    let settle = |app: &mut bevy::app::App| (0..60).for_each(|_| app.update());
+    let mut app = small_app(&path("scenes/world.yaml"));
+    settle(&mut app);
+    let trees = scattered(&mut app);
+    let mut chunks = app.world_mut().query::<&WorldChunk>();
+    let near: Vec<(i32, i32)> =
+        chunks.iter(app.world()).filter(|chunk| chunk.level == 0).map(|chunk| (chunk.key.x, chunk.key.z)).collect();
+    assert!(!near.is_empty());
+    // A tree (`per_chunk`) on every chunk of the finest level, on no other.
+    assert_eq!(trees.len(), near.len());
+    assert!(trees.iter().all(|(key, level, bases)| *level == 0 && bases.len() == 1 && near.contains(key)));
+    // Each trunk inside its chunk, standing on the ground as the chunk draws it.
+    let mut bodies = app.world_mut().query::<&WorldBody>();
+    let body = bodies.single(app.world()).unwrap();
+    let (heights, geometry) = body.ground();
+    for ((x, z), _, bases) in &trees {
+        for base in bases {
+            let ground = heights.ground_height(base.x, base.z, geometry);
+            assert!((base.y - ground).abs() < 1e-4, "a trunk at {base} stands off the ground at {ground}");
+            assert_eq!(((base.x / CHUNK_M).floor(), (base.z / CHUNK_M).floor()), (*x as f32, *z as f32));
+        }
+    }
+    // The same trees in another run.
+    let mut again = small_app(&path("scenes/world.yaml"));
+    settle(&mut again);
+    assert_eq!(scattered(&mut again), trees);
+    // Far from there, the old chunks' trees are gone with them and the new near chunks have theirs.
+    let mut cameras = app.world_mut().query::<&mut CameraParams>();
+    cameras.single_mut(app.world_mut()).unwrap().target.x += 600.0;
+    (0..4).for_each(|_| settle(&mut app));
+    let moved = scattered(&mut app);
+    assert!(!moved.is_empty() && moved.iter().all(|(key, ..)| !trees.iter().any(|(old, ..)| old == key)));
+    let mut chunks = app.world_mut().query::<&WorldChunk>();
+    let near = chunks.iter(app.world()).filter(|chunk| chunk.level == 0).count();
+    assert_eq!(moved.len(), near);
 }
