@@ -131,11 +131,6 @@ impl Skin {
         Self { bind, triangles, influences, bind_frames: bone_frames(&frame, rigs, &angles), shade, face }
     }
 
-    /// Vertices of the surface.
-    pub fn vertices(&self) -> usize {
-        self.bind.len()
-    }
-
     /// The surface's triangles.
     pub fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
@@ -196,7 +191,12 @@ pub(super) fn palm(points: &[Vec3; JOINTS], claw: f32) -> Vec3 {
 }
 
 /// The parts of the body and the limbs' bones as capsules, in the pose of `frame` and `angles`.
-fn capsules(proportions: &Proportions, rigs: &[LimbRig; 4], frame: &BodyFrame, angles: &[[f32; 5]; 4]) -> Vec<Capsule> {
+fn capsules(
+    proportions: &Proportions,
+    rigs: &[LimbRig; 4],
+    frame: &BodyFrame,
+    angles: &[[f32; JOINTS]; 4],
+) -> Vec<Capsule> {
     let (r, hr, forward) = (proportions.torso_radius, proportions.head_radius, frame.forward);
     let (hips, shoulders, head) = (frame.hips(proportions), frame.shoulders(proportions), frame.head(proportions));
     let snout = head + forward * (hr * 0.75) - frame.up * (hr * 0.15);

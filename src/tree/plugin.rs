@@ -229,9 +229,9 @@ fn grow_on_new_chunks(
         if chunk.level != 0 {
             continue;
         }
+        let (corner, side) = world.chunk_square(chunk.key);
+        let (heights, geometry) = world.ground();
         for (forest, source, raster) in forests.iter().filter(|(forest, ..)| forest.world == world_entity.name) {
-            let (corner, side) = world.chunk_square(chunk.key);
-            let (heights, geometry) = world.ground();
             let specs: Vec<SupportSpec> = scatter(&forest.settings, (chunk.key.x, chunk.key.z), corner, side)
                 .into_iter()
                 .map(|mut supports| {

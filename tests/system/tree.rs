@@ -198,7 +198,7 @@ fn trees_on_a_terrain_stand_on_its_ground_through_edits_and_say_when_they_cannot
     edit_tree(world, oak, Edit::Fork { support: 1, field: ForkField::Length, value: 2.0 }).unwrap();
     assert_eq!(world.get::<TreeBody>(oak).unwrap().tree.supports[0].points[0], base);
 
-    for (from, to, expected) in [
+    let changes = [
         (
             "ground: land\n      supports",
             "ground: lamd\n      supports",
@@ -209,11 +209,19 @@ fn trees_on_a_terrain_stand_on_its_ground_through_edits_and_say_when_they_cannot
             "[[40, 0, 0], [40, 3, 0]]",
             "support `trunk` starts at x 40.00, z 0.00, off the terrain `land`'s section",
         ),
-    ] {
-        std::fs::write(&scene, text.replace(from, to)).unwrap();
-        let error = canopy::app::entity_kinds().load(&scene).unwrap_err();
-        assert!(error.message.contains("entities[1].tree.ground") && error.message.contains(expected), "{error}");
-        assert_eq!(error.location.map(|l| l.0), Some(12), "{error}");
+    ];
+    assert_refused(&scene, text, &changes, "entities[1].tree.ground", 12);
+}
+
+/// Writes `text` with each of `changes` (from, to, the reason expected) into `scene` in turn,
+/// and checks that loading it is refused for that reason at `field`, on line `line`.
+fn assert_refused(scene: &std::path::Path, text: &str, changes: &[(&str, &str, &str)], field: &str, line: usize) {
+    for (from, to, expected) in changes {
+        assert!(text.contains(from), "`{from}` is in the scene");
+        std::fs::write(scene, text.replace(from, to)).unwrap();
+        let error = canopy::app::entity_kinds().load(scene).unwrap_err();
+        assert!(error.message.contains(field) && error.message.contains(expected), "{error}");
+        assert_eq!(error.location.map(|l| l.0), Some(line), "{error}");
     }
 }
 
@@ -226,7 +234,7 @@ fn trees_are_scattered_only_over_a_streamed_world_with_sensible_settings() {
         - name: woods\n    tree:\n      ground: land\n      scatter: {seed: 4, per_chunk: 2}\n";
     std::fs::write(&scene, text).unwrap();
     canopy::app::entity_kinds().load(&scene).unwrap_or_else(|e| panic!("{e}"));
-    for (from, to, expected) in [
+    let changes = [
         (
             "ground: land",
             "ground: lamd",
@@ -238,10 +246,6 @@ fn trees_are_scattered_only_over_a_streamed_world_with_sensible_settings() {
             "per_chunk: 2}\n      generate: {seed: 1}",
             "give scatter alone, without supports or generate",
         ),
-    ] {
-        std::fs::write(&scene, text.replace(from, to)).unwrap();
-        let error = canopy::app::entity_kinds().load(&scene).unwrap_err();
-        assert!(error.message.contains("entities[1].tree.scatter") && error.message.contains(expected), "{error}");
-        assert_eq!(error.location.map(|l| l.0), Some(9), "{error}");
-    }
+    ];
+    assert_refused(&scene, text, &changes, "entities[1].tree.scatter", 9);
 }
