@@ -19,8 +19,8 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step};
-use super::rig::{BodyFrame, Limb};
+use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step, in_wood};
+use super::rig::{BodyFrame, Limb, Proportions};
 use super::supports::{SupportPath, Supports};
 use crate::tree::SupportKind;
 use bevy::math::{Quat, Vec3};
@@ -53,8 +53,21 @@ fn keeps_leg_order(leading: bool, changing: bool, pair_lead: f32, side_lead: f32
 /// Below this cosine between a branch and the body, the branch runs across the body.
 const ACROSS: f32 = 0.3;
 
-/// How far round a trunk from the side facing the body the grips lie, degrees.
-pub const TRUNK_GRIP_DEG: f32 = 65.0;
+/// How far round a slender trunk from the side facing the body the grips lie, degrees.
+const TRUNK_GRIP_DEG: f32 = 65.0;
+
+/// How far to the side of the body's midline a grip on a trunk lies at most, in girdle
+/// widths (twice [`Proportions::girdle_half_width`]): round a thick
+/// trunk the limbs cannot reach [`TRUNK_GRIP_DEG`] round, so they grip its near face.
+const TRUNK_GRIP_SPAN: f32 = 1.0;
+
+/// How far round a trunk of `radius` metres from the side facing the body an animal of
+/// `proportions` grips it, radians: [`TRUNK_GRIP_DEG`], or less where that would put the grip
+/// more than [`TRUNK_GRIP_SPAN`] girdle widths to the side.
+pub(super) fn trunk_grip_round(proportions: &Proportions, radius: f32) -> f32 {
+    let span = TRUNK_GRIP_SPAN * 2.0 * proportions.girdle_half_width;
+    (span / radius).min(1.0).asin().min(TRUNK_GRIP_DEG.to_radians())
+}
 
 /// Arc a foot moves round a trunk in one side step, metres.
 const SIDE_STEP: f32 = 0.04;
@@ -156,7 +169,7 @@ impl Sloth {
     fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool, supports: &Supports) -> bool {
         let foot = &self.feet[limb.index()];
         // Where a branch grows out of another, its grips must not sink into the other's wood.
-        if supports.clearance(step.grip, GRIP_TOLERANCE) < -GRIP_TOLERANCE {
+        if in_wood(step.grip, supports) {
             return false;
         }
         if ahead(step, foot, along, motion) < if changing { 0.0 } else { MIN_STEP } {
@@ -197,15 +210,15 @@ impl Sloth {
     /// The limb's side of `path` at `s`: its right for right limbs. Along a branch that is
     /// the right of the way the body faces along it, so a foot keeps its side round a turn;
     /// across a branch it is the body's own right, the two blending by how much the branch runs
-    /// along the body. On a trunk the grip lies [`TRUNK_GRIP_DEG`] round from the side facing
-    /// the body, so the grips hold the body's bearing round the trunk.
+    /// along the body. On a trunk the grip lies [`trunk_grip_round`] round from the side
+    /// facing the body, so the grips hold the body's bearing round the trunk.
     pub fn side_on(&self, path: &SupportPath, s: f32, limb: Limb) -> Vec3 {
         let axis = path.at(s);
         let tangent = axis.tangent;
         let across = self.frame.right() - tangent * self.frame.right().dot(tangent);
         if path.kind == SupportKind::Trunk {
             let towards_body = body::perpendicular_towards(self.frame.centre - axis.point, tangent);
-            let (sin, cos) = TRUNK_GRIP_DEG.to_radians().sin_cos();
+            let (sin, cos) = trunk_grip_round(&self.proportions, axis.radius).sin_cos();
             return towards_body * cos + across.normalize_or(towards_body.cross(tangent)) * (sin * limb.side());
         }
         let lengthwise = tangent.dot(self.frame.forward);
@@ -305,5 +318,22 @@ mod tests {
         assert!(keeps_leg_order(false, false, 1.0, -ORDER_GAP));
         assert!(!keeps_leg_order(false, false, 1.0, -ORDER_GAP + 0.001));
         assert!(!keeps_leg_order(false, true, -1.0, 0.0));
+    }
+
+    #[test]
+    fn round_a_thick_trunk_the_grips_keep_to_its_near_face() {
+        let proportions = Proportions::default();
+        let span = TRUNK_GRIP_SPAN * 2.0 * proportions.girdle_half_width;
+        // A slender trunk is gripped well round it, inside the span.
+        let slender = 0.08;
+        assert!((trunk_grip_round(&proportions, slender).to_degrees() - TRUNK_GRIP_DEG).abs() < 1e-4);
+        assert!(slender * TRUNK_GRIP_DEG.to_radians().sin() < span);
+        // Thicker ones at the span to the side, so less far round the thicker they are.
+        let rounds = [0.15, 0.25, 0.35].map(|radius| {
+            let round = trunk_grip_round(&proportions, radius);
+            assert!((radius * round.sin() - span).abs() < 1e-5, "{radius} m: {round} rad");
+            round
+        });
+        assert!(rounds[0] > rounds[1] && rounds[1] > rounds[2]);
     }
 }

@@ -105,6 +105,16 @@ pub enum PlaceError {
 /// holding on: the foothold search only accepts grips the limb reaches this closely.
 pub const GRIP_TOLERANCE: f32 = 0.004;
 
+/// How far a placed foot's grip moves at a time, metres, and in how many moves at most either
+/// way, to come clear of another support's wood near a junction.
+const WOOD_SHIFT_STEP: f32 = 0.02;
+const WOOD_SHIFTS: usize = 15;
+
+/// Whether a grip at `grip` sinks into some support's wood (where one grows out of another).
+pub(super) fn in_wood(grip: Vec3, supports: &Supports) -> bool {
+    supports.clearance(grip, GRIP_TOLERANCE) < -GRIP_TOLERANCE
+}
+
 /// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
 /// is about to lift.
 const PLACED_PHASE: f32 = 1.0 - 1e-4;
@@ -217,13 +227,20 @@ impl Sloth {
         let stagger = [-0.5, -0.125, 0.25, 0.5];
         for limb in Limb::ALL {
             let rig = &sloth.rigs[limb.index()];
-            let s = (s0 + facing.signum() * (rig.neutral_reach() + stagger[limb.index()] * stride))
-                .clamp(0.0, path.length());
-            let towards = sloth.side_on(path, s, limb);
+            let staggered = s0 + facing.signum() * (rig.neutral_reach() + stagger[limb.index()] * stride);
+            // Near a junction the grip moves along its support to the nearest place clear of
+            // the other support's wood.
+            let grip_at = |s: f32| {
+                let s = s.clamp(0.0, path.length());
+                (s, path.surface_towards(s, sloth.side_on(path, s, limb)))
+            };
+            let shifts = (0..=WOOD_SHIFTS).flat_map(|k| [k as f32, -(k as f32)]).map(|k| k * WOOD_SHIFT_STEP);
+            let (s, grip) = shifts
+                .map(|shift| grip_at(staggered + shift))
+                .find(|&(_, grip)| !in_wood(grip, supports))
+                .unwrap_or_else(|| grip_at(staggered));
             let foot = &mut sloth.feet[limb.index()];
-            foot.s = s;
-            foot.grip = path.surface_towards(s, towards);
-            foot.angles = rig.rest;
+            (foot.s, foot.grip, foot.angles) = (s, grip, rig.rest);
         }
         sloth.settle(supports, 0.0);
         let unreachable = sloth.feet.iter().any(|f| f.position.distance(f.grip) > GRIP_TOLERANCE);

@@ -27,8 +27,8 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::foothold::TRUNK_GRIP_DEG;
-use super::locomotion::{Foot, GRIP_TOLERANCE, Placement, Sloth, Step};
+use super::foothold;
+use super::locomotion::{Foot, GRIP_TOLERANCE, Placement, Sloth, Step, in_wood};
 use super::rig::{BodyFrame, Limb};
 use super::supports::Supports;
 use crate::tree::SupportKind;
@@ -76,9 +76,9 @@ const PLAN_REACH: f32 = 1.5 * GRIP_TOLERANCE;
 /// metres, in the order tried.
 const GRIP_SHIFTS: [f32; 10] = [0.0, -0.05, 0.05, -0.1, 0.1, -0.15, 0.15, -0.2, -0.25, -0.3];
 
-/// How far round a trunk from the side facing the body a forelimb may grip, degrees, in the
-/// order tried (walking, they grip at [`TRUNK_GRIP_DEG`]).
-const TRUNK_GRIP_ROUND_DEG: [f32; 4] = [TRUNK_GRIP_DEG, 50.0, 35.0, 20.0];
+/// How far round a trunk from the side facing the body a forelimb may grip, as parts of how
+/// far round it grips walking ([`foothold::trunk_grip_round`]), in the order tried.
+const TRUNK_GRIP_ROUND: [f32; 4] = [1.0, 0.77, 0.54, 0.31];
 
 /// How far the shoulders may bow out from the trunk (negative: in towards it) and to the
 /// body's right (negative: left) in the body's turn, metres, in the order tried: the head
@@ -97,6 +97,11 @@ const SHOULDER_BOW: [(f32, f32); 9] = [
 
 /// Part of a move the shoulders wait before moving, while the body starts turning.
 const SHOULDER_DELAY: f32 = 0.3;
+
+/// By what part of the body's move onto the new support it has turned into its end pose, in
+/// the order tried: all through the move, or early, rolling over while its head still points
+/// at its hands (which a thick trunk's grips, all on its near face, need).
+const TURNED_BY: [f32; 2] = [1.0, 1.0 - SHOULDER_DELAY];
 
 /// How much farther than its grip a forelimb must reach from the reaching body, metres: a
 /// grip at the edge of its reach is lost as soon as the body turns.
@@ -128,6 +133,8 @@ struct Move {
     bow: Vec3,
     /// Which way and how far the shoulders bow out at mid-move.
     front_bow: Vec3,
+    /// The part of the move by which the body has turned into its end pose.
+    turned_by: f32,
     /// Seconds.
     duration: f32,
 }
@@ -146,9 +153,11 @@ impl Move {
         let late = late * late * (3.0 - 2.0 * late);
         let front = shoulders(&self.from).lerp(shoulders(&self.to), late) + self.front_bow * (PI * eased).sin();
         let back = hips(&self.from).lerp(hips(&self.to), eased) + self.bow * (PI * eased).sin();
-        // The body's turn, less whatever turns its long axis from the eased turn's onto the
-        // line from hips to shoulders.
-        let turn = orientation(&self.from).slerp(orientation(&self.to), eased);
+        // The body's turn (done by `turned_by`), less whatever turns its long axis from the
+        // eased turn's onto the line from hips to shoulders.
+        let turned = (t / self.turned_by).clamp(0.0, 1.0);
+        let turned = turned * turned * (3.0 - 2.0 * turned);
+        let turn = orientation(&self.from).slerp(orientation(&self.to), turned);
         let forward = (front - back).try_normalize().unwrap_or(self.to.forward);
         let aligned = Quat::from_rotation_arc(turn * Vec3::Z, forward) * turn;
         BodyFrame {
@@ -229,8 +238,10 @@ impl Sloth {
     /// from or onto a branch growing from its trunk above it; `None` if there is no such
     /// support nearby or no transfer onto it passes the checks.
     pub fn plan_transfer(&self, supports: &Supports) -> Option<Transfer> {
+        // The hind feet may still hold a branch beside the forefeet's, where two leave the
+        // trunk side by side: they hold on there until they swing over.
         let support = self.support();
-        if self.feet.iter().any(|f| f.support != support || !f.planted()) {
+        if !self.feet.iter().all(Foot::planted) || self.feet[Limb::LeftFore.index()].support != support {
             return None;
         }
         let (target, ends, out) = self.transfer_ends(supports)?;
@@ -340,6 +351,7 @@ impl Sloth {
                     swings: left_swinging,
                     bow: Vec3::ZERO,
                     front_bow: Vec3::ZERO,
+                    turned_by: 1.0,
                     duration: 1.0,
                 };
                 if self.move_holds(&reach, &self.feet, supports) {
@@ -364,6 +376,10 @@ impl Sloth {
             return None;
         }
         let placed = Sloth::place(supports, placement, self.proportions, self.speed).ok()?;
+        // Near the junction a placement's grips may fall inside the other support's wood.
+        if placed.feet.iter().any(|f| in_wood(f.grip, supports)) {
+            return None;
+        }
         let ending = Ending { target, placed, out };
         reaching.iter().find_map(|&pose| {
             let [lefts, rights] =
@@ -389,7 +405,8 @@ impl Sloth {
             let beyond = step.grip + (step.grip - rig.root_in(pose)).normalize_or_zero() * REACH_SPARE;
             reaches(pose, step.grip) && reaches(pose, beyond) && reaches(&placed.frame, step.grip)
         };
-        placed.grip_variations(limb, supports).into_iter().filter(reached).take(GRIPS_TRIED).collect()
+        let grips = placed.grip_variations(limb, supports).into_iter().filter(|step| !in_wood(step.grip, supports));
+        grips.filter(reached).take(GRIPS_TRIED).collect()
     }
 
     /// The transfer whose forelimbs reach from the body at `pose` to the grips `fore` (left,
@@ -419,14 +436,22 @@ impl Sloth {
             }
             swings
         };
-        let still =
-            |swings| Move { from: pose, to: pose, swings, bow: Vec3::ZERO, front_bow: Vec3::ZERO, duration: swing };
+        let still = |swings| Move {
+            from: pose,
+            to: pose,
+            swings,
+            bow: Vec3::ZERO,
+            front_bow: Vec3::ZERO,
+            turned_by: 1.0,
+            duration: swing,
+        };
         let reach = Move { from: self.frame, ..still(swinging(&[Limb::LeftFore])) };
         let hind = swinging(&[Limb::RightHind, Limb::LeftHind]);
-        SHOULDER_BOW.into_iter().find_map(|(outwards, sideways)| {
+        let paths = TURNED_BY.into_iter().flat_map(|turned_by| SHOULDER_BOW.map(|bow| (turned_by, bow)));
+        paths.into_iter().find_map(|(turned_by, (outwards, sideways))| {
             let front_bow = ending.out * outwards + pose.right() * sideways;
             let bow = ending.out * HIP_BOW;
-            let turn = Move { from: pose, to: end, swings: hind, bow, front_bow, duration: 2.0 * swing };
+            let turn = Move { from: pose, to: end, swings: hind, bow, front_bow, turned_by, duration: 2.0 * swing };
             self.move_holds(&turn, &holding, supports).then(|| Transfer {
                 target: ending.target,
                 moves: [reach, still(swinging(&[Limb::RightFore])), turn],
@@ -481,8 +506,9 @@ impl Sloth {
                     let axis = path.at(s);
                     let facing = body::perpendicular_towards(self.frame.centre - axis.point, axis.tangent);
                     let side = axis.tangent.cross(facing) * -limb.side();
-                    for round in TRUNK_GRIP_ROUND_DEG {
-                        let (sin, cos) = round.to_radians().sin_cos();
+                    let walking = foothold::trunk_grip_round(&self.proportions, axis.radius);
+                    for part in TRUNK_GRIP_ROUND {
+                        let (sin, cos) = (walking * part).sin_cos();
                         steps.push(Step {
                             support: foot.support,
                             s,
@@ -528,7 +554,7 @@ mod tests {
         let from = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
         let to = BodyFrame { centre: Vec3::new(0.3, -0.2, 0.0), forward: Vec3::Y, up: Vec3::NEG_X };
         let bow = Vec3::new(0.0, 0.0, HIP_BOW);
-        let moving = Move { from, to, swings: [None; 4], bow, front_bow: Vec3::ZERO, duration: 1.0 };
+        let moving = Move { from, to, swings: [None; 4], bow, front_bow: Vec3::ZERO, turned_by: 1.0, duration: 1.0 };
         let half = 0.2;
         for (t, expected) in [(0.0, from), (1.0, to)] {
             let frame = moving.frame_at(t, half);

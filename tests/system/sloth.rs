@@ -195,8 +195,7 @@ impl Record {
 }
 
 /// Runs the scene `name` with the swept value for each angle, and returns the angles that
-/// failed with why. Each run must end stopped at the end of `support`, all four feet having
-/// held each support of `via` on the way, in order.
+/// failed with why (see [`failed_runs`]).
 fn sweep_scene(
     name: &str,
     angles: impl Iterator<Item = i32>,
@@ -205,9 +204,16 @@ fn sweep_scene(
     support: &str,
 ) -> Vec<String> {
     let text = std::fs::read_to_string(scene_path(name)).unwrap();
+    failed_runs(angles.map(|angle| (format!("{angle} deg"), sweep(&text, value(angle)))), via, support)
+}
+
+/// Runs each named scene of `scenes` on autorun for a minute, and returns the names of those
+/// that failed with why. Each run must end stopped at the end of `support`, all four feet
+/// having held each support of `via` on the way, in order.
+fn failed_runs(scenes: impl Iterator<Item = (String, String)>, via: &[&str], support: &str) -> Vec<String> {
     let mut failed = Vec::new();
-    for angle in angles {
-        let record = run(&sweep(&text, value(angle)), "[]", 60.0);
+    for (name, text) in scenes {
+        let record = run(&text, "[]", 60.0);
         let mut failures = record.failures(support);
         let mut visits = record.visited.iter();
         if !via.iter().all(|wanted| visits.any(|v| v == wanted)) {
@@ -221,7 +227,7 @@ fn sweep_scene(
             failures.push(format!("did not stop at the end of the branch ({reach:.2} m short)"));
         }
         if !failures.is_empty() {
-            failed.push(format!("{angle} deg: {}", failures.join("; ")));
+            failed.push(format!("{name}: {}", failures.join("; ")));
         }
     }
     failed
@@ -247,24 +253,68 @@ fn walks_from_a_branch_onto_its_trunk_and_back_at_85_to_150_degrees() {
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
-#[test]
-fn climbs_from_a_trunk_onto_the_branch_above_at_85_to_150_degrees() {
+/// The trunk radii the thick-trunk sweeps try at the junction, metres: the trunk tapers from
+/// 1.15 times that at its foot to 0.77 times at its top, as the scene's own does.
+const THICK_TRUNKS: [f32; 5] = [0.15, 0.2, 0.25, 0.3, 0.35];
+
+/// The branch angles the thick-trunk sweeps try at each radius, degrees to the trunk below:
+/// a generated forest's branches leave their trunks at 85 to 130 degrees.
+const THICK_TRUNK_ANGLES: [i32; 3] = [90, 110, 130];
+
+/// `transfer.yaml` with its trunk `radius` metres thick at the junction and its branch at
+/// `angle` degrees to the trunk below.
+fn thick_trunk(radius: f32, angle: i32) -> String {
     let text = std::fs::read_to_string(scene_path("transfer.yaml")).unwrap();
-    let text = text.replace(
-        "sloth: { support: limb, at: 0.6, facing: backward, autorun: true }",
-        "sloth: { support: trunk, at: 0.3, around_deg: 90 }",
-    );
+    let radii = "radii: [0.15, 0.13, 0.1]";
+    assert!(text.contains(radii), "transfer.yaml's trunk radii changed");
+    let text = text.replace(radii, &format!("radii: [{}, {radius}, {}]", radius * 1.15, radius * 0.77));
+    sweep(&text, angle as f32 - 90.0)
+}
+
+#[test]
+fn walks_from_a_branch_onto_a_thick_trunk_and_back_at_radii_up_to_35_cm() {
+    let route = ["tree/limb", "tree/trunk", "tree/limb"];
+    let scenes = THICK_TRUNKS.into_iter().flat_map(|radius| {
+        THICK_TRUNK_ANGLES.map(|angle| (format!("{radius} m, {angle} deg"), thick_trunk(radius, angle)))
+    });
+    let failed = failed_runs(scenes, &route, "tree/limb");
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+/// The names of the scenes of `scenes` in which the sloth, placed on the trunk round from
+/// the branch and climbing, did not move onto the branch or broke a per-step criterion.
+fn failed_climbs(scenes: impl Iterator<Item = (String, String)>) -> Vec<String> {
     let mut failed = Vec::new();
-    for angle in (85..=150).step_by(5) {
-        let record = run(&sweep(&text, angle as f32 - 90.0), "- { at: 0, press: [KeyW] }\n", 20.0);
+    for (name, text) in scenes {
+        let placed = "sloth: { support: limb, at: 0.6, facing: backward, autorun: true }";
+        assert!(text.contains(placed), "transfer.yaml's sloth changed");
+        let text = text.replace(placed, "sloth: { support: trunk, at: 0.3, around_deg: 90 }");
+        let record = run(&text, "- { at: 0, press: [KeyW] }\n", 20.0);
         let mut failures: Vec<String> = record.violations.iter().take(3).cloned().collect();
         if record.visited != ["tree/trunk", "tree/limb"] {
             failures.push(format!("went by {:?}", record.visited));
         }
         if !failures.is_empty() {
-            failed.push(format!("{angle} deg: {}", failures.join("; ")));
+            failed.push(format!("{name}: {}", failures.join("; ")));
         }
     }
+    failed
+}
+
+#[test]
+fn climbs_from_a_trunk_onto_the_branch_above_at_85_to_150_degrees() {
+    let text = std::fs::read_to_string(scene_path("transfer.yaml")).unwrap();
+    let failed =
+        failed_climbs((85..=150).step_by(5).map(|angle| (format!("{angle} deg"), sweep(&text, angle as f32 - 90.0))));
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn climbs_from_a_thick_trunk_onto_the_branch_above_at_radii_up_to_35_cm() {
+    let scenes = THICK_TRUNKS.into_iter().flat_map(|radius| {
+        THICK_TRUNK_ANGLES.map(|angle| (format!("{radius} m, {angle} deg"), thick_trunk(radius, angle)))
+    });
+    let failed = failed_climbs(scenes);
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
@@ -369,4 +419,27 @@ fn walks_across_the_biological_range_of_speeds_at_the_speed_asked() {
         let error = (record.mean_speed - speed).abs() / speed;
         assert!(error < 0.2, "asked {speed} m/s, walked {} m/s", record.mean_speed);
     }
+}
+
+#[test]
+fn walks_in_from_each_bough_of_the_forest_onto_its_thick_or_leaning_trunk() {
+    let forest = forest();
+    let placed = "sloth: { support: cecropia/side, at: 0.7, facing: backward }";
+    assert!(forest.contains(placed), "forest.yaml's sloth changed");
+    let mut failed = Vec::new();
+    // The oak's trunk is 0.22-0.3 m thick with two boughs leaving it side by side.
+    for (bough, trunk) in [
+        ("oak/west", "oak/trunk"),
+        ("oak/west_twin", "oak/trunk"),
+        ("oak/east", "oak/trunk"),
+        ("leaning/bough", "leaning/trunk"),
+    ] {
+        let text =
+            forest.replace(placed, &format!("sloth: {{ support: {bough}, at: 0.6, facing: backward, autorun: true }}"));
+        let record = run(&text, "[]", 30.0);
+        if !record.violations.is_empty() || record.visited.get(..2) != Some(&[bough.to_string(), trunk.to_string()]) {
+            failed.push(format!("{bough}: went by {:?}; {:?}", record.visited, record.violations.first()));
+        }
+    }
+    assert!(failed.is_empty(), "{failed:#?}");
 }
