@@ -238,8 +238,8 @@ impl Texture {
                 let level = self.image();
                 let (x, y) = level.in_texels(u, v);
                 level.texels_at(
-                    level.wrap_x(floor_lanes(x), sampler.address),
-                    level.wrap_y(floor_lanes(y), sampler.address),
+                    level.row_start(level.wrap_y(floor_lanes(y), sampler.address))
+                        + level.wrap_x(floor_lanes(x), sampler.address),
                 )
             }
             Filter::Bilinear => self.image().bilinear(u, v, sampler.address),
@@ -300,22 +300,32 @@ impl Level {
         let (x, y) = (x - 0.5, y - 0.5);
         let (left, top) = (floor_lanes(x), floor_lanes(y));
         let (right_weight, down_weight) = (x - floats_of(left), y - floats_of(top));
-        let [x0, x1] = [left, left + 1].map(|x| self.wrap_x(x, address));
-        let [y0, y1] = [top, top + 1].map(|y| self.wrap_y(y, address));
-        let lerp = |a: [Vec4; 3], b: [Vec4; 3], t: Vec4| std::array::from_fn(|c| a[c] * (1.0 - t) + b[c] * t);
-        let upper = lerp(self.texels_at(x0, y0), self.texels_at(x1, y0), right_weight);
-        let lower = lerp(self.texels_at(x0, y1), self.texels_at(x1, y1), right_weight);
+        let (x0, x1) = (self.wrap_x(left, address), self.wrap_x(left + 1, address));
+        // Each row's first texel, once for both of its columns.
+        let (row0, row1) = (self.row_start(self.wrap_y(top, address)), self.row_start(self.wrap_y(top + 1, address)));
+        let lerp = |a: [Vec4; 3], b: [Vec4; 3], t: Vec4| {
+            let inverse = Vec4::ONE - t;
+            [a[0] * inverse + b[0] * t, a[1] * inverse + b[1] * t, a[2] * inverse + b[2] * t]
+        };
+        let upper = lerp(self.texels_at(row0 + x0), self.texels_at(row0 + x1), right_weight);
+        let lower = lerp(self.texels_at(row1 + x0), self.texels_at(row1 + x1), right_weight);
         lerp(upper, lower, down_weight)
     }
 
-    /// The red, green and blue lanes of the texels in columns `x` and rows `y`, one per lane,
-    /// each inside the level.
+    /// The index of the first texel of each of the rows `y`, each inside the level.
     #[inline(always)]
-    fn texels_at(&self, x: i32x4, y: i32x4) -> [Vec4; 3] {
+    fn row_start(&self, y: i32x4) -> i32x4 {
         // Below `MAX_TEXELS` every index fits an `i32`.
-        let index = (y * i32x4::splat(self.width as i32) + x).to_array();
-        let words = u32x4::new(index.map(|i| self.texels[i as usize]));
-        [0, 8, 16].map(|shift| bytes_of(words, shift) * BYTE_TO_UNIT)
+        y * i32x4::splat(self.width as i32)
+    }
+
+    /// The red, green and blue lanes of the texels at `index` (row by row), one per lane, each
+    /// inside the level.
+    #[inline(always)]
+    fn texels_at(&self, index: i32x4) -> [Vec4; 3] {
+        let [a, b, c, d] = index.to_array().map(|i| i as usize);
+        let words = u32x4::new([self.texels[a], self.texels[b], self.texels[c], self.texels[d]]);
+        [bytes_of(words, 0) * BYTE_TO_UNIT, bytes_of(words, 8) * BYTE_TO_UNIT, bytes_of(words, 16) * BYTE_TO_UNIT]
     }
 }
 
