@@ -99,6 +99,14 @@ pub enum PlaceError {
         /// Where along it.
         fraction: f32,
     },
+    /// Near a junction, some foot finds no grip clear of the other support's wood.
+    #[error("the sloth cannot hang at {fraction} along `{support}`: a foot's grips all sink into another support")]
+    InWood {
+        /// The support's label.
+        support: String,
+        /// Where along it.
+        fraction: f32,
+    },
 }
 
 /// Largest distance, metres, between an IK grip point and its grip that still counts as
@@ -238,7 +246,7 @@ impl Sloth {
             let (s, grip) = shifts
                 .map(|shift| grip_at(staggered + shift))
                 .find(|&(_, grip)| !in_wood(grip, supports))
-                .unwrap_or_else(|| grip_at(staggered));
+                .ok_or_else(|| PlaceError::InWood { support: path.label.clone(), fraction })?;
             let foot = &mut sloth.feet[limb.index()];
             (foot.s, foot.grip, foot.angles) = (s, grip, rig.rest);
         }

@@ -375,11 +375,9 @@ impl Sloth {
         if !(0.0..=1.0).contains(&placement.fraction) {
             return None;
         }
+        // Placements whose grips near the junction cannot come clear of the other support's
+        // wood are refused by `place`.
         let placed = Sloth::place(supports, placement, self.proportions, self.speed).ok()?;
-        // Near the junction a placement's grips may fall inside the other support's wood.
-        if placed.feet.iter().any(|f| in_wood(f.grip, supports)) {
-            return None;
-        }
         let ending = Ending { target, placed, out };
         reaching.iter().find_map(|&pose| {
             let [lefts, rights] =
@@ -525,7 +523,7 @@ impl Sloth {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sloth::locomotion::Drive;
+    use crate::sloth::locomotion::{Drive, PlaceError};
     use crate::sloth::rig::Proportions;
     use crate::tree::{Shape, SupportSpec, Tree};
 
@@ -594,6 +592,36 @@ mod tests {
         assert!(sloth.frame.forward.y > 0.95, "head up: {}", sloth.frame.forward);
         let head = sloth.frame.head(&sloth.proportions);
         assert!(head.y < 2.0, "the head stays below the branch: {head}");
+    }
+
+    #[test]
+    fn a_sloth_is_not_placed_where_a_foot_finds_no_grip_clear_of_the_other_supports_wood() {
+        // A trunk a metre thick: the first metre of the branch growing from it is inside it.
+        let trunk = Shape::Polyline {
+            points: vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 4.0, 0.0)],
+            radii: vec![1.0, 1.0, 1.0],
+        };
+        let limb = Shape::Fork {
+            parent: "trunk".into(),
+            at: 0.5,
+            yaw_deg: 90.0,
+            pitch_deg: 0.0,
+            length: 4.0,
+            radius: [0.06, 0.035],
+            bend_deg: [0.0, 0.0],
+            sections: 1,
+        };
+        let spec = |name: &str, shape| SupportSpec { name: name.into(), shape, kind: None };
+        let tree = Tree::build(&[spec("trunk", trunk), spec("limb", limb)]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let limb = supports.find("t/limb").unwrap();
+        let place = |fraction| {
+            let placement = Placement { support: limb, fraction, facing: -1.0, around: 0.0 };
+            Sloth::place(&supports, placement, Proportions::default(), 0.11)
+        };
+        assert!(matches!(place(0.02), Err(PlaceError::InWood { .. })), "{:?}", place(0.02).err());
+        let placed = place(0.7).expect("clear of the trunk");
+        assert!(placed.feet.iter().all(|f| !in_wood(f.grip, &supports)));
     }
 
     #[test]

@@ -271,13 +271,17 @@ fn thick_trunk(radius: f32, angle: i32) -> String {
     sweep(&text, angle as f32 - 90.0)
 }
 
+/// Every [`thick_trunk`] scene of the sweeps, named by its radius and angle.
+fn thick_trunk_scenes() -> impl Iterator<Item = (String, String)> {
+    THICK_TRUNKS.into_iter().flat_map(|radius| {
+        THICK_TRUNK_ANGLES.map(|angle| (format!("{radius} m, {angle} deg"), thick_trunk(radius, angle)))
+    })
+}
+
 #[test]
 fn walks_from_a_branch_onto_a_thick_trunk_and_back_at_radii_up_to_35_cm() {
     let route = ["tree/limb", "tree/trunk", "tree/limb"];
-    let scenes = THICK_TRUNKS.into_iter().flat_map(|radius| {
-        THICK_TRUNK_ANGLES.map(|angle| (format!("{radius} m, {angle} deg"), thick_trunk(radius, angle)))
-    });
-    let failed = failed_runs(scenes, &route, "tree/limb");
+    let failed = failed_runs(thick_trunk_scenes(), &route, "tree/limb");
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
@@ -311,10 +315,7 @@ fn climbs_from_a_trunk_onto_the_branch_above_at_85_to_150_degrees() {
 
 #[test]
 fn climbs_from_a_thick_trunk_onto_the_branch_above_at_radii_up_to_35_cm() {
-    let scenes = THICK_TRUNKS.into_iter().flat_map(|radius| {
-        THICK_TRUNK_ANGLES.map(|angle| (format!("{radius} m, {angle} deg"), thick_trunk(radius, angle)))
-    });
-    let failed = failed_climbs(scenes);
+    let failed = failed_climbs(thick_trunk_scenes());
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
