@@ -2,7 +2,7 @@
 //! global numbering of vertices and triangles across instances, and the view they are drawn in.
 
 use crate::camera::{Camera, Light};
-use crate::clip::{ClipVertex, clip_triangle};
+use crate::clip::{ClipVertex, clip_triangle, outcode};
 use crate::mesh::MeshData;
 use crate::screen::ScreenVertex;
 use crate::setup::Viewport;
@@ -147,19 +147,34 @@ pub(crate) fn flat_diffuse(corners: [Vec3; 3], light: &Light) -> f32 {
 }
 
 /// World bounds of everything drawn, from each instance's transformed model bounds.
-pub(crate) fn scene_bounds(instances: &[Instance]) -> Option<(Vec3, Vec3)> {
-    instances
-        .iter()
-        .filter_map(|instance| {
-            let (min, max) = instance.mesh.bounds()?;
-            let centre = instance.model.transform_point3((min + max) * 0.5);
-            let half = (max - min) * 0.5;
-            let m = Mat3::from_mat4(instance.model);
-            // The transformed box's half extent along each world axis.
-            let extent = Vec3::new(m.row(0).abs().dot(half), m.row(1).abs().dot(half), m.row(2).abs().dot(half));
-            Some((centre - extent, centre + extent))
-        })
-        .reduce(|(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)))
+pub(crate) fn scene_bounds(boxes: &[Option<(Vec3, Vec3)>]) -> Option<(Vec3, Vec3)> {
+    boxes.iter().flatten().copied().reduce(|(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)))
+}
+
+/// The smallest world-axis-aligned box holding `instance`'s mesh as its model matrix places
+/// it, `(min, max)`; `None` for a mesh without positions.
+pub(crate) fn world_box(instance: &Instance) -> Option<(Vec3, Vec3)> {
+    let (min, max) = instance.mesh.bounds()?;
+    let centre = instance.model.transform_point3((min + max) * 0.5);
+    let half = (max - min) * 0.5;
+    let m = Mat3::from_mat4(instance.model);
+    // The transformed box's half extent along each world axis.
+    let extent = Vec3::new(m.row(0).abs().dot(half), m.row(1).abs().dot(half), m.row(2).abs().dot(half));
+    Some((centre - extent, centre + extent))
+}
+
+/// Whether some of the world box `(min, max)` may lie inside the view volume of
+/// `clip_from_world`, as far as the planes of `planes` (bits of
+/// [`outside`](crate::clip::outside)) bound it: false
+/// only when all eight corners lie beyond one of them, so that nothing inside the box can
+/// reach the view.
+pub(crate) fn box_reaches(clip_from_world: Mat4, (min, max): (Vec3, Vec3), planes: u8) -> bool {
+    let beyond = (0..8).fold(planes, |beyond, corner: u8| {
+        let pick = |bit: u8, low: f32, high: f32| if corner & bit == 0 { low } else { high };
+        let point = Vec3::new(pick(1, min.x, max.x), pick(2, min.y, max.y), pick(4, min.z, max.z));
+        beyond & outcode(clip_from_world * point.extend(1.0))
+    });
+    beyond == 0
 }
 
 /// The triangles of all `instances`, whose spans are `spans`.
@@ -198,4 +213,34 @@ pub(crate) struct InstanceRun<'a> {
     pub instance: &'a Instance,
     /// Which of its triangles.
     pub triangles: Range<usize>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Lens;
+    use crate::clip::outside;
+
+    #[test]
+    fn a_box_reaches_a_view_unless_it_lies_wholly_beyond_one_of_its_planes() {
+        let camera =
+            Camera { eye: Vec3::ZERO, target: Vec3::NEG_Z, lens: Lens::FieldOfView(1.0), near: 0.1, far: 50.0 };
+        let view = camera.view_projection(1.0);
+        let cube = |centre: Vec3| (centre - 0.5, centre + 0.5);
+        assert!(box_reaches(view, cube(Vec3::new(0.0, 0.0, -5.0)), outside::VIEW), "in front");
+        assert!(box_reaches(view, cube(Vec3::new(3.0, 0.0, -5.0)), outside::VIEW), "across the right plane");
+        assert!(box_reaches(view, cube(Vec3::ZERO), outside::VIEW), "round the eye");
+        for (centre, beyond) in [
+            (Vec3::new(0.0, 0.0, 5.0), "behind"),
+            (Vec3::new(0.0, 0.0, -60.0), "past the far plane"),
+            (Vec3::new(10.0, 0.0, -5.0), "to the right"),
+            (Vec3::new(0.0, -10.0, -5.0), "below"),
+        ] {
+            assert!(!box_reaches(view, cube(centre), outside::VIEW), "{beyond}");
+        }
+        // Without the near and far planes, depth along the view no longer matters.
+        let sides = outside::VIEW & !(outside::NEAR | outside::FAR);
+        assert!(box_reaches(view, cube(Vec3::new(0.0, 0.0, -60.0)), sides));
+        assert!(!box_reaches(view, cube(Vec3::new(10.0, 0.0, -5.0)), sides));
+    }
 }

@@ -11,8 +11,9 @@
 //! two bands is set up in each. Every buffer lives in the [`Renderer`] and is reused, so a
 //! frame of steady size allocates nothing of its own.
 
+use crate::clip::outside;
 use crate::color_pass::{self, BandCounts, BandScratch, BandShadow, TileContext};
-use crate::frame::{Frame, RenderStats, Span, View, scene_bounds};
+use crate::frame::{Frame, Instance, RenderStats, Span, View, box_reaches, scene_bounds, world_box};
 use crate::framebuffer::Framebuffer;
 use crate::screen::{MAX_TARGET_SIZE, ScreenVertex, TILE_HEIGHT};
 use crate::setup::Viewport;
@@ -29,6 +30,9 @@ use bevy_tasks::TaskPool;
 /// steady size does not allocate.
 #[derive(Debug, Default)]
 pub struct Renderer {
+    /// Each instance's world box, and the instances reaching the view or the shadow map.
+    boxes: Vec<Option<(Vec3, Vec3)>>,
+    visible: Vec<Instance>,
     spans: Vec<Span>,
     world: Vec<Vec3>,
     vertices: Vec<ScreenVertex>,
@@ -59,20 +63,51 @@ impl Renderer {
             settings.shadow_map_size > 0 && settings.shadow_map_size.is_multiple_of(TILE_HEIGHT),
             "the shadow map size must be a positive multiple of {TILE_HEIGHT}"
         );
-        let mut stats = RenderStats {
+        let stats = RenderStats {
             triangles_submitted: frame.instances.iter().map(|i| i.mesh.triangle_count()).sum(),
             ..RenderStats::default()
         };
         let aspect = width.max(1) as f32 / height.max(1) as f32;
+        self.boxes.clear();
+        self.boxes.extend(frame.instances.iter().map(world_box));
         let light_clip = if settings.shadows && width > 0 && height > 0 {
-            scene_bounds(frame.instances)
+            scene_bounds(&self.boxes)
                 .and_then(|bounds| fit_light(&frame.camera, aspect, &frame.light, bounds, settings.shadow_distance_m))
         } else {
             None
         };
         self.shadow.reset(settings.shadow_map_size, light_clip, settings.pcf);
 
+        // Instances that reach neither the view nor the shadow map are left out of every stage:
+        // the map's casters are kept whatever their depth along the light.
         let view_projection = frame.camera.view_projection(aspect);
+        let reaches = |bounds: (Vec3, Vec3)| {
+            box_reaches(view_projection, bounds, outside::VIEW)
+                || light_clip
+                    .is_some_and(|clip| box_reaches(clip, bounds, outside::VIEW & !(outside::NEAR | outside::FAR)))
+        };
+        let mut visible = std::mem::take(&mut self.visible);
+        visible.clear();
+        let boxes = frame.instances.iter().zip(&self.boxes);
+        visible.extend(boxes.filter(|(_, bounds)| bounds.is_some_and(reaches)).map(|(instance, _)| instance.clone()));
+        let stats =
+            self.draw(target, pool, &Frame { instances: &visible, ..*frame }, view_projection, light_clip, stats);
+        self.visible = visible;
+        stats
+    }
+
+    /// Draws the instances of `frame`, all of which may reach the view or the shadow map, into
+    /// `target` (see [`Renderer::render`]), adding to `stats`.
+    fn draw(
+        &mut self,
+        target: &mut Framebuffer,
+        pool: &TaskPool,
+        frame: &Frame,
+        view_projection: Mat4,
+        light_clip: Option<Mat4>,
+        mut stats: RenderStats,
+    ) -> RenderStats {
+        let (width, height, settings) = (target.width(), target.height(), frame.settings);
         self.vertex_stage(pool, frame, view_projection, width, height, light_clip);
         let view = View {
             clip_from_world: view_projection,
@@ -187,8 +222,7 @@ impl Renderer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::clip::outside;
-    use crate::{Camera, Instance, Lens, Light, Material, MeshData, Morph, RenderSettings};
+    use crate::{Camera, Lens, Light, Material, MeshData, Morph, RenderSettings};
     use std::f32::consts::FRAC_PI_2;
     use std::sync::Arc;
 
@@ -380,6 +414,32 @@ mod tests {
         }
         // The sphere's shadow on the floor, under it.
         assert!(darker > 20, "{darker} pixels in shadow");
+    }
+
+    #[test]
+    fn only_instances_reaching_neither_the_view_nor_the_shadow_map_are_left_out() {
+        // A narrow view of the floor around the origin, the light falling steeply towards +x:
+        // a cube beside the view on the light's side still shadows the floor in view, a cube
+        // far off to the other side reaches neither.
+        let floor = instance(MeshData::plane(4), Mat4::from_scale(Vec3::splat(8.0)), Vec3::ONE);
+        let caster = instance(MeshData::cube(), Mat4::from_translation(Vec3::new(-3.0, 2.5, 0.0)), Vec3::ONE);
+        let far_off = instance(MeshData::cube(), Mat4::from_translation(Vec3::new(30.0, 0.5, -30.0)), Vec3::ONE);
+        let camera = Camera { lens: Lens::FieldOfView(0.5), ..camera_at(Vec3::new(0.0, 4.0, 4.0), Vec3::ZERO) };
+        let light = Light { direction: Vec3::new(1.0, -1.0, 0.0).normalize(), diffuse: 0.8, fill: 0.0, ambient: 0.2 };
+        let render = |instances: &[Instance]| {
+            let mut target = Framebuffer::new(64, 64);
+            let settings = RenderSettings { shadows: true, ..RenderSettings::default() };
+            let frame = Frame { camera, light, background: SKY, instances, settings };
+            let mut renderer = Renderer::default();
+            let stats = renderer.render(&mut target, &TaskPool::new(), &frame);
+            (target, stats, renderer.world.len())
+        };
+        let (alone, _, _) = render(std::slice::from_ref(&floor));
+        let (image, stats, vertices) = render(&[floor.clone(), caster.clone(), far_off]);
+        assert_eq!(stats.triangles_submitted, 2 * 16 + 2 * 12, "every instance counts as submitted");
+        assert_eq!(vertices, floor.mesh.positions.len() + caster.mesh.positions.len(), "the far cube is left out");
+        let darker = image.color().chunks_exact(4).zip(alone.color().chunks_exact(4)).filter(|(a, b)| a < b).count();
+        assert!(darker > 20, "the cube beside the view casts into it: {darker} pixels in its shadow");
     }
 
     #[test]
