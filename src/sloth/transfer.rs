@@ -529,16 +529,20 @@ mod tests {
 
     /// A vertical trunk with a branch growing from it at `angle` degrees to the trunk below.
     fn tree(angle: f32) -> Tree {
-        let trunk = Shape::Polyline {
-            points: vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 4.0, 0.0)],
-            radii: vec![0.15, 0.13, 0.1],
-        };
+        junction(vec![0.15, 0.13, 0.1], angle, 2.0)
+    }
+
+    /// A vertical trunk 4 m tall with `radii` at its foot, middle and top, and a branch
+    /// `length` metres long growing from its middle at `angle` degrees to the trunk below.
+    fn junction(radii: Vec<f32>, angle: f32, length: f32) -> Tree {
+        let trunk =
+            Shape::Polyline { points: vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 4.0, 0.0)], radii };
         let limb = Shape::Fork {
             parent: "trunk".into(),
             at: 0.5,
             yaw_deg: 90.0,
             pitch_deg: angle - 90.0,
-            length: 2.0,
+            length,
             radius: [0.06, 0.035],
             bend_deg: [0.0, 0.0],
             sections: 1,
@@ -597,22 +601,7 @@ mod tests {
     #[test]
     fn a_sloth_is_not_placed_where_a_foot_finds_no_grip_clear_of_the_other_supports_wood() {
         // A trunk a metre thick: the first metre of the branch growing from it is inside it.
-        let trunk = Shape::Polyline {
-            points: vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 4.0, 0.0)],
-            radii: vec![1.0, 1.0, 1.0],
-        };
-        let limb = Shape::Fork {
-            parent: "trunk".into(),
-            at: 0.5,
-            yaw_deg: 90.0,
-            pitch_deg: 0.0,
-            length: 4.0,
-            radius: [0.06, 0.035],
-            bend_deg: [0.0, 0.0],
-            sections: 1,
-        };
-        let spec = |name: &str, shape| SupportSpec { name: name.into(), shape, kind: None };
-        let tree = Tree::build(&[spec("trunk", trunk), spec("limb", limb)]).unwrap();
+        let tree = junction(vec![1.0, 1.0, 1.0], 90.0, 4.0);
         let supports = Supports::new([("t", &tree)]);
         let limb = supports.find("t/limb").unwrap();
         let place = |fraction| {
