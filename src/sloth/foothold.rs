@@ -69,6 +69,35 @@ pub(super) fn trunk_grip_round(proportions: &Proportions, radius: f32) -> f32 {
     (span / radius).min(1.0).asin().min(TRUNK_GRIP_DEG.to_radians())
 }
 
+/// How far round a branch, at most, a grip moves from its side to come clear of the wood of a
+/// branch forking from it, degrees, and in how many steps either way.
+const FORK_ROUND_DEG: f32 = 60.0;
+const FORK_ROUND_STEPS: usize = 4;
+
+/// The grip on branch `path` (support `support`) at `s` on the side `towards`; where the wood
+/// of a branch forking from it covers that grip, the nearest one round the branch clear of it,
+/// if there is one within [`FORK_ROUND_DEG`]. Wood of any other support is left to the checks.
+fn clear_of_forks(path: &SupportPath, support: usize, s: f32, towards: Vec3, supports: &Supports) -> Vec3 {
+    let grip = path.surface_towards(s, towards);
+    let in_fork = |grip: Vec3| {
+        supports.nearest(grip, GRIP_TOLERANCE).is_some_and(|hit| {
+            hit.surface.distance < -GRIP_TOLERANCE && supports.paths[hit.support].parent == Some(support)
+        })
+    };
+    if !in_fork(grip) {
+        return grip;
+    }
+    let tangent = path.at(s).tangent;
+    (1..=FORK_ROUND_STEPS)
+        .flat_map(|k| {
+            let angle = (FORK_ROUND_DEG * k as f32 / FORK_ROUND_STEPS as f32).to_radians();
+            [angle, -angle]
+        })
+        .map(|angle| path.surface_towards(s, Quat::from_axis_angle(tangent, angle) * towards))
+        .find(|&grip| !in_wood(grip, supports))
+        .unwrap_or(grip)
+}
+
 /// Arc a foot moves round a trunk in one side step, metres.
 const SIDE_STEP: f32 = 0.04;
 
@@ -102,11 +131,10 @@ impl Sloth {
             let s = foot.s + along * step;
             if (range.0..=range.1).contains(&s) {
                 // Up and down a trunk a foot keeps its bearing round it: only side steps turn.
-                let towards = match path.kind {
-                    SupportKind::Trunk => foot.grip - path.at(foot.s).point,
-                    SupportKind::Branch => self.side_on(path, s, limb),
+                let grip = match path.kind {
+                    SupportKind::Trunk => path.surface_towards(s, foot.grip - path.at(foot.s).point),
+                    SupportKind::Branch => clear_of_forks(path, foot.support, s, self.side_on(path, s, limb), supports),
                 };
-                let grip = path.surface_towards(s, towards);
                 let candidate = Step { support: foot.support, s, grip };
                 let lead = ahead(&candidate, pair, along, motion);
                 if leading && lead < 0.0 {
