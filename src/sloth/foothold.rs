@@ -364,4 +364,38 @@ mod tests {
         });
         assert!(rounds[0] > rounds[1] && rounds[1] > rounds[2]);
     }
+
+    #[test]
+    fn a_grip_under_a_forks_wood_moves_round_the_branch_clear_of_it() {
+        use crate::tree::{Shape, SupportSpec, Tree};
+        // A level branch along +x and a fork leaving its middle 60 degrees below level, off to
+        // one side: where a sloth hanging under the branch grips it.
+        let branch = Shape::Polyline { points: vec![Vec3::ZERO, Vec3::new(4.0, 0.0, 0.0)], radii: vec![0.08, 0.06] };
+        let fork = Shape::Fork {
+            parent: "branch".into(),
+            at: 0.5,
+            yaw_deg: 0.0,
+            pitch_deg: -60.0,
+            length: 1.5,
+            radius: [0.04, 0.02],
+            bend_deg: [0.0, 0.0],
+            sections: 1,
+        };
+        let spec = |name: &str, shape| SupportSpec { name: name.into(), shape, kind: None };
+        let tree = Tree::build(&[spec("branch", branch), spec("fork", fork)]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let index = supports.find("t/branch").unwrap();
+        let path = &supports.paths[index];
+        let fork_side = supports.paths[supports.find("t/fork").unwrap()].at(0.5).point - Vec3::new(2.0, 0.0, 0.0);
+        let towards = fork_side.normalize();
+        let covered = path.surface_towards(2.0, towards);
+        assert!(in_wood(covered, &supports), "the grip on the fork's side at its foot is in its wood");
+        let moved = clear_of_forks(path, index, 2.0, towards, &supports);
+        assert!(!in_wood(moved, &supports) && moved.distance(covered) > 0.01, "{moved} from {covered}");
+        let round = (moved - path.at(2.0).point).normalize().angle_between(towards).to_degrees();
+        assert!(round <= FORK_ROUND_DEG + 1e-3, "{round} deg round");
+        // Away from the fork the grip stays where it was.
+        let clear = path.surface_towards(0.6, towards);
+        assert_eq!(clear_of_forks(path, index, 0.6, towards, &supports), clear);
+    }
 }
