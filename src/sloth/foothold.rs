@@ -19,7 +19,7 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step, in_wood};
+use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step, in_wood, wood_at};
 use super::rig::{BodyFrame, Limb, Proportions};
 use super::supports::{SupportPath, Supports};
 use crate::tree::SupportKind;
@@ -79,12 +79,7 @@ const FORK_ROUND_STEPS: usize = 4;
 /// if there is one within [`FORK_ROUND_DEG`]. Wood of any other support is left to the checks.
 fn clear_of_forks(path: &SupportPath, support: usize, s: f32, towards: Vec3, supports: &Supports) -> Vec3 {
     let grip = path.surface_towards(s, towards);
-    let in_fork = |grip: Vec3| {
-        supports.nearest(grip, GRIP_TOLERANCE).is_some_and(|hit| {
-            hit.surface.distance < -GRIP_TOLERANCE && supports.paths[hit.support].parent == Some(support)
-        })
-    };
-    if !in_fork(grip) {
+    if wood_at(grip, supports).is_none_or(|wood| supports.paths[wood].parent != Some(support)) {
         return grip;
     }
     let tangent = path.at(s).tangent;

@@ -120,7 +120,12 @@ const WOOD_SHIFTS: usize = 15;
 
 /// Whether a grip at `grip` sinks into some support's wood (where one grows out of another).
 pub(super) fn in_wood(grip: Vec3, supports: &Supports) -> bool {
-    supports.clearance(grip, GRIP_TOLERANCE) < -GRIP_TOLERANCE
+    wood_at(grip, supports).is_some()
+}
+
+/// The support whose wood a grip at `grip` sinks into, if it sinks into one.
+pub(super) fn wood_at(grip: Vec3, supports: &Supports) -> Option<usize> {
+    supports.nearest(grip, GRIP_TOLERANCE).filter(|hit| hit.surface.distance < -GRIP_TOLERANCE).map(|hit| hit.support)
 }
 
 /// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
