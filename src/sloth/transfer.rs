@@ -9,6 +9,8 @@
 //! 3. both hind limbs let go together and swing over while the body turns about its shoulders
 //!    into its pose on the new support, its hips bowed out from the trunk by up to
 //!    [`HIP_BOW`] (the hindquarters' offset), so that they swing round the trunk, not into it.
+//!    Where rolling straight from one pose into the other would carry a hand across the body
+//!    (beyond what its shoulder turns), the body rolls its belly towards the hands mid-move.
 //!
 //! The source also names the lateral sequence for these moves; its transfer rules (fore limbs
 //! first, the hind limbs together) fix the order here, a lateral pair of forelimbs and then the
@@ -135,6 +137,8 @@ struct Move {
     front_bow: Vec3,
     /// The part of the move by which the body has turned into its end pose.
     turned_by: f32,
+    /// Where the belly turns towards mid-move, if anywhere: the forelimbs' grips.
+    belly_towards: Option<Vec3>,
     /// Seconds.
     duration: f32,
 }
@@ -160,11 +164,13 @@ impl Move {
         let turn = orientation(&self.from).slerp(orientation(&self.to), turned);
         let forward = (front - back).try_normalize().unwrap_or(self.to.forward);
         let aligned = Quat::from_rotation_arc(turn * Vec3::Z, forward) * turn;
-        BodyFrame {
-            centre: front - forward * half_torso,
-            forward,
-            up: body::perpendicular_towards(aligned * Vec3::Y, forward),
+        let mut up = body::perpendicular_towards(aligned * Vec3::Y, forward);
+        if let Some(grips) = self.belly_towards {
+            let weight = (PI * eased).sin();
+            let towards = body::perpendicular_towards(grips - front, forward);
+            up = body::perpendicular_towards(up * (1.0 - weight) + towards * weight, forward);
         }
+        BodyFrame { centre: front - forward * half_torso, forward, up }
     }
 }
 
@@ -352,6 +358,7 @@ impl Sloth {
                     bow: Vec3::ZERO,
                     front_bow: Vec3::ZERO,
                     turned_by: 1.0,
+                    belly_towards: None,
                     duration: 1.0,
                 };
                 if self.move_holds(&reach, &self.feet, supports) {
@@ -441,15 +448,28 @@ impl Sloth {
             bow: Vec3::ZERO,
             front_bow: Vec3::ZERO,
             turned_by: 1.0,
+            belly_towards: None,
             duration: swing,
         };
         let reach = Move { from: self.frame, ..still(swinging(&[Limb::LeftFore])) };
         let hind = swinging(&[Limb::RightHind, Limb::LeftHind]);
-        let paths = TURNED_BY.into_iter().flat_map(|turned_by| SHOULDER_BOW.map(|bow| (turned_by, bow)));
-        paths.into_iter().find_map(|(turned_by, (outwards, sideways))| {
+        let grips = (left.grip + right.grip) * 0.5;
+        let paths = [None, Some(grips)].into_iter().flat_map(|belly_towards| {
+            TURNED_BY.into_iter().flat_map(move |turned_by| SHOULDER_BOW.map(|bow| (belly_towards, turned_by, bow)))
+        });
+        paths.into_iter().find_map(|(belly_towards, turned_by, (outwards, sideways))| {
             let front_bow = ending.out * outwards + pose.right() * sideways;
             let bow = ending.out * HIP_BOW;
-            let turn = Move { from: pose, to: end, swings: hind, bow, front_bow, turned_by, duration: 2.0 * swing };
+            let turn = Move {
+                from: pose,
+                to: end,
+                swings: hind,
+                bow,
+                front_bow,
+                turned_by,
+                belly_towards,
+                duration: 2.0 * swing,
+            };
             self.move_holds(&turn, &holding, supports).then(|| Transfer {
                 target: ending.target,
                 moves: [reach, still(swinging(&[Limb::RightFore])), turn],
@@ -556,20 +576,42 @@ mod tests {
         let from = BodyFrame { centre: Vec3::ZERO, forward: Vec3::X, up: Vec3::Y };
         let to = BodyFrame { centre: Vec3::new(0.3, -0.2, 0.0), forward: Vec3::Y, up: Vec3::NEG_X };
         let bow = Vec3::new(0.0, 0.0, HIP_BOW);
-        let moving = Move { from, to, swings: [None; 4], bow, front_bow: Vec3::ZERO, turned_by: 1.0, duration: 1.0 };
+        let moving = Move {
+            from,
+            to,
+            swings: [None; 4],
+            bow,
+            front_bow: Vec3::ZERO,
+            turned_by: 1.0,
+            belly_towards: None,
+            duration: 1.0,
+        };
+        // Turning the belly towards a point below the body changes neither end of the move.
+        let grips = Vec3::new(0.2, -1.0, 0.0);
+        let towards_grips = Move { belly_towards: Some(grips), ..moving };
         let half = 0.2;
-        for (t, expected) in [(0.0, from), (1.0, to)] {
-            let frame = moving.frame_at(t, half);
-            assert!(frame.centre.distance(expected.centre) < 1e-5 && frame.forward.distance(expected.forward) < 1e-5);
-            assert!(frame.up.distance(expected.up) < 1e-5, "{t}: {frame:?}");
+        for moving in [moving, towards_grips] {
+            for (t, expected) in [(0.0, from), (1.0, to)] {
+                let frame = moving.frame_at(t, half);
+                assert!(
+                    frame.centre.distance(expected.centre) < 1e-5 && frame.forward.distance(expected.forward) < 1e-5
+                );
+                assert!(frame.up.distance(expected.up) < 1e-5, "{t}: {frame:?}");
+            }
+            for k in 0..=20 {
+                let frame = moving.frame_at(k as f32 / 20.0, half);
+                assert!((frame.forward.length() - 1.0).abs() < 1e-5 && frame.forward.dot(frame.up).abs() < 1e-5);
+            }
+            // Mid-move the hips bow out sideways.
+            let middle = moving.frame_at(0.5, half);
+            assert!((middle.centre - middle.forward * half).z > 0.1);
         }
-        for k in 0..=20 {
-            let frame = moving.frame_at(k as f32 / 20.0, half);
-            assert!((frame.forward.length() - 1.0).abs() < 1e-5 && frame.forward.dot(frame.up).abs() < 1e-5);
-        }
-        // Mid-move the hips bow out sideways.
-        let middle = moving.frame_at(0.5, half);
-        assert!((middle.centre - middle.forward * half).z > 0.1);
+        // Mid-move the belly faces the point, square to the long axis.
+        let middle = towards_grips.frame_at(0.5, half);
+        let shoulders = middle.centre + middle.forward * half;
+        let towards = body::perpendicular_towards(grips - shoulders, middle.forward);
+        assert!(middle.up.dot(towards) > 0.999, "{middle:?}");
+        assert!(moving.frame_at(0.5, half).up.dot(towards) < 0.9, "without it the belly faces elsewhere");
     }
 
     #[test]
