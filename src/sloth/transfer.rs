@@ -20,7 +20,10 @@
 //! all the way (ending a little round the trunk, or with the shoulders' path bowed aside, moves
 //! the head aside from it); on a branch, facing out along it. The hind feet end where a
 //! placement there would put them and the forefeet near that, the body where those grips hold
-//! it, so the walk resumes as from a placement.
+//! it, so the walk resumes as from a placement. Where the forefeet's grips leave them bunched
+//! up against the hind feet, so that neither finds its next grip (onto a thick branch the
+//! forelimbs reach only its base), two more moves step them out, the left and then the right,
+//! to where the placement has them.
 //!
 //! A transfer is planned whole before it starts and checked at closely spaced moments of every
 //! move: each planted foot reaches its grip within its joint limits, and the body keeps clear
@@ -62,9 +65,9 @@ const TRY_STEP: f32 = 0.05;
 /// degrees (positive: head towards the grips), in the order tried.
 const REACH_PITCH_DEG: [f32; 9] = [0.0, -10.0, 10.0, -20.0, 20.0, -30.0, 30.0, -40.0, 40.0];
 
-/// How far the body may draw back along itself while the forelimbs reach, metres, in the
-/// order tried.
-const REACH_BACK: [f32; 3] = [0.0, 0.05, 0.1];
+/// How far the body may draw back along itself while the forelimbs reach, metres (negative:
+/// on towards the new support, as below a thick branch), in the order tried.
+const REACH_BACK: [f32; 5] = [0.0, 0.05, 0.1, -0.05, -0.1];
 
 /// The least clearance a plan keeps between the body and the supports, metres. The body
 /// follows the plan exactly (it is not pushed out to [`BODY_MARGIN`](body::BODY_MARGIN) on the
@@ -75,8 +78,9 @@ const PLAN_CLEARANCE: f32 = 0.002;
 const PLAN_REACH: f32 = 1.5 * GRIP_TOLERANCE;
 
 /// How far along its support a forelimb's grip may move from where a placement puts it,
-/// metres, in the order tried.
-const GRIP_SHIFTS: [f32; 10] = [0.0, -0.05, 0.05, -0.1, 0.1, -0.15, 0.15, -0.2, -0.25, -0.3];
+/// metres (negative: back towards the junction, down to the base of a thick branch, all that
+/// a forelimb reaching from the trunk gets to), in the order tried.
+const GRIP_SHIFTS: [f32; 14] = [0.0, -0.05, 0.05, -0.1, 0.1, -0.15, 0.15, -0.2, -0.25, -0.3, -0.35, -0.4, -0.45, -0.5];
 
 /// How far round a trunk from the side facing the body a forelimb may grip, as parts of how
 /// far round it grips walking ([`foothold::trunk_grip_round`]), in the order tried.
@@ -187,12 +191,22 @@ struct Ending {
     out: Vec3,
 }
 
+impl Ending {
+    /// Whether the sloth, its body at `frame` and its feet on `feet`, walks on from there:
+    /// each forelimb finds its next grip forward.
+    fn walks_on_from(&self, frame: BodyFrame, feet: &[Foot; 4], supports: &Supports) -> bool {
+        let mut after = self.placed.clone();
+        (after.frame, after.feet) = (frame, *feet);
+        [Limb::LeftFore, Limb::RightFore].into_iter().all(|limb| after.find_next_step(limb, 1.0, supports).is_some())
+    }
+}
+
 /// A transfer under way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Transfer {
     /// The support the sloth moves onto.
     pub target: usize,
-    moves: [Move; 3],
+    moves: Vec<Move>,
     /// The move under way.
     current: usize,
     /// Seconds into it; `None` before its feet have lifted.
@@ -457,7 +471,7 @@ impl Sloth {
         let paths = [None, Some(grips)].into_iter().flat_map(|belly_towards| {
             TURNED_BY.into_iter().flat_map(move |turned_by| SHOULDER_BOW.map(|bow| (belly_towards, turned_by, bow)))
         });
-        paths.into_iter().find_map(|(belly_towards, turned_by, (outwards, sideways))| {
+        let turn = paths.into_iter().find_map(|(belly_towards, turned_by, (outwards, sideways))| {
             let front_bow = ending.out * outwards + pose.right() * sideways;
             let bow = ending.out * HIP_BOW;
             let turn = Move {
@@ -470,13 +484,50 @@ impl Sloth {
                 belly_towards,
                 duration: 2.0 * swing,
             };
-            self.move_holds(&turn, &holding, supports).then(|| Transfer {
-                target: ending.target,
-                moves: [reach, still(swinging(&[Limb::RightFore])), turn],
-                current: 0,
-                elapsed: None,
-            })
-        })
+            self.move_holds(&turn, &holding, supports).then_some(turn)
+        })?;
+        let mut moves = vec![reach, still(swinging(&[Limb::RightFore])), turn];
+        if !ending.walks_on_from(end, &feet, supports) {
+            moves.extend(self.stepping_out(ending, end, &feet, supports)?);
+        }
+        Some(Transfer { target: ending.target, moves, current: 0, elapsed: None })
+    }
+
+    /// The forefeet stepping on from their grips in `feet`, the left and then the right, to
+    /// where the placed sloth has them, the body moving from `end` into the placed pose: two
+    /// moves, if they pass the checks.
+    fn stepping_out(
+        &self,
+        ending: &Ending,
+        end: BodyFrame,
+        feet: &[Foot; 4],
+        supports: &Supports,
+    ) -> Option<[Move; 2]> {
+        let placed = &ending.placed;
+        let mut halfway = *feet;
+        halfway[Limb::LeftFore.index()] = placed.feet[Limb::LeftFore.index()];
+        let mut middle = placed.pose(&halfway, &halfway.map(|f| f.grip), supports, 0.0);
+        let near = NearSupports::around(&middle, &self.proportions, supports);
+        if body::push_clear(&mut middle, &self.proportions, &near) < PLAN_CLEARANCE {
+            return None;
+        }
+        let step = |limb: Limb, from, to| {
+            let foot = &placed.feet[limb.index()];
+            let mut swings = [None; 4];
+            swings[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+            Move {
+                from,
+                to,
+                swings,
+                bow: Vec3::ZERO,
+                front_bow: Vec3::ZERO,
+                turned_by: 1.0,
+                belly_towards: None,
+                duration: self.timing().swing,
+            }
+        };
+        let moves = [step(Limb::LeftFore, end, middle), step(Limb::RightFore, middle, placed.frame)];
+        (self.move_holds(&moves[0], feet, supports) && self.move_holds(&moves[1], &halfway, supports)).then_some(moves)
     }
 
     /// Whether, all through `current`, every foot of `feet` not swinging in it reaches its

@@ -437,22 +437,30 @@ fn walks_in_from_each_bough_of_the_forest_onto_its_thick_or_leaning_trunk() {
     ] {
         let text =
             forest.replace(placed, &format!("sloth: {{ support: {bough}, at: 0.6, facing: backward, autorun: true }}"));
-        failed.extend(failed_walk_in(&text, bough, trunk));
+        failed.extend(failed_walk_in(&run(&text, "[]", 30.0), bough, trunk));
     }
     assert!(failed.is_empty(), "{failed:#?}");
 }
 
-/// Why the sloth of scene `text`, on autorun from `bough`, did not walk in onto `trunk` next
-/// keeping every per-step criterion for 30 s; `None` when it did.
-fn failed_walk_in(text: &str, bough: &str, trunk: &str) -> Option<String> {
-    let record = run(text, "[]", 30.0);
+/// Why the sloth of `record`, on autorun from `bough`, did not walk in onto `trunk` next
+/// keeping every per-step criterion; `None` when it did.
+fn failed_walk_in(record: &Record, bough: &str, trunk: &str) -> Option<String> {
     let walked_in = record.visited.get(..2) == Some(&[bough.to_string(), trunk.to_string()]);
     (!record.violations.is_empty() || !walked_in)
         .then(|| format!("{bough}: went by {:?}; {:?}", record.visited, record.violations.first()))
 }
 
+/// The trees of `scenes/generated_forest.yaml` on which the sloth, come onto the trunk from
+/// the first branch, does not yet climb on over onto a branch above and out along it: no
+/// transfer plan passes the checks (t4, its trunk 0.23 m thick), or the sloth stops at once on
+/// the branch, its forefeet finding no next grip one after the other (t8).
+const TREES_NOT_YET_CLIMBED_ON: [u32; 2] = [4, 8];
+
+/// How far out along the branch above, metres, the forefeet have walked by the end.
+const OUT_ALONG: f32 = 1.0;
+
 #[test]
-fn walks_in_from_the_first_branch_of_every_one_of_sixteen_generated_trees_onto_its_trunk() {
+fn walks_in_from_the_first_branch_of_every_generated_tree_onto_its_trunk_and_on_up_onto_a_branch() {
     let forest = std::fs::read_to_string(super::common::path("scenes/generated_forest.yaml")).unwrap();
     let mut failed = Vec::new();
     for tree in 1..=16 {
@@ -460,7 +468,20 @@ fn walks_in_from_the_first_branch_of_every_one_of_sixteen_generated_trees_onto_i
         let text = format!(
             "{forest}\n  - name: sloth\n    sloth: {{ support: {branch}, at: 0.6, facing: backward, autorun: true }}\n"
         );
-        failed.extend(failed_walk_in(&text, &branch, &trunk));
+        let record = run(&text, "[]", 40.0);
+        if let Some(failure) = failed_walk_in(&record, &branch, &trunk) {
+            failed.push(failure);
+            continue;
+        }
+        if TREES_NOT_YET_CLIMBED_ON.contains(&tree) {
+            continue;
+        }
+        let sloth = &record.body.as_ref().unwrap().sloth;
+        let fore_s = sloth.feet[Limb::LeftFore.index()].s.min(sloth.feet[Limb::RightFore.index()].s);
+        let above = record.visited.get(2).filter(|support| support.starts_with(&format!("{trunk}-")));
+        if above.is_none() || record.visited.len() != 3 || fore_s < OUT_ALONG {
+            failed.push(format!("{trunk}: went by {:?}, the forefeet {fore_s} m out", record.visited));
+        }
     }
     assert!(failed.is_empty(), "{failed:#?}");
 }
