@@ -21,7 +21,7 @@
 //! the head aside from it); on a branch, facing out along it. The hind feet end where a
 //! placement there would put them and the forefeet near that, the body where those grips hold
 //! it, so the walk resumes as from a placement. Where the forefeet's grips leave them bunched
-//! up against the hind feet, so that neither finds its next grip (onto a thick branch the
+//! up against the hind feet, so that the walk would soon stop (onto a thick branch the
 //! forelimbs reach only its base), two more moves step them out, the left and then the right,
 //! to where the placement has them.
 //!
@@ -33,7 +33,7 @@
 use super::body::{self, NearSupports};
 use super::ccd;
 use super::foothold;
-use super::locomotion::{Foot, GRIP_TOLERANCE, Placement, Sloth, Step, in_wood};
+use super::locomotion::{Drive, Foot, GRIP_TOLERANCE, Placement, Sloth, Step, in_wood};
 use super::rig::{BodyFrame, Limb};
 use super::supports::Supports;
 use crate::tree::SupportKind;
@@ -57,6 +57,9 @@ const TRUNK_BEARING_DEG: [f32; 5] = [0.0, 30.0, -30.0, 60.0, -60.0];
 
 /// How far out along the branch from the trunk's surface the body's centre may end, metres.
 const BRANCH_OUT: (f32, f32) = (0.25, 0.9);
+
+/// The time step of the walk tried on from a planned transfer's end, seconds.
+const WALK_ON_STEP: f32 = 1.0 / 60.0;
 
 /// Spacing of the end poses tried, metres.
 const TRY_STEP: f32 = 0.05;
@@ -192,12 +195,20 @@ struct Ending {
 }
 
 impl Ending {
-    /// Whether the sloth, its body at `frame` and its feet on `feet`, walks on from there:
-    /// each forelimb finds its next grip forward.
+    /// Whether the sloth, its body at `frame` and its feet on `feet`, walks on forward from
+    /// there for two gait cycles without stopping, every planted foot holding its grip (a forefoot
+    /// may find its first grip and the walk still stop a few steps on, the feet's order
+    /// bunching them up).
     fn walks_on_from(&self, frame: BodyFrame, feet: &[Foot; 4], supports: &Supports) -> bool {
         let mut after = self.placed.clone();
         (after.frame, after.feet) = (frame, *feet);
-        [Limb::LeftFore, Limb::RightFore].into_iter().all(|limb| after.find_next_step(limb, 1.0, supports).is_some())
+        let drive = Drive { direction: 1.0, ..Drive::default() };
+        let steps = (2.0 * after.timing().cycle / WALK_ON_STEP).ceil() as usize;
+        (0..steps).all(|_| {
+            after.step(WALK_ON_STEP, drive, supports);
+            let holding = after.feet.iter().filter(|f| f.planted()).all(|f| f.position.distance(f.grip) <= PLAN_REACH);
+            after.blocked.is_none() && holding
+        })
     }
 }
 

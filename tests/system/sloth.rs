@@ -450,12 +450,6 @@ fn failed_walk_in(record: &Record, bough: &str, trunk: &str) -> Option<String> {
         .then(|| format!("{bough}: went by {:?}; {:?}", record.visited, record.violations.first()))
 }
 
-/// The trees of `scenes/generated_forest.yaml` on which the sloth, come onto the trunk from
-/// the first branch, does not yet climb on over onto a branch above and out along it: no
-/// transfer plan passes the checks (t4, its trunk 0.23 m thick), or the sloth stops at once on
-/// the branch, its forefeet finding no next grip one after the other (t8).
-const TREES_NOT_YET_CLIMBED_ON: [u32; 2] = [4, 8];
-
 /// How far out along the branch above, metres, the forefeet have walked by the end.
 const OUT_ALONG: f32 = 1.0;
 
@@ -471,9 +465,6 @@ fn walks_in_from_the_first_branch_of_every_generated_tree_onto_its_trunk_and_on_
         let record = run(&text, "[]", 40.0);
         if let Some(failure) = failed_walk_in(&record, &branch, &trunk) {
             failed.push(failure);
-            continue;
-        }
-        if TREES_NOT_YET_CLIMBED_ON.contains(&tree) {
             continue;
         }
         let sloth = &record.body.as_ref().unwrap().sloth;
