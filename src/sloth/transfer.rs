@@ -34,7 +34,7 @@ use super::body::{self, NearSupports};
 use super::ccd;
 use super::foothold;
 use super::locomotion::{Drive, Foot, GRIP_TOLERANCE, Placement, Sloth, Step, in_wood};
-use super::rig::{BodyFrame, Limb};
+use super::rig::{BodyFrame, Limb, Proportions};
 use super::supports::Supports;
 use crate::tree::SupportKind;
 use bevy::math::{Mat3, Quat, Vec3};
@@ -151,6 +151,13 @@ struct Move {
 }
 
 impl Move {
+    /// A move from `from` to `to`, turning all through it and bowing nowhere, while the feet
+    /// of `swings` swing.
+    fn plain(from: BodyFrame, to: BodyFrame, swings: [Option<Step>; 4], duration: f32) -> Self {
+        let (bow, front_bow) = (Vec3::ZERO, Vec3::ZERO);
+        Self { from, to, swings, bow, front_bow, turned_by: 1.0, belly_towards: None, duration }
+    }
+
     /// The body at `t` (0 start to 1 end): the shoulders on the straight line between their
     /// two places, the hips following on theirs (bowed out), both eased in and out.
     fn frame_at(&self, t: f32, half_torso: f32) -> BodyFrame {
@@ -186,6 +193,16 @@ fn orientation(frame: &BodyFrame) -> Quat {
     Quat::from_mat3(&Mat3::from_cols(frame.up.cross(frame.forward), frame.up, frame.forward))
 }
 
+/// The feet of `limbs` swinging to where `feet` grip, indexed like [`Limb::ALL`].
+fn swinging_to(feet: &[Foot; 4], limbs: &[Limb]) -> [Option<Step>; 4] {
+    let mut swings = [None; 4];
+    for &limb in limbs {
+        let foot = &feet[limb.index()];
+        swings[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+    }
+    swings
+}
+
 /// Where a transfer ends: the support, a sloth placed there, and the way out from the trunk
 /// (the way the hips bow).
 struct Ending {
@@ -195,6 +212,14 @@ struct Ending {
 }
 
 impl Ending {
+    /// The body where the grips of `feet` hold the placed sloth, pushed clear of the supports,
+    /// if it keeps [`PLAN_CLEARANCE`] from them.
+    fn held_by(&self, feet: &[Foot; 4], proportions: &Proportions, supports: &Supports) -> Option<BodyFrame> {
+        let mut frame = self.placed.pose(feet, &feet.map(|f| f.grip), supports, 0.0);
+        let near = NearSupports::around(&frame, proportions, supports);
+        (body::push_clear(&mut frame, proportions, &near) >= PLAN_CLEARANCE).then_some(frame)
+    }
+
     /// Whether the sloth, its body at `frame` and its feet on `feet`, walks on forward from
     /// there for two gait cycles without stopping, every planted foot holding its grip (a forefoot
     /// may find its first grip and the walk still stop a few steps on, the feet's order
@@ -365,9 +390,7 @@ impl Sloth {
     /// turned about the hips and drawn back along the body, each checked with the hind feet
     /// and the right forefoot still on the old support (the left forefoot swinging).
     fn reaching_poses(&self, supports: &Supports) -> Vec<BodyFrame> {
-        let mut left_swinging = [None; 4];
-        let foot = &self.feet[Limb::LeftFore.index()];
-        left_swinging[Limb::LeftFore.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
+        let left_swinging = swinging_to(&self.feet, &[Limb::LeftFore]);
         let mut poses = Vec::new();
         for pitch in REACH_PITCH_DEG {
             for back in REACH_BACK {
@@ -376,16 +399,7 @@ impl Sloth {
                 let forward = turn * self.frame.forward;
                 let centre = hips + forward * (self.proportions.torso_length * 0.5);
                 let pose = BodyFrame { centre, forward, up: turn * self.frame.up };
-                let reach = Move {
-                    from: self.frame,
-                    to: pose,
-                    swings: left_swinging,
-                    bow: Vec3::ZERO,
-                    front_bow: Vec3::ZERO,
-                    turned_by: 1.0,
-                    belly_towards: None,
-                    duration: 1.0,
-                };
+                let reach = Move::plain(self.frame, pose, left_swinging, 1.0);
                 if self.move_holds(&reach, &self.feet, supports) {
                     poses.push(pose);
                 }
@@ -452,30 +466,10 @@ impl Sloth {
                 (foot.support, foot.s, foot.grip) = (step.support, step.s, step.grip);
             }
         }
-        let mut end = ending.placed.pose(&feet, &feet.map(|f| f.grip), supports, 0.0);
-        let near = NearSupports::around(&end, &self.proportions, supports);
-        if body::push_clear(&mut end, &self.proportions, &near) < PLAN_CLEARANCE {
-            return None;
-        }
+        let end = ending.held_by(&feet, &self.proportions, supports)?;
         let swing = self.timing().swing;
-        let swinging = |limbs: &[Limb]| {
-            let mut swings = [None; 4];
-            for &limb in limbs {
-                let foot = &feet[limb.index()];
-                swings[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
-            }
-            swings
-        };
-        let still = |swings| Move {
-            from: pose,
-            to: pose,
-            swings,
-            bow: Vec3::ZERO,
-            front_bow: Vec3::ZERO,
-            turned_by: 1.0,
-            belly_towards: None,
-            duration: swing,
-        };
+        let swinging = |limbs: &[Limb]| swinging_to(&feet, limbs);
+        let still = |swings| Move::plain(pose, pose, swings, swing);
         let reach = Move { from: self.frame, ..still(swinging(&[Limb::LeftFore])) };
         let hind = swinging(&[Limb::RightHind, Limb::LeftHind]);
         let grips = (left.grip + right.grip) * 0.5;
@@ -517,26 +511,9 @@ impl Sloth {
         let placed = &ending.placed;
         let mut halfway = *feet;
         halfway[Limb::LeftFore.index()] = placed.feet[Limb::LeftFore.index()];
-        let mut middle = placed.pose(&halfway, &halfway.map(|f| f.grip), supports, 0.0);
-        let near = NearSupports::around(&middle, &self.proportions, supports);
-        if body::push_clear(&mut middle, &self.proportions, &near) < PLAN_CLEARANCE {
-            return None;
-        }
-        let step = |limb: Limb, from, to| {
-            let foot = &placed.feet[limb.index()];
-            let mut swings = [None; 4];
-            swings[limb.index()] = Some(Step { support: foot.support, s: foot.s, grip: foot.grip });
-            Move {
-                from,
-                to,
-                swings,
-                bow: Vec3::ZERO,
-                front_bow: Vec3::ZERO,
-                turned_by: 1.0,
-                belly_towards: None,
-                duration: self.timing().swing,
-            }
-        };
+        let middle = ending.held_by(&halfway, &self.proportions, supports)?;
+        let swing = self.timing().swing;
+        let step = |limb, from, to| Move::plain(from, to, swinging_to(&placed.feet, &[limb]), swing);
         let moves = [step(Limb::LeftFore, end, middle), step(Limb::RightFore, middle, placed.frame)];
         (self.move_holds(&moves[0], feet, supports) && self.move_holds(&moves[1], &halfway, supports)).then_some(moves)
     }
