@@ -2,7 +2,7 @@
 # Frame times of the window against the headless simulation and raster of the same scenes,
 # scene by scene in turn, on a virtual 1280 x 720 X display (Xvfb). Prints a Markdown table.
 #
-# Headless: `benches/headless_frames.rs`, a fixed step and a 980 x 720 raster (the window's
+# Headless: `crates/canopy_bench/benches/headless_frames.rs`, a fixed step and a 980 x 720 raster (the window's
 # 3D view) every frame. Window: `canopy play --max-fps 0` (no frame cap) for N frames, the mean
 # frame time it reports with its capture. The two alternate, ROUNDS times per scene; the table
 # gives the median of each. Run from anywhere: `scripts/frame_times.sh [N] [ROUNDS]`.
@@ -10,11 +10,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 frames="${1:-300}"
 rounds="${2:-3}"
-scenes=(benches/scenes/empty.yaml scenes/demo.yaml scenes/biceps.yaml scenes/tree.yaml scenes/forest.yaml
+scenes=(crates/canopy_bench/benches/scenes/empty.yaml scenes/demo.yaml scenes/biceps.yaml scenes/tree.yaml scenes/forest.yaml
     scenes/generated_forest.yaml scenes/sloth.yaml scenes/terrain.yaml)
 
 cargo build --quiet --bin canopy
-cargo bench --quiet --profile dev --bench headless_frames --no-run 2>/dev/null
+cargo bench --quiet -p canopy_bench --profile dev --bench headless_frames --no-run 2>/dev/null
 canopy="${CARGO_TARGET_DIR:-target}/debug/canopy"
 shot="$(mktemp -d)/window.png"
 
@@ -29,7 +29,7 @@ echo "|---|---:|---:|---:|---:|"
 for scene in "${scenes[@]}"; do
     headless=(); window=(); raster=()
     for _ in $(seq "$rounds"); do
-        headless+=("$(cargo bench --quiet --profile dev --bench headless_frames -- "$scene" 2>/dev/null | awk '{print $2}')")
+        headless+=("$(cargo bench --quiet -p canopy_bench --profile dev --bench headless_frames -- "$scene" 2>/dev/null | awk '{print $2}')")
         read -r w _ r <<<"$(window_run "$scene")"
         window+=("$w"); raster+=("$r")
     done

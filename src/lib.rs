@@ -57,6 +57,7 @@
 
 pub mod app;
 pub mod ar;
+pub mod cli;
 pub mod controls;
 pub mod elastic;
 pub mod foundation;

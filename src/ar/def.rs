@@ -1,12 +1,9 @@
 //! The `ar:` entry of a scene file, and the kind that reads and spawns it.
 
-use super::calibration::{self, Calibration};
+use super::calibration::Calibration;
 use super::frames::FrameFolder;
-use super::plugin::{ArPlugin, ArState, ArView};
-use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::values::{FileType, FolderFile, PositiveMetres, checked_number, inside_folder};
-use crate::foundation::yaml::{FileError, deserialize_str_with};
-use bevy::ecs::world::EntityWorldMut;
+use crate::foundation::yaml::deserialize_str_with;
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::dictionary::Dictionary;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -121,7 +118,7 @@ fn yes() -> bool {
     true
 }
 
-fn one() -> Scale {
+pub(super) fn one() -> Scale {
     Scale(1.0)
 }
 
@@ -138,61 +135,6 @@ pub struct ArBuilt {
     pub camera: Intrinsics,
     /// Where the frames are, for messages and the dump.
     pub folder: PathBuf,
-}
-
-/// The `ar` kind.
-pub struct ArKind;
-
-impl EntityKind for ArKind {
-    const KEY: &'static str = "ar";
-    type Def = ArDef;
-    type Built = ArBuilt;
-    type Plugin = ArPlugin;
-
-    fn validate(def: &ArDef, cx: &EntityContext) -> Result<(), FileError> {
-        let dictionary = def.dictionary.0;
-        if def.marker_id >= dictionary.len() {
-            return Err(cx.field_error(
-                "marker_id",
-                0,
-                "marker_id",
-                format!("{} has markers 0 to {}, not {}", dictionary.name, dictionary.len() - 1, def.marker_id),
-            ));
-        }
-        if cx.kind_index > 0 {
-            return Err(cx.field_error("frames", 0, "frames", "a scene has one camera to draw over: one `ar` entity"));
-        }
-        Ok(())
-    }
-
-    fn references(def: &ArDef) -> Vec<String> {
-        vec![def.calibration.path.clone()]
-    }
-
-    fn resolve(def: &mut ArDef, file: &mut ReferencedFile, _cx: &EntityContext) -> Result<(), FileError> {
-        if def.calibration.path == file.file {
-            def.calibration_read = Some(file.decoded(calibration::parse)?);
-        }
-        Ok(())
-    }
-
-    fn build(def: &ArDef, cx: &BuildContext) -> Result<ArBuilt, FileError> {
-        let entity = cx.entity;
-        let folder = entity.path.parent().unwrap_or(std::path::Path::new(".")).join(&def.frames.0);
-        let frames = FrameFolder::open(&folder).map_err(|error| entity.field_error("frames", 0, "frames", error))?;
-        let calibration = def
-            .calibration_read
-            .as_ref()
-            .ok_or_else(|| entity.field_error("calibration", 0, "calibration", "the calibration file was not read"))?;
-        let camera = calibration
-            .for_frames(frames.size)
-            .map_err(|error| entity.field_error("calibration", 0, "calibration", error))?;
-        Ok(ArBuilt { frames: Arc::new(frames), camera, folder })
-    }
-
-    fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {
-        entity.insert((ArView::new(def, built), ArState::default()));
-    }
 }
 
 #[cfg(test)]

@@ -3,10 +3,12 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `ar:` entry of a scene file and [`ArKind`] |
+//! | [`kind`] | [`ArKind`]: the frames and calibration read, the overlay spawned; its panel |
+//! | [`def`] | the `ar:` entry of a scene file and its checks |
 //! | [`calibration`] | OpenCV's calibration files (YAML and JSON), read and written |
 //! | [`frames`] | a folder of PNG and JPEG frames in name order |
 //! | [`overlay`] | the world on the marker, the render camera from the pose, the photograph fitted behind, the pose held |
+//! | [`report`] | a found marker and its pose as JSON, as `canopy ar detect` prints it and the dump records it |
 //! | [`panel`] | the panel's section: the frame, the marker's pose and errors, an outline switch |
 //! | [`sample`] | synthetic sequences written with their calibration and ground truth |
 //! | [`plugin`] | [`ArPlugin`]: frames shown at their rate, the marker found, the camera placed, the frame laid over the photograph |
@@ -18,10 +20,13 @@
 pub mod calibration;
 pub mod def;
 pub mod frames;
+pub mod kind;
 pub mod overlay;
 pub mod panel;
 pub mod plugin;
+pub mod report;
 pub mod sample;
 
-pub use def::{ArDef, ArKind};
+pub use def::ArDef;
+pub use kind::ArKind;
 pub use plugin::{ArPlugin, ArState, ArView};

@@ -11,8 +11,8 @@
 use super::def::{ArBuilt, ArDef};
 use super::frames::FrameFolder;
 use super::overlay::{Tracker, render_camera, world_from_marker};
+use super::report::marker_json;
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
@@ -38,7 +38,6 @@ pub struct ArPlugin;
 impl Plugin for ArPlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<ArView>()
-            .register_panel_section("ar", super::panel::overlay_section)
             .register_dump::<ArState>()
             .add_systems(FixedUpdate, show_frames.in_set(SimSystems::Streaming))
             .add_systems(PostUpdate, place_camera.in_set(RenderSystems::Camera))
@@ -176,19 +175,6 @@ impl ArState {
             _ => None,
         }
     }
-}
-
-/// A marker as `canopy ar detect` prints it and the dump records it: its corners (pixels,
-/// OpenCV's order) and, with a pose, OpenCV's `rvec` and `tvec` and both solutions' errors.
-pub fn marker_json(corners: &[DVec2; 4], estimate: Option<&PoseEstimate>) -> Value {
-    let mut out = json!({"corners": corners.map(|c| c.to_array())});
-    if let Some(estimate) = estimate {
-        out["rvec"] = json!(estimate.pose.rvec().to_array());
-        out["tvec"] = json!(estimate.pose.translation.to_array());
-        out["reprojection_error_px"] = json!(estimate.error_px);
-        out["alternative_error_px"] = json!(estimate.alternative_error_px);
-    }
-    out
 }
 
 fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {

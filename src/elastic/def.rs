@@ -11,16 +11,14 @@
 //!     poisson_ratio: 0.4
 //! ```
 
-use super::plugin::{ElasticPlugin, spawn_elastic_body};
-use super::xpbd::{Attachment, Body, Embedding, Material, TetError, TetMesh};
-use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use super::xpbd::{Attachment, Body, Embedding, Material};
+use crate::foundation::kind::BuildContext;
 use crate::foundation::values::{Color, FolderFile, Point, PositiveMetres, Size, UnitInterval, checked_number};
 use crate::foundation::yaml::FileError;
-use crate::soft_body::def::{MeshFile, SampleDef, check_source, read_mesh, source_surface};
+use crate::soft_body::def::{MeshFile, SampleDef};
 use crate::soft_body::mesh_io::{MeshReport, TriangleMesh};
 use crate::tree::TreeKind;
 use bevy::color::Srgba;
-use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -226,93 +224,9 @@ pub struct ElasticBuilt {
     pub shaken_loose: Option<(Vec3, f32)>,
 }
 
-/// The `elastic_body` kind, built after the trees its stems may hang from.
-pub struct ElasticBodyKind;
-
-impl EntityKind for ElasticBodyKind {
-    const KEY: &'static str = "elastic_body";
-    type Def = ElasticBodyDef;
-    type Built = Arc<ElasticBuilt>;
-    type Plugin = ElasticPlugin;
-
-    fn validate(def: &ElasticBodyDef, cx: &EntityContext) -> Result<(), FileError> {
-        check_source(Self::KEY, &def.mesh, &def.sample, cx)?;
-        let Some(stem) = &def.stem else { return Ok(()) };
-        if def.position.is_some() {
-            return Err(cx.field_error("position", 0, "position", "a body on a stem hangs below it: give no position"));
-        }
-        match (&stem.support, &stem.point) {
-            (Some(_), Some(_)) => {
-                Err(cx.field_error("point", 0, "stem.point", "a stem hangs from a support or a point, not both"))
-            }
-            (None, None) => {
-                Err(cx.field_error("stem", 0, "stem", "expected `support: TREE/SUPPORT` or `point: [x, y, z]`"))
-            }
-            (None, Some(_)) if stem.at.is_some() => {
-                Err(cx.field_error("at", 0, "stem.at", "`at` is a place along a support: give it with `support`"))
-            }
-            _ => Ok(()),
-        }
-    }
-
-    fn references(def: &ElasticBodyDef) -> Vec<String> {
-        def.mesh.iter().map(|file| file.path.clone()).collect()
-    }
-
-    fn resolve(def: &mut ElasticBodyDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        def.decoded = Some(read_mesh(file, cx)?);
-        Ok(())
-    }
-
-    /// Scales the surface to its size, places it (below its stem's anchor, or at its
-    /// position), fills it with tetrahedra and attaches its top to the stem.
-    fn build(def: &ElasticBodyDef, cx: &BuildContext) -> Result<Arc<ElasticBuilt>, FileError> {
-        let entity = &cx.entity;
-        let (mut surface, read) = source_surface(&def.decoded, def.sample, cx)?;
-        let (low, high) = surface.bounds();
-        let scale = def.size.0 / (high - low).max(Vec3::splat(f32::MIN_POSITIVE));
-        let centre = (low + high) / 2.0;
-        let anchor = def.stem.as_ref().map(|stem| stem_anchor(stem, cx)).transpose()?;
-        let placed_centre = match (anchor, &def.stem) {
-            (Some(anchor), Some(stem)) => anchor - Vec3::Y * (stem.length_m.0 + def.size.0.y / 2.0),
-            _ => def.position.map_or(Vec3::ZERO, |p| p.0),
-        };
-        for p in &mut surface.positions {
-            *p = (*p - centre) * scale + placed_centre;
-        }
-        let cell = def.cell();
-        let fill_error = |error: TetError| {
-            let key = match (&error, def.sample) {
-                (TetError::Open(_), Some(_)) => "sample",
-                (TetError::Open(_), None) => "mesh",
-                _ => "cell_m",
-            };
-            entity.field_error(key, 0, key, format!("the body cannot be filled with tetrahedra: {error}"))
-        };
-        let (mesh, embedding) = TetMesh::fill(&surface, cell, MAX_TETS).map_err(fill_error)?;
-        let mut body = Body::new(mesh, def.material());
-        if let Some(velocity) = def.velocity {
-            body.velocities.fill(velocity.0);
-        }
-        if let Some(anchor) = anchor {
-            body.stems = stems(&body, anchor, cell);
-        }
-        let shaken_loose = anchor.zip(def.stem.as_ref().and_then(|stem| stem.shaken_loose_m)).map(|(a, m)| (a, m.0));
-        Ok(Arc::new(ElasticBuilt { body, embedding, triangles: surface.triangles, read, cell_m: cell, shaken_loose }))
-    }
-
-    fn spawn(def: &ElasticBodyDef, built: &Arc<ElasticBuilt>, entity: &mut EntityWorldMut) {
-        spawn_elastic_body(entity, def, built.clone());
-    }
-
-    fn save_live(def: &mut ElasticBodyDef, entity: EntityRef) {
-        super::plugin::save_live(def, entity);
-    }
-}
-
 /// Where a stem hangs from: its point, or the underside of its support at `at`; an unknown
 /// tree or support is an error located at the stem's `support`.
-fn stem_anchor(stem: &StemDef, cx: &BuildContext) -> Result<Vec3, FileError> {
+pub(super) fn stem_anchor(stem: &StemDef, cx: &BuildContext) -> Result<Vec3, FileError> {
     if let Some(point) = stem.point {
         return Ok(point.0);
     }
@@ -342,7 +256,7 @@ fn stem_anchor(stem: &StemDef, cx: &BuildContext) -> Result<Vec3, FileError> {
 /// The stems from `anchor` to the particles of the body's top (within a cell of its highest)
 /// that lie within a quarter of its width, or one and a half cells, of the anchor's
 /// vertical: a stem holds a patch of the body, so that it does not pull one particle out.
-fn stems(body: &Body, anchor: Vec3, cell: f32) -> Vec<Attachment> {
+pub(super) fn stems(body: &Body, anchor: Vec3, cell: f32) -> Vec<Attachment> {
     let top = body.positions.iter().map(|p| p.y).fold(f32::MIN, f32::max);
     let (low, high) = body.positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), &p| (l.min(p), h.max(p)));
     let reach = (0.25 * (high.x - low.x).min(high.z - low.z)).max(1.5 * cell);

@@ -4,14 +4,10 @@
 
 use super::collide::Collider;
 use super::def::{Bending, Damping, ElasticBodyDef, ElasticBuilt, Friction, Modulus, Poisson, Substeps};
-use super::panel;
 use super::xpbd::{Attachment, Body, World as Surroundings};
-use crate::foundation::actions::RegisterActions;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
-use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::messages::{DragPhase, HandPlanted, SelectEntity, ViewDragged, ViewGrab};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
@@ -293,7 +289,7 @@ impl DumpState for ElasticBody {
 pub struct ElasticSystems;
 
 /// Elastic body keys: (key, action).
-const ELASTIC_KEYS: [(KeyCode, &str); 3] = [
+pub(super) const ELASTIC_KEYS: [(KeyCode, &str); 3] = [
     (KeyCode::KeyO, "drop the elastic bodies from their stems"),
     (KeyCode::KeyB, "put the elastic bodies back where they started"),
     (KeyCode::KeyP, "pause or resume the elastic bodies"),
@@ -306,13 +302,9 @@ pub struct ElasticPlugin;
 
 impl Plugin for ElasticPlugin {
     fn build(&self, app: &mut App) {
-        let help = |(key, action)| KeyHelp { key, action, scope: KeyScope::Kind("elastic_body") };
         app.init_resource::<Solids>()
             .register_params::<ElasticParams>()
             .register_dump::<ElasticBody>()
-            .register_actions::<ElasticAction>("elastic_body", perform_action)
-            .register_keys(&ELASTIC_KEYS.map(help))
-            .register_panel_section("elastic_body", panel::elastic_section)
             .add_systems(
                 RunFixedMainLoop,
                 (act_on_keys, drag_with_the_mouse).in_set(ControlSystems::Input).in_set(ElasticSystems),
@@ -327,7 +319,7 @@ impl Plugin for ElasticPlugin {
 }
 
 /// Performs a timeline's action on the body `entity`.
-fn perform_action(world: &mut World, entity: Entity, action: ElasticAction) {
+pub(super) fn perform_action(world: &mut World, entity: Entity, action: ElasticAction) {
     let Some(mut body) = world.get_mut::<ElasticBody>(entity) else { return };
     if let Err(error) = body.perform(&action) {
         warn!("{error}");

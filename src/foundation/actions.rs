@@ -10,6 +10,7 @@
 //! the loaded scene before it plays, and a wrong action is named with what was expected.
 
 use crate::foundation::entity::SceneEntity;
+use crate::foundation::kind::EntityKind;
 use bevy::prelude::*;
 use serde::de::DeserializeOwned;
 
@@ -51,18 +52,16 @@ pub struct ActionKinds(Vec<(&'static str, ActionFn)>);
 
 /// Registration of a kind's actions on the app.
 pub trait RegisterActions {
-    /// Entities of `kind` take actions of type `A`, performed by `perform`.
-    fn register_actions<A: DeserializeOwned + 'static>(
+    /// Entities of kind `K` take actions of type `A`, performed by `perform`.
+    fn register_actions<K: EntityKind, A: DeserializeOwned + 'static>(
         &mut self,
-        kind: &'static str,
         perform: fn(&mut World, Entity, A),
     ) -> &mut Self;
 }
 
 impl RegisterActions for App {
-    fn register_actions<A: DeserializeOwned + 'static>(
+    fn register_actions<K: EntityKind, A: DeserializeOwned + 'static>(
         &mut self,
-        kind: &'static str,
         perform: fn(&mut World, Entity, A),
     ) -> &mut Self {
         let read: ActionFn = Box::new(move |world, entity, value, run| {
@@ -74,7 +73,7 @@ impl RegisterActions for App {
             }
             Ok(())
         });
-        self.world_mut().get_resource_or_init::<ActionKinds>().0.push((kind, read));
+        self.world_mut().get_resource_or_init::<ActionKinds>().0.push((K::KEY, read));
         self
     }
 }
@@ -125,6 +124,29 @@ mod tests {
     #[derive(Component, Default)]
     struct Rings(u32);
 
+    /// A kind whose entities take [`Bell`] actions.
+    struct BellKind;
+
+    #[derive(Default)]
+    struct NoPlugin;
+
+    impl Plugin for NoPlugin {
+        fn build(&self, _: &mut App) {}
+    }
+
+    impl EntityKind for BellKind {
+        const KEY: &'static str = "bell";
+        type Def = ();
+        type Built = ();
+        type Plugin = NoPlugin;
+
+        fn build(_: &(), _: &crate::foundation::kind::BuildContext) -> Result<(), crate::foundation::yaml::FileError> {
+            Ok(())
+        }
+
+        fn spawn(_: &(), _: &(), _: &mut EntityWorldMut) {}
+    }
+
     fn ring(world: &mut World, entity: Entity, bell: Bell) {
         let times = match bell {
             Bell::Ring => 1,
@@ -136,7 +158,7 @@ mod tests {
     #[test]
     fn actions_are_checked_then_performed_in_order() {
         let mut app = App::new();
-        app.init_resource::<ActionKinds>().register_actions::<Bell>("bell", ring);
+        app.init_resource::<ActionKinds>().register_actions::<BellKind, Bell>(ring);
         let bell = app.world_mut().spawn((SceneEntity { index: 0, name: "b".into(), kind: "bell" }, Rings(0))).id();
         app.world_mut().spawn(SceneEntity { index: 1, name: "lamp".into(), kind: "lamp" });
         let world = app.world_mut();

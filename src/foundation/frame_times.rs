@@ -1,5 +1,5 @@
 //! Frame times by phase over the last frames, for their means and 99th percentiles: the
-//! window panel's frame budget and the headless measurement (`benches/headless_frames.rs`).
+//! window panel's frame budget and the headless measurement (`crates/canopy_bench/benches/headless_frames.rs`).
 //! A frame rate is only as smooth as its slowest frames, so the budget is read at the 99th
 //! percentile rather than from the mean.
 

@@ -2,6 +2,7 @@
 //! so that the help overlay and the key reference (`docs/reference.md`) list exactly the keys that
 //! work.
 
+use super::kind::EntityKind;
 use bevy::prelude::*;
 
 /// Where a key works: everywhere, or in scenes holding an entity of one kind.
@@ -51,6 +52,12 @@ impl KeyMap {
 pub trait RegisterKeys {
     /// Adds keys to the [`KeyMap`].
     fn register_keys(&mut self, keys: &[KeyHelp]) -> &mut Self;
+
+    /// Adds keys, each `(key, action)`, that work in scenes with an entity of kind `K`.
+    fn register_kind_keys<K: EntityKind>(&mut self, keys: &[(KeyCode, &'static str)]) -> &mut Self {
+        let scope = KeyScope::Kind(K::KEY);
+        self.register_keys(&keys.iter().map(|&(key, action)| KeyHelp { key, action, scope }).collect::<Vec<_>>())
+    }
 }
 
 impl RegisterKeys for App {

@@ -17,9 +17,12 @@
 //! | build | [`EntityKind::build`] | every definition, and what the kinds registered earlier built |
 //! | spawn | [`EntityKind::spawn`] | its definition, what its build made, the world |
 //! | save | [`EntityKind::saved`], [`EntityKind::save_live`] | the definition, the live entity |
+//!
+//! Beside its plugin, a kind registers its panel section, keys and actions under its own type
+//! in [`EntityKind::register`].
 
 use crate::foundation::yaml::{FileError, locate_key, locate_key_after};
-use bevy::app::Plugin;
+use bevy::app::{App, Plugin};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::math::Vec3;
 use serde::Serialize;
@@ -84,6 +87,11 @@ pub trait EntityKind: 'static {
     /// Brings the definition up to date with what the user changed in the live `entity`
     /// before the scene is saved.
     fn save_live(_def: &mut Self::Def, _entity: EntityRef) {}
+
+    /// Registers what the app offers for this kind's entities under the kind itself, after
+    /// [`Self::Plugin`] is added: its panel section, its keys, the actions timelines may ask of
+    /// it. Done here rather than in the plugin so that the plugin never names its own kind.
+    fn register(_app: &mut App) {}
 }
 
 /// A kind's configuration file read as a scene: the one entity and where to look at it from.

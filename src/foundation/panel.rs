@@ -1,6 +1,7 @@
 //! Panel sections: a kind's own part of the window's side panel, drawn under the parameters
 //! of a selected entity of that kind.
 
+use super::kind::EntityKind;
 use bevy::prelude::*;
 use bevy_egui::egui;
 
@@ -20,13 +21,13 @@ impl PanelSections {
 
 /// Registration of panel sections on the app.
 pub trait RegisterPanel {
-    /// Draws `section` in the panel when an entity of `kind` is selected.
-    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self;
+    /// Draws `section` in the panel when an entity of kind `K` is selected.
+    fn register_panel_section<K: EntityKind>(&mut self, section: PanelSection) -> &mut Self;
 }
 
 impl RegisterPanel for App {
-    fn register_panel_section(&mut self, kind: &'static str, section: PanelSection) -> &mut Self {
-        self.world_mut().get_resource_or_init::<PanelSections>().0.push((kind, section));
+    fn register_panel_section<K: EntityKind>(&mut self, section: PanelSection) -> &mut Self {
+        self.world_mut().get_resource_or_init::<PanelSections>().0.push((K::KEY, section));
         self
     }
 }

@@ -3,12 +3,9 @@
 
 use super::carcass::Carcass;
 use super::model::{self, Muscle};
-use super::plugin::{self, MusclePlugin};
-use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile, Standalone, ViewPoint};
 use crate::foundation::values::{Angles, Color, FileType, FolderFile, Point, checked_number};
 use crate::foundation::yaml::{FileError, locate_key, parse_yaml};
 use bevy::color::Srgba;
-use bevy::ecs::world::EntityWorldMut;
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -212,81 +209,13 @@ impl ConfigFile {
     }
 
     /// Reads a configuration file, its node model checked so that its errors point into it.
-    fn read(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+    pub(super) fn read(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
         let config: ConfigFile = parse_yaml(path, bytes, "a muscle configuration")?;
         if let Err(error) = config.muscle_config.model(1.0, 1.0) {
             let text = String::from_utf8_lossy(bytes);
             return Err(locate_key(path, &text, "muscle_config", 0, format!("muscle_config: {error}")));
         }
         Ok(config)
-    }
-}
-
-/// The `muscle` kind.
-pub struct MuscleKind;
-
-impl EntityKind for MuscleKind {
-    const KEY: &'static str = "muscle";
-    type Def = MuscleDef;
-    type Built = (Muscle, Carcass);
-    type Plugin = MusclePlugin;
-
-    /// A file whose top level is the source program's configuration (`muscle_config` and
-    /// `carcass_config`) is a scene too: that muscle, named `muscle`, seen from a camera that
-    /// frames its arm.
-    fn standalone(path: &Path, bytes: &[u8]) -> Option<Result<Standalone<MuscleDef>, FileError>> {
-        let text = String::from_utf8_lossy(bytes);
-        text.lines().any(|line| line.starts_with("muscle_config:")).then(|| {
-            let view =
-                ViewPoint { position: Vec3::new(-0.2, 0.7, 2.4), look_at: Vec3::new(-0.2, 0.1, 0.0), fov_deg: 45.0 };
-            parse_yaml(path, bytes, "a muscle configuration").map(|def| Standalone { def, view })
-        })
-    }
-
-    fn validate(def: &MuscleDef, cx: &EntityContext) -> Result<(), FileError> {
-        if def.file.is_some() && (def.muscle_config.is_some() || def.carcass_config.is_some()) {
-            let message =
-                format!("{}: give the configuration either inline or from a file, not both", cx.field("file"));
-            return Err(cx.locate("file", 0, message));
-        }
-        Ok(())
-    }
-
-    fn references(def: &MuscleDef) -> Vec<String> {
-        def.file.iter().map(|file| file.path.clone()).collect()
-    }
-
-    fn resolve(def: &mut MuscleDef, file: &mut ReferencedFile, _cx: &EntityContext) -> Result<(), FileError> {
-        let config = file.decoded(ConfigFile::read)?;
-        def.fill_from((*config).clone());
-        Ok(())
-    }
-
-    /// Builds the model; an error in an inline configuration is located at its
-    /// `muscle_config` key (the nth inline muscle has the nth of the file).
-    fn build(def: &MuscleDef, cx: &BuildContext) -> Result<(Muscle, Carcass), FileError> {
-        let entity = &cx.entity;
-        def.build().map_err(|error| {
-            if def.file.is_some() {
-                entity.whole_file(format!("entities[{}].muscle: {error}", entity.index))
-            } else {
-                let nth = cx.earlier::<MuscleKind>().filter(|earlier| earlier.file.is_none()).count();
-                entity.locate("muscle_config", nth, format!("{}: {error}", entity.field("muscle_config")))
-            }
-        })
-    }
-
-    fn spawn(def: &MuscleDef, built: &(Muscle, Carcass), entity: &mut EntityWorldMut) {
-        plugin::spawn_muscle(entity, def, built.clone());
-    }
-
-    fn saved(def: &MuscleDef) -> MuscleDef {
-        let mut saved = def.clone();
-        if saved.file.is_some() {
-            saved.muscle_config = None;
-            saved.carcass_config = None;
-        }
-        saved
     }
 }
 

@@ -3,7 +3,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `muscle:` entry of a scene file, the source's two configurations, [`MuscleKind`] |
+//! | [`kind`] | [`MuscleKind`]: the source's configuration files as scenes, the model built while checking, spawned and saved; its panel and keys |
+//! | [`def`] | the `muscle:` entry of a scene file, the source's two configurations |
 //! | [`plugin`] | [`MusclePlugin`] and its set [`MuscleSystems`]: parameters, keys, the model in the fixed step, write-back, dump |
 //! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
 //! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
@@ -22,10 +23,12 @@
 pub mod carcass;
 pub mod comparison;
 pub mod def;
+pub mod kind;
 pub mod model;
 pub mod panel;
 pub mod plugin;
 pub mod surface;
 
-pub use def::{CarcassConfig, ConfigFile, MuscleConfig, MuscleDef, MuscleKind};
+pub use def::{CarcassConfig, ConfigFile, MuscleConfig, MuscleDef};
+pub use kind::MuscleKind;
 pub use plugin::{MuscleBody, MuscleParams, MusclePlugin, MuscleSystems, Placement};

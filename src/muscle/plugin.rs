@@ -3,18 +3,16 @@
 
 use super::carcass::Carcass;
 use super::comparison::growth_table;
-use super::def::MuscleDef;
+use super::def::{MuscleDef, Scale};
 use super::model::Muscle;
-use super::{panel, surface};
+use super::surface;
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
-use crate::foundation::values::{srgb_channels, wrap_degrees};
+use crate::foundation::values::{Angles, MAX_METRES, Point, srgb_channels, wrap_degrees};
 use crate::raster::primitives::{Primitive, PrimitiveMeshes};
 use crate::raster::{MeshData, RasterMesh};
-use bevy::ecs::world::EntityWorldMut;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
@@ -78,6 +76,16 @@ struct MuscleSurface;
 #[derive(Component)]
 struct Rod(u8);
 
+/// Brings `def` up to date with where the arm was moved, turned and scaled to, each kept within
+/// what a scene file holds.
+pub(super) fn save_live(def: &mut MuscleDef, entity: EntityRef) {
+    let Some(placement) = entity.get::<Placement>() else { return };
+    let metres = MAX_METRES as f32;
+    def.position = Point(placement.position.clamp(Vec3::splat(-metres), Vec3::splat(metres)));
+    def.rotation_deg = Angles(placement.rotation_deg.clamp(Vec3::splat(-36_000.0), Vec3::splat(36_000.0)));
+    def.scale = Scale(placement.scale.clamp(1e-6, 1e6));
+}
+
 /// Spawns a muscle entity of `def`, whose model and carcass are `built`, and its drawn parts.
 pub(super) fn spawn_muscle(entity: &mut EntityWorldMut, def: &MuscleDef, (model, carcass): (Muscle, Carcass)) {
     let length = model.length();
@@ -115,7 +123,7 @@ const FLEX_DEG_PER_S: f64 = 30.0;
 /// Flexion step of the step keys, degrees.
 const FLEX_STEP_DEG: f64 = 15.0;
 /// Muscle keys: (key, action, hold rate sign, step sign).
-const MUSCLE_KEYS: [(KeyCode, &str, f64, f64); 4] = [
+pub(super) const MUSCLE_KEYS: [(KeyCode, &str, f64, f64); 4] = [
     (KeyCode::KeyW, "contract the muscle (flex the elbow)", 1.0, 0.0),
     (KeyCode::KeyS, "stretch the muscle (extend the elbow)", -1.0, 0.0),
     (KeyCode::KeyE, "flex the elbow 15 degrees more", 0.0, 1.0),
@@ -128,7 +136,7 @@ const MOVE_M_PER_S: f32 = 0.5;
 /// Scaling speed of the model: the scale changes by this factor per second.
 const SCALE_PER_S: f32 = 1.5;
 /// Placement keys: (key, action, turn about y, move along x, move along y, scale exponent).
-const PLACEMENT_KEYS: [(KeyCode, &str, f32, f32, f32, f32); 8] = [
+pub(super) const PLACEMENT_KEYS: [(KeyCode, &str, f32, f32, f32, f32); 8] = [
     (KeyCode::KeyR, "turn the arm left", 1.0, 0.0, 0.0, 0.0),
     (KeyCode::KeyF, "turn the arm right", -1.0, 0.0, 0.0, 0.0),
     (KeyCode::KeyA, "move the arm left", 0.0, -1.0, 0.0, 0.0),
@@ -141,13 +149,9 @@ const PLACEMENT_KEYS: [(KeyCode, &str, f32, f32, f32, f32); 8] = [
 
 impl Plugin for MusclePlugin {
     fn build(&self, app: &mut App) {
-        let help = |key, action| KeyHelp { key, action, scope: KeyScope::Kind("muscle") };
         app.register_params::<MuscleParams>()
             .register_params::<Placement>()
             .register_dump::<MuscleBody>()
-            .register_keys(&MUSCLE_KEYS.map(|(key, action, ..)| help(key, action)))
-            .register_keys(&PLACEMENT_KEYS.map(|(key, action, ..)| help(key, action)))
-            .register_panel_section("muscle", panel::muscle_section)
             .add_systems(
                 RunFixedMainLoop,
                 (flex_with_keys, place_with_keys).in_set(ControlSystems::Input).in_set(MuscleSystems),

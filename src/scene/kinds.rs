@@ -10,7 +10,7 @@ use crate::foundation::kind::{
     BuildContext, Built, EntityContext, EntityKind, EntityRecord, KindDef, ReferencedFile, SharedBuilds, Standalone,
 };
 use crate::foundation::yaml::{FileError, parse_yaml};
-use bevy::app::PluginGroupBuilder;
+use bevy::app::{App, Plugin, PluginGroupBuilder};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use serde::de::MapAccess;
 use serde::ser::SerializeMap;
@@ -77,6 +77,15 @@ impl<L: KindList, K: EntityKind> KindList for Then<L, K> {
     }
 }
 
+/// What [`EntityKind::register`] adds for kind `K`, as a plugin that follows the kind's own.
+struct KindRegistration<K>(PhantomData<fn() -> K>);
+
+impl<K: EntityKind> Plugin for KindRegistration<K> {
+    fn build(&self, app: &mut App) {
+        K::register(app);
+    }
+}
+
 /// A kind's hooks behind one object-safe face.
 trait ErasedKind: Send + Sync {
     fn key(&self) -> &'static str;
@@ -105,7 +114,7 @@ impl<K: EntityKind> ErasedKind for Erased<K> {
     }
 
     fn add_plugin(&self, group: PluginGroupBuilder) -> PluginGroupBuilder {
-        group.add(K::Plugin::default())
+        group.add(K::Plugin::default()).add(KindRegistration::<K>(PhantomData))
     }
 
     fn standalone(&self, path: &Path, bytes: &[u8]) -> Option<Result<Standalone<Box<dyn KindDef>>, FileError>> {

@@ -1,14 +1,10 @@
 //! The `shape:` entry of a scene file, and the kind that reads, spawns and saves it.
 
-use super::plugin::{Shape, ShapeParams, ShapePlugin};
-use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::values::{Angles, Color, Point, Size};
-use crate::foundation::yaml::FileError;
-use crate::raster::primitives::{Primitive, PrimitiveMeshes};
+use crate::raster::Material;
+use crate::raster::primitives::Primitive;
 use crate::raster::texture::{TextureDef, material};
-use crate::raster::{Material, RasterMesh};
 use bevy::color::{Gray, Srgba};
-use bevy::ecs::world::EntityWorldMut;
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -59,39 +55,6 @@ fn no_angles() -> Angles {
 
 fn grey() -> Color {
     Color(Srgba::gray(0.8))
-}
-
-/// The `shape` kind.
-pub struct ShapeKind;
-
-impl EntityKind for ShapeKind {
-    const KEY: &'static str = "shape";
-    type Def = ShapeDef;
-    type Built = ();
-    type Plugin = ShapePlugin;
-
-    fn references(def: &ShapeDef) -> Vec<String> {
-        TextureDef::reference(def.texture.as_ref())
-    }
-
-    fn resolve(def: &mut ShapeDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx, "texture.file"))
-    }
-
-    fn build(_def: &ShapeDef, _cx: &BuildContext) -> Result<(), FileError> {
-        Ok(())
-    }
-
-    fn spawn(def: &ShapeDef, _built: &(), entity: &mut EntityWorldMut) {
-        let params = ShapeParams::from(def);
-        let mesh = entity.world().resource::<PrimitiveMeshes>().get(def.primitive).clone();
-        entity.insert((
-            Shape(def.primitive),
-            params.transform(),
-            RasterMesh { mesh, material: def.material(params.color_channels()) },
-            params,
-        ));
-    }
 }
 
 #[cfg(test)]

@@ -3,7 +3,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `shape:` entry of a scene file and [`ShapeKind`] |
+//! | [`kind`] | [`ShapeKind`]: textures read, shapes spawned and saved |
+//! | [`def`] | the `shape:` entry of a scene file |
 //! | [`plugin`] | [`ShapePlugin`] and its set [`ShapeSystems`]: parameters, dump, spinning, writing the transform and colour |
 //!
 //! Parameters (`<name>.<parameter>`, all from [`ShapeParams`]): `position.{x,y,z}` (metres),
@@ -14,7 +15,9 @@
 //! colour, read with nearest, bilinear or trilinear (mip-mapped) filtering, repeated or clamped at its edges.
 
 pub mod def;
+pub mod kind;
 pub mod plugin;
 
-pub use def::{ShapeDef, ShapeKind};
+pub use def::ShapeDef;
+pub use kind::ShapeKind;
 pub use plugin::{Shape, ShapeParams, ShapePlugin, ShapeSystems};

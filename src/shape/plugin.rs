@@ -5,9 +5,10 @@ use super::def::ShapeDef;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{SimSystems, WriteBackSystems};
-use crate::foundation::values::{srgb_channels, wrap_degrees};
+use crate::foundation::values::{Angles, Color, MAX_METRES, Point, Size, srgb_channels, wrap_degrees};
 use crate::raster::RasterMesh;
 use crate::raster::primitives::Primitive;
+use bevy::ecs::world::EntityRef;
 use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
@@ -44,6 +45,9 @@ impl From<&ShapeDef> for ShapeParams {
     }
 }
 
+/// The largest angle or angular rate a scene file holds, degrees (per second).
+const MAX_DEGREES: f32 = 36_000.0;
+
 /// The smallest size a shape may be edited down to, in metres.
 const MIN_SIZE: f32 = 1e-3;
 
@@ -61,6 +65,23 @@ impl ShapeParams {
     /// The colour as the rasterizer takes it.
     pub fn color_channels(&self) -> Vec3 {
         srgb_channels(self.color)
+    }
+}
+
+/// Brings `def` up to date with the shape's live parameters, each kept within what a scene file
+/// holds. A spinning shape's rotation is where its spin has taken it, not an edit: the file's
+/// rotation stays unless the shape stands still.
+pub(super) fn save_live(def: &mut ShapeDef, entity: EntityRef) {
+    let Some(params) = entity.get::<ShapeParams>() else { return };
+    let metres = MAX_METRES as f32;
+    def.position = Point(params.position.clamp(Vec3::splat(-metres), Vec3::splat(metres)));
+    def.size = Size(params.size.clamp(Vec3::splat(MIN_SIZE), Vec3::splat(metres)));
+    let [red, green, blue] = [params.color.red, params.color.green, params.color.blue].map(|c| c.clamp(0.0, 1.0));
+    def.color = Color(Srgba::rgb(red, green, blue));
+    let degrees = |angles: Vec3| Angles(angles.clamp(Vec3::splat(-MAX_DEGREES), Vec3::splat(MAX_DEGREES)));
+    def.spin_deg_per_s = degrees(params.spin_deg_per_s);
+    if params.spin_deg_per_s == Vec3::ZERO {
+        def.rotation_deg = degrees(params.rotation_deg);
     }
 }
 

@@ -4,19 +4,13 @@
 use super::biceps::Biceps;
 use super::gait;
 use super::locomotion::{Placement, Sloth};
-use super::plugin::{self, SlothPlugin};
 use super::rig::Proportions;
 use super::supports::Supports;
-use crate::foundation::kind::{BuildContext, EntityKind};
 use crate::foundation::values::{Color, Degrees, UnitInterval, checked_number};
-use crate::foundation::yaml::FileError;
 use crate::muscle::ConfigFile;
-use crate::tree::TreeKind;
 use bevy::color::Srgba;
-use bevy::ecs::world::EntityWorldMut;
 use bevy::prelude::Reflect;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 
 checked_number!(
     /// A walking speed in metres per second, within the gait's range.
@@ -183,32 +177,5 @@ impl SlothDef {
             around: self.around_deg.0.to_radians(),
         };
         Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())
-    }
-}
-
-/// The `sloth` kind, built after the trees it hangs from.
-pub struct SlothKind;
-
-impl EntityKind for SlothKind {
-    const KEY: &'static str = "sloth";
-    type Def = SlothDef;
-    type Built = (Sloth, Arc<Supports>, [Biceps; 2]);
-    type Plugin = SlothPlugin;
-
-    /// Places the sloth on the scene's trees (built by the tree kind before, gathered once for
-    /// all the sloths) and builds its biceps; an error is located at the sloth's `support` or
-    /// `biceps` key.
-    fn build(def: &SlothDef, cx: &BuildContext) -> Result<Self::Built, FileError> {
-        let supports = cx.shared(|| Supports::new(cx.built::<TreeKind>()));
-        let entity = &cx.entity;
-        let sloth = def.place(&supports, def.speed.0).map_err(|error| {
-            entity.locate("support", entity.kind_index, format!("{}: {error}", entity.field("support")))
-        })?;
-        let biceps = def.biceps().map_err(|error| entity.field_error("biceps", 0, "biceps", error))?;
-        Ok((sloth, supports, biceps))
-    }
-
-    fn spawn(def: &SlothDef, (sloth, supports, biceps): &Self::Built, entity: &mut EntityWorldMut) {
-        plugin::spawn_sloth(entity, def, sloth.clone(), supports.clone(), biceps.clone());
     }
 }

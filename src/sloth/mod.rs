@@ -5,7 +5,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `sloth:` entry of a scene file and [`SlothKind`], which places it once while checking |
+//! | [`kind`] | [`SlothKind`], which places the sloth once while checking, spawns and saves it; its keys |
+//! | [`def`] | the `sloth:` entry of a scene file |
 //! | [`plugin`] | [`SlothPlugin`] and its set [`SlothSystems`]: parameters `<name>.speed`, `.autorun`, `.direction`, keys, the walk, mesh write-back, dump |
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
@@ -32,6 +33,7 @@ pub mod ccd;
 pub mod def;
 pub mod foothold;
 pub mod gait;
+pub mod kind;
 pub mod locomotion;
 pub mod mesh;
 pub mod plugin;
@@ -40,7 +42,8 @@ pub mod skin;
 pub mod supports;
 pub mod transfer;
 
-pub use def::{Facing, SlothDef, SlothKind, WalkDirection};
+pub use def::{Facing, SlothDef, WalkDirection};
+pub use kind::SlothKind;
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
 pub use plugin::{SlothBody, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSkin, SlothSource, SlothSystems};
 pub use supports::Supports;

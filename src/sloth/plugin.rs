@@ -2,7 +2,8 @@
 //! write-back of its mesh, and its dump.
 
 use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
-use super::def::{SlothDef, WalkDirection};
+use super::def::{SlothDef, Speed, WalkDirection};
+use super::gait;
 use super::locomotion::{Drive, Sloth};
 use super::mesh;
 use super::rig::{JOINTS, Limb};
@@ -10,14 +11,13 @@ use super::skin::Skin;
 use super::supports::Supports;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::{FocusPoint, SceneEntity};
-use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::messages::HandPlanted;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
 use crate::raster::{Material, RasterMesh};
 use crate::tree::TreeBody;
-use bevy::ecs::world::EntityWorldMut;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
@@ -93,12 +93,30 @@ pub(super) fn spawn_sloth(
     ));
 }
 
+/// Brings `def` up to date with the speed, autorun and direction set while it ran (the panel's
+/// and the timelines' parameters).
+pub(super) fn save_live(def: &mut SlothDef, entity: EntityRef) {
+    let Some(params) = entity.get::<SlothParams>() else { return };
+    def.speed = Speed(params.speed.clamp(gait::SPEED_RANGE.0, gait::SPEED_RANGE.1));
+    def.autorun = params.autorun;
+    def.direction = params.direction;
+}
+
 /// Keys of the sloth kind, held or pressed.
 const FORWARD_KEY: KeyCode = KeyCode::KeyW;
 const BACK_KEY: KeyCode = KeyCode::KeyS;
 const AUTORUN_KEY: KeyCode = KeyCode::KeyR;
 const LEFT_KEY: KeyCode = KeyCode::KeyA;
 const RIGHT_KEY: KeyCode = KeyCode::KeyD;
+
+/// The sloth's keys and what they do, for the key help.
+pub(super) const SLOTH_KEYS: [(KeyCode, &str); 5] = [
+    (FORWARD_KEY, "walk forward, or climb up a trunk (hold)"),
+    (BACK_KEY, "walk back, or climb down a trunk (hold)"),
+    (AUTORUN_KEY, "autorun on or off (stops where no foothold is found)"),
+    (LEFT_KEY, "change to the branch on the left; on a trunk, hold to step round it"),
+    (RIGHT_KEY, "change to the branch on the right; on a trunk, hold to step round it"),
+];
 
 /// Every system of the sloth kind, in whichever phase it runs: a handle for ordering other
 /// plugins' systems before or after the sloths'.
@@ -111,25 +129,9 @@ pub struct SlothPlugin;
 
 impl Plugin for SlothPlugin {
     fn build(&self, app: &mut App) {
-        let scope = KeyScope::Kind("sloth");
         app.register_params::<SlothParams>()
             .register_dump::<SlothBody>()
             .register_dump::<SlothMuscles>()
-            .register_keys(&[
-                KeyHelp { key: FORWARD_KEY, action: "walk forward, or climb up a trunk (hold)", scope },
-                KeyHelp { key: BACK_KEY, action: "walk back, or climb down a trunk (hold)", scope },
-                KeyHelp { key: AUTORUN_KEY, action: "autorun on or off (stops where no foothold is found)", scope },
-                KeyHelp {
-                    key: LEFT_KEY,
-                    action: "change to the branch on the left; on a trunk, hold to step round it",
-                    scope,
-                },
-                KeyHelp {
-                    key: RIGHT_KEY,
-                    action: "change to the branch on the right; on a trunk, hold to step round it",
-                    scope,
-                },
-            ])
             .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input).in_set(SlothSystems))
             .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply).in_set(SlothSystems))
             .add_systems(

@@ -11,16 +11,14 @@
 //!     k: 0.9
 //! ```
 
-use super::deform::{Method, Settings, Variant};
+use super::deform::{Deformer, Method, Settings, Variant};
 use super::mesh_io::{self, MeshReport, TriangleMesh};
-use super::plugin::{Deformer, SoftBodyPlugin, spawn_soft_body};
 use super::sample::{SIZES, Shape};
 use super::surface::Surface;
-use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
+use crate::foundation::kind::{BuildContext, EntityContext, ReferencedFile};
 use crate::foundation::values::{Color, FileType, FolderFile, Point, checked_number};
 use crate::foundation::yaml::FileError;
 use bevy::color::Srgba;
-use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -221,44 +219,6 @@ pub fn source_surface(
         return Err(cx.entity.field_error("mesh", 0, "mesh", "the mesh has no triangles"));
     }
     Ok((surface, read))
-}
-
-/// The `soft_body` kind.
-pub struct SoftBodyKind;
-
-impl EntityKind for SoftBodyKind {
-    const KEY: &'static str = "soft_body";
-    type Def = SoftBodyDef;
-    type Built = Arc<SoftBodyBuilt>;
-    type Plugin = SoftBodyPlugin;
-
-    fn validate(def: &SoftBodyDef, cx: &EntityContext) -> Result<(), FileError> {
-        check_source(Self::KEY, &def.mesh, &def.sample, cx)?;
-        let (method, settings) = def.deformer();
-        settings.check(method).map_err(|error| cx.field_error("k", 0, "k", error))
-    }
-
-    fn references(def: &SoftBodyDef) -> Vec<String> {
-        def.mesh.iter().map(|file| file.path.clone()).collect()
-    }
-
-    fn resolve(def: &mut SoftBodyDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
-        def.decoded = Some(read_mesh(file, cx)?);
-        Ok(())
-    }
-
-    fn build(def: &SoftBodyDef, cx: &BuildContext) -> Result<Arc<SoftBodyBuilt>, FileError> {
-        let (surface, read) = source_surface(&def.decoded, def.sample, cx)?;
-        Ok(Arc::new(SoftBodyBuilt { surface, read }))
-    }
-
-    fn spawn(def: &SoftBodyDef, built: &Arc<SoftBodyBuilt>, entity: &mut EntityWorldMut) {
-        spawn_soft_body(entity, def, built);
-    }
-
-    fn save_live(def: &mut SoftBodyDef, entity: EntityRef) {
-        super::plugin::save_live(def, entity);
-    }
 }
 
 #[cfg(test)]

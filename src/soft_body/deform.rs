@@ -348,6 +348,41 @@ fn area(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     }
 }
 
+/// Which deformer shrinks a region, as a parameter (`torso.method: area`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, bevy::reflect::Reflect)]
+#[serde(rename_all = "snake_case")]
+pub enum Deformer {
+    /// A length constraint per edge.
+    EdgeLengths,
+    /// One constraint on the sum of edge lengths.
+    EdgeSum,
+    /// One constraint on the area.
+    Area,
+}
+
+impl Deformer {
+    /// Every deformer, in the panel's order.
+    pub const ALL: [Deformer; 3] = [Deformer::EdgeLengths, Deformer::EdgeSum, Deformer::Area];
+
+    /// The deformer stepped as `variant` (which the per-edge constraint does not take).
+    pub fn method(self, variant: Variant) -> Method {
+        match self {
+            Deformer::EdgeLengths => Method::EdgeLengths,
+            Deformer::EdgeSum => Method::EdgeSum(variant),
+            Deformer::Area => Method::Area(variant),
+        }
+    }
+
+    /// Its name in the panel.
+    pub fn label(self) -> &'static str {
+        match self {
+            Deformer::EdgeLengths => "edge lengths",
+            Deformer::EdgeSum => "edge sum",
+            Deformer::Area => "area",
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::sample;

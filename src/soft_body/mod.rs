@@ -3,10 +3,10 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`kind`] | [`SoftBodyKind`]: the mesh read once, spawned and saved; its panel, keys and actions |
 //! | [`def`] | the `soft_body:` entry of a scene file: a mesh file or a sample, where it stands, the deformer |
 //! | [`plugin`] | [`SoftBodyPlugin`]: marks picked in the view, actions and keys, the write-back, the dump; the panel section |
 //! | [`draw`] | the meshes shown: the surface tinted by region or by shift, the marks as balls |
-//! | [`batch`] | the batch deformation of `canopy deform`: a mesh file, a region, a deformer, a report |
 //! | [`surface`] | a triangle surface with its derived edges and adjacency, and the facts a deformation is judged by |
 //! | [`deform`] | the deformers: per-edge lengths, the sum of edge lengths, the area; their stopping rules and reports |
 //! | [`mesh_io`] | OBJ, PLY and STL meshes read and welded, OBJ and PLY written |
@@ -15,10 +15,10 @@
 //! | [`pick`] | points picked on a surface by a ray through a hierarchy of its triangles |
 //! | [`workbench`] | the workflow: marks, the region, shrinks kept as a collection of models |
 
-pub mod batch;
 pub mod def;
 pub mod deform;
 pub mod draw;
+pub mod kind;
 pub mod mesh_io;
 mod panel;
 pub mod pick;
@@ -28,5 +28,6 @@ pub mod sample;
 pub mod surface;
 pub mod workbench;
 
-pub use def::{SoftBodyDef, SoftBodyKind};
+pub use def::SoftBodyDef;
+pub use kind::SoftBodyKind;
 pub use plugin::{ShrinkParams, SoftBody, SoftBodyAction, SoftBodyPlugin, SoftBodySystems};

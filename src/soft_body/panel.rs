@@ -2,8 +2,8 @@
 //! region, the deformer with its `k` slider, threshold and cap, Apply, the collection with
 //! each model's report, the comparison, and saving a model.
 
-use super::deform::Variant;
-use super::plugin::{Compare, Deformer, ShrinkParams, SoftBody, SoftBodyAction, perform_on};
+use super::deform::{Deformer, Variant};
+use super::plugin::{Compare, ShrinkParams, SoftBody, SoftBodyAction, perform_on};
 use super::workbench::ShrinkReport;
 use crate::foundation::entity::SceneEntity;
 use bevy::prelude::*;

@@ -3,19 +3,15 @@
 //! surface, its marks and the original beside it, and the dump.
 
 use super::def::{SoftBodyBuilt, SoftBodyDef};
-use super::deform::{Method, Settings, Variant};
+use super::deform::{Deformer, Method, Settings, Variant};
 use super::draw::{marker_mesh, region_tints, shift_tints, surface_mesh};
 use super::mesh_io::{self, MeshReport};
-use super::panel;
 use super::pick::SurfaceBvh;
 use super::region::{Mark, RegionError};
 use super::workbench::{ShrinkError, ShrinkJob, Shrunk, Workbench};
-use crate::foundation::actions::RegisterActions;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
-use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
 use crate::foundation::messages::{SelectEntity, ViewClicked};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, LongWorkArrival, WriteBackSystems};
 use crate::foundation::values::{Point, first_free_path, srgb_channels};
@@ -24,45 +20,10 @@ use crate::view::CameraParams;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use serde_json::{Map, Value, json};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// Which deformer shrinks a region, as a parameter (`torso.method: area`).
-#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Deformer {
-    /// A length constraint per edge.
-    EdgeLengths,
-    /// One constraint on the sum of edge lengths.
-    EdgeSum,
-    /// One constraint on the area.
-    Area,
-}
-
-impl Deformer {
-    /// Every deformer, in the panel's order.
-    pub const ALL: [Deformer; 3] = [Deformer::EdgeLengths, Deformer::EdgeSum, Deformer::Area];
-
-    /// The deformer stepped as `variant` (which the per-edge constraint does not take).
-    pub fn method(self, variant: Variant) -> Method {
-        match self {
-            Deformer::EdgeLengths => Method::EdgeLengths,
-            Deformer::EdgeSum => Method::EdgeSum(variant),
-            Deformer::Area => Method::Area(variant),
-        }
-    }
-
-    /// Its name in the panel.
-    pub fn label(self) -> &'static str {
-        match self {
-            Deformer::EdgeLengths => "edge lengths",
-            Deformer::EdgeSum => "edge sum",
-            Deformer::Area => "area",
-        }
-    }
-}
 
 /// How the model shown is set against the original.
 #[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -282,7 +243,7 @@ fn start_shrink(job: ShrinkJob) -> PendingShrink {
 }
 
 /// Performs a timeline's action on a soft body.
-fn perform_action(world: &mut World, entity: Entity, action: SoftBodyAction) {
+pub(super) fn perform_action(world: &mut World, entity: Entity, action: SoftBodyAction) {
     if let Ok(mut entity_mut) = world.get_entity_mut(entity) {
         perform_on(&mut entity_mut, action);
     }
@@ -416,7 +377,7 @@ pub(super) fn save_live(def: &mut SoftBodyDef, entity: EntityRef) {
 pub struct SoftBodySystems;
 
 /// Soft body keys: (key, action).
-const SOFT_BODY_KEYS: [(KeyCode, &str); 6] = [
+pub(super) const SOFT_BODY_KEYS: [(KeyCode, &str); 6] = [
     (KeyCode::Backspace, "take back the last mark on the soft body"),
     (KeyCode::Delete, "take back every mark"),
     (KeyCode::Enter, "shrink the marked region into a new model"),
@@ -432,12 +393,8 @@ pub struct SoftBodyPlugin;
 
 impl Plugin for SoftBodyPlugin {
     fn build(&self, app: &mut App) {
-        let help = |(key, action)| KeyHelp { key, action, scope: KeyScope::Kind("soft_body") };
         app.register_params::<ShrinkParams>()
             .register_dump::<SoftBody>()
-            .register_actions::<SoftBodyAction>("soft_body", perform_action)
-            .register_keys(&SOFT_BODY_KEYS.map(help))
-            .register_panel_section("soft_body", panel::soft_body_section)
             .add_systems(
                 RunFixedMainLoop,
                 (mark_clicked_points, act_on_keys).in_set(ControlSystems::Input).in_set(SoftBodySystems),

@@ -27,6 +27,33 @@ pub enum Shape {
 pub const SIZES: std::ops::RangeInclusive<u32> = 3..=1000;
 
 impl Shape {
+    /// Every sample surface.
+    pub const ALL: [Shape; 6] = [Shape::Belly, Shape::Cap, Shape::Sphere, Shape::Cushion, Shape::Torus, Shape::Torso];
+
+    /// Its name, as scene files and the command line write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shape::Belly => "belly",
+            Shape::Cap => "cap",
+            Shape::Sphere => "sphere",
+            Shape::Cushion => "cushion",
+            Shape::Torus => "torus",
+            Shape::Torso => "torso",
+        }
+    }
+
+    /// What it is, in a line.
+    pub fn about(self) -> &'static str {
+        match self {
+            Shape::Belly => "A patch of body surface 0.4 m a side with a belly 0.12 m high.",
+            Shape::Cap => "A cap of a unit sphere, 60 degrees around its pole.",
+            Shape::Sphere => "A closed unit sphere.",
+            Shape::Cushion => "A closed cube 2 m a side with rounded edges.",
+            Shape::Torus => "A closed torus 1 m across its centre line.",
+            Shape::Torso => "An open torso 0.6 m high with a belly.",
+        }
+    }
+
     /// The surface with `size` vertices along its main direction (clamped to [`SIZES`]).
     pub fn make(self, size: u32) -> Surface {
         let size = size.clamp(*SIZES.start(), *SIZES.end());
@@ -214,6 +241,16 @@ pub fn torso(rings: u32, segments: u32) -> Surface {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_shape_is_listed_under_the_name_scene_files_give_it() {
+        for shape in Shape::ALL {
+            assert_eq!(serde_yaml::to_string(&shape).unwrap().trim(), shape.name());
+            assert_eq!(serde_yaml::from_str::<Shape>(shape.name()).unwrap(), shape);
+        }
+        let names: std::collections::BTreeSet<_> = Shape::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(names.len(), Shape::ALL.len());
+    }
 
     #[test]
     fn the_sphere_is_closed_and_faces_out() {

@@ -3,7 +3,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `terrain:` entry of a scene file and [`TerrainKind`] |
+//! | [`kind`] | [`TerrainKind`]: the map read or made while checking, spawned and saved; its panel and keys |
+//! | [`def`] | the `terrain:` entry of a scene file and its checks |
 //! | [`plugin`] | [`TerrainPlugin`] and its set [`TerrainSystems`]: parameters, keys, regeneration off the main thread, meshes, dump |
 //! | [`panel`] | the window's terrain section: figures, new seed, save |
 //! | [`heightmap`] | the grid of heights and the map algebra |
@@ -15,7 +16,6 @@
 //! | [`chunk`] | chunks of an unbounded world: heights at world positions and levels of detail, edges shared bit for bit |
 //! | [`stream`] | which chunks to have around a camera: nearest and ahead first, unloaded beyond a larger radius |
 //! | [`bands`] | the height bands, their rule and the project's band textures |
-//! | [`experiment`] | the source's timing experiment: image time against section size, with and without shadows |
 //!
 //! Parameters (`<name>.<parameter>`, all from [`TerrainParams`]): `section.{x,z}` (the
 //! section's first map sample), `section.{width,depth}` (vertices), `rotation_deg`,
@@ -26,17 +26,18 @@
 pub mod bands;
 pub mod chunk;
 pub mod def;
-pub mod experiment;
 pub mod generate;
 pub mod ground;
 pub mod heightmap;
 pub mod image_io;
+pub mod kind;
 pub mod noise;
 pub mod panel;
 pub mod plugin;
 pub mod section;
 pub mod stream;
 
-pub use def::{TerrainDef, TerrainKind};
+pub use def::TerrainDef;
 pub use heightmap::Heightmap;
+pub use kind::TerrainKind;
 pub use plugin::{TerrainBody, TerrainParams, TerrainPlugin, TerrainSystems};

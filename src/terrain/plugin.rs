@@ -8,11 +8,8 @@ use super::generate::{PerlinLayer, Recipe};
 use super::ground::placement;
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
-use super::panel;
 use super::section::{BORDERS, Geometry, Section, mesh_section};
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::keys::{KeyHelp, KeyScope, RegisterKeys};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::{first_free_path, wrap_degrees};
@@ -278,7 +275,7 @@ pub struct TerrainSystems;
 pub struct TerrainPlugin;
 
 /// Section keys: (key, action, samples along x, samples along z). With Shift, ten times as far.
-const MOVE_KEYS: [(KeyCode, &str, i64, i64); 4] = [
+pub(super) const MOVE_KEYS: [(KeyCode, &str, i64, i64); 4] = [
     (KeyCode::KeyA, "move the section 1 sample along -x (Shift: 10)", -1, 0),
     (KeyCode::KeyD, "move the section 1 sample along +x (Shift: 10)", 1, 0),
     (KeyCode::KeyW, "move the section 1 sample along -z (Shift: 10)", 0, -1),
@@ -289,7 +286,7 @@ const TURN_DEG_PER_S: f32 = 45.0;
 /// Scaling speed: the scale changes by this factor per second.
 const SCALE_PER_S: f32 = 1.5;
 /// Held keys: (key, action, turn, horizontal scale exponent, vertical scale exponent).
-const MODEL_KEYS: [(KeyCode, &str, f32, f32, f32); 6] = [
+pub(super) const MODEL_KEYS: [(KeyCode, &str, f32, f32, f32); 6] = [
     (KeyCode::KeyR, "turn the terrain left", 1.0, 0.0, 0.0),
     (KeyCode::KeyF, "turn the terrain right", -1.0, 0.0, 0.0),
     (KeyCode::KeyX, "make the terrain wider", 0.0, 1.0, 0.0),
@@ -298,23 +295,15 @@ const MODEL_KEYS: [(KeyCode, &str, f32, f32, f32); 6] = [
     (KeyCode::KeyG, "make the terrain flatter", 0.0, 0.0, -1.0),
 ];
 /// Makes the map again with the next seed.
-const NEW_SEED: KeyCode = KeyCode::KeyN;
+pub(super) const NEW_SEED: KeyCode = KeyCode::KeyN;
 /// Saves the heightmap as a 16-bit PNG.
-const SAVE_MAP: KeyCode = KeyCode::KeyU;
+pub(super) const SAVE_MAP: KeyCode = KeyCode::KeyU;
 
 impl Plugin for TerrainPlugin {
     fn build(&self, app: &mut App) {
-        let help = |key, action| KeyHelp { key, action, scope: KeyScope::Kind("terrain") };
         app.register_params::<TerrainParams>()
             .register_dump::<TerrainParams>()
             .register_dump::<TerrainBody>()
-            .register_keys(&MOVE_KEYS.map(|(key, action, ..)| help(key, action)))
-            .register_keys(&MODEL_KEYS.map(|(key, action, ..)| help(key, action)))
-            .register_keys(&[
-                help(NEW_SEED, "make the map again with the next seed"),
-                help(SAVE_MAP, "save the heightmap as a 16-bit PNG in heightmaps/"),
-            ])
-            .register_panel_section("terrain", panel::terrain_section)
             .add_systems(
                 RunFixedMainLoop,
                 (move_with_keys, shape_with_keys, seed_and_save_with_keys)

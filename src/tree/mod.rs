@@ -3,7 +3,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `tree:` entry of a scene file and [`TreeKind`] |
+//! | [`kind`] | [`TreeKind`]: the tree built while checking, stood on the ground under it, spawned and saved; its panel |
+//! | [`def`] | the `tree:` entry of a scene file and its checks |
 //! | [`plugin`] | [`TreePlugin`] and its set [`TreeSystems`]: the live tree, picking, edits with undo, mesh write-back, dump |
 //! | [`panel`] | the window's tree section: counts, the picked support and its editor |
 //! | [`model`] | supports from their descriptions (polylines or forks), trunk or branch |
@@ -22,15 +23,17 @@ pub mod def;
 pub mod edit;
 pub mod generate;
 pub mod geometry;
+pub mod kind;
 pub mod mesh;
 pub mod model;
 pub mod panel;
 pub mod plugin;
 
 pub use bvh::{Bvh, Nearest, Primitive, RayHit, SegmentBvh};
-pub use def::{SupportDef, TreeDef, TreeKind};
+pub use def::{SupportDef, TreeDef};
 pub use generate::{GeneratorSettings, ScatterSettings};
 pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
+pub use kind::TreeKind;
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 pub use plugin::{
     ChunkTrees, Pick, ScatteredTrees, SelectedSupport, TreeBody, TreePlugin, TreeSource, TreeSystems, edit_tree, pick,

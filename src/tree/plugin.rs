@@ -6,11 +6,10 @@ use super::def::{TreeDef, prefixed};
 use super::generate::{ScatterSettings, scatter};
 use super::geometry::TaperedSegment;
 use super::model::{Shape, SupportSpec, Tree};
-use super::{edit, mesh, panel};
+use super::{edit, mesh};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::messages::{SelectEntity, ViewClicked};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
 use crate::raster::RasterMesh;
@@ -192,7 +191,6 @@ pub struct TreePlugin;
 impl Plugin for TreePlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<TreeBody>()
-            .register_panel_section("tree", panel::tree_section)
             .add_systems(RunFixedMainLoop, select_clicked_support.in_set(ControlSystems::Input).in_set(TreeSystems))
             .add_systems(Update, grow_on_new_chunks.after(WorldSystems).in_set(TreeSystems))
             .add_systems(PostUpdate, write_back_trees.in_set(WriteBackSystems).in_set(TreeSystems));

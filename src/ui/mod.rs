@@ -8,7 +8,7 @@
 //! | [`compose`] | the window's pixels from the frame and the panel's paint jobs; pure |
 //! | [`surface`] | the primary window's `softbuffer` surface |
 //! | [`pacing`] | the frame rate cap |
-//! | [`plot`] | plots written as image files, painted without a window |
+//! | [`plot`] | egui drawings (plots) written as image files, painted without a window |
 //!
 //! | schedule | system | what it does |
 //! |---|---|---|

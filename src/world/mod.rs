@@ -2,7 +2,8 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`def`] | the `world:` entry of a scene file and [`WorldKind`] |
+//! | [`kind`] | [`WorldKind`]: the world's heights made while checking, spawned and saved; its panel |
+//! | [`def`] | the `world:` entry of a scene file and its checks |
 //! | [`plugin`] | [`WorldPlugin`] and its set [`WorldSystems`]: the streaming plan, chunks made off the main thread (or in advance) and spawned within a budget, skirts where levels meet, the dump |
 //! | [`panel`] | the window's world section: chunks per level, arriving a second, time to make one |
 //!
@@ -10,8 +11,10 @@
 //! ([`crate::terrain::chunk`], [`crate::terrain::stream`]).
 
 pub mod def;
+pub mod kind;
 pub mod panel;
 pub mod plugin;
 
-pub use def::{WorldBuilt, WorldDef, WorldKind};
+pub use def::{WorldBuilt, WorldDef};
+pub use kind::WorldKind;
 pub use plugin::{ChunkSkirt, WorldBody, WorldChunk, WorldPlugin, WorldSystems};

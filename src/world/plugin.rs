@@ -7,9 +7,7 @@
 //! frames.
 
 use super::def::{WorldBuilt, WorldDef};
-use super::panel;
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::panel::RegisterPanel;
 use crate::foundation::schedule::ControlSystems;
 use crate::raster::{Material, MeshData, RasterMesh};
 use crate::terrain::bands::BandRule;
@@ -42,7 +40,7 @@ pub struct WorldPlugin;
 
 impl Plugin for WorldPlugin {
     fn build(&self, app: &mut App) {
-        app.register_dump::<WorldBody>().register_panel_section("world", panel::world_section).add_systems(
+        app.register_dump::<WorldBody>().add_systems(
             Update,
             (stream_chunks, spawn_finished, hang_skirts).chain().after(ControlSystems::Input).in_set(WorldSystems),
         );

@@ -276,7 +276,7 @@ fn a_shrink_runs_off_the_main_thread_and_a_second_waits_for_it() {
 fn a_saved_scene_keeps_the_deformer_set_in_the_window() {
     use canopy::foundation::params::{ParamValue, set_param};
     use canopy::soft_body::SoftBodyDef;
-    use canopy::soft_body::plugin::Deformer;
+    use canopy::soft_body::deform::Deformer;
     let folder = tempfile::tempdir().unwrap();
     let scene = folder.path().join("patch.yaml");
     std::fs::write(&scene, "entities:\n  - name: patch\n    soft_body:\n      sample: { shape: belly, size: 17 }\n")

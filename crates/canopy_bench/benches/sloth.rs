@@ -1,7 +1,7 @@
 //! One fixed step of sloth locomotion, per sloth, with 100 sloths walking on a generated
 //! forest: gait clock, foothold searches, body pose and clearance, and four limbs of IK.
 //!
-//! Run with `cargo bench --profile dev --bench sloth`.
+//! Run with `cargo bench -p canopy_bench --profile dev --bench sloth`.
 
 use canopy::sloth::rig::Proportions;
 use canopy::sloth::{Drive, Placement, Sloth, Supports};

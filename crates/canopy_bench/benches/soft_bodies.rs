@@ -5,7 +5,7 @@
 //! sag, time per step and per tetrahedron-substep are printed side by side. Last, two bodies
 //! stepped on two threads against one after the other.
 //!
-//! Run with `cargo bench --bench soft_bodies`.
+//! Run with `cargo bench -p canopy_bench --bench soft_bodies`.
 
 use bevy::math::Vec3;
 use canopy::elastic::xpbd::{Body, Material, TetMesh, World};

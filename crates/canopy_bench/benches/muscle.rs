@@ -1,7 +1,7 @@
 //! Deforming and remeshing a muscle: one length change of the node model followed by a
 //! rebuild of its surface, as the app does whenever the muscle's state changes.
 //!
-//! Run with `cargo bench --bench muscle`.
+//! Run with `cargo bench -p canopy_bench --bench muscle`.
 
 use canopy::muscle::model::Muscle;
 use canopy::muscle::surface::build_surface;

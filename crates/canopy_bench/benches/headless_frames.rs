@@ -2,7 +2,7 @@
 //! frame at the size of the window's 3D view, every frame, without a window or a panel. The
 //! window's frame time is measured against it (`scripts/frame_times.sh`).
 //!
-//! Run with `cargo bench --profile dev --bench headless_frames -- SCENE.yaml...`; prints one
+//! Run with `cargo bench -p canopy_bench --profile dev --bench headless_frames -- SCENE.yaml...`; prints one
 //! line per scene: `SCENE MEAN P99 simulation MEAN P99 raster MEAN P99 other MEAN P99`, the
 //! wall-clock milliseconds of a whole frame and of its phases, their mean and 99th percentile
 //! ("other" is the rest of the frame: streaming, write-back, Bevy's own systems).
@@ -47,6 +47,7 @@ fn frame_times(scene: &Path) -> Result<FrameLog<3>, String> {
 }
 
 fn main() {
+    canopy_bench::at_workspace_root();
     // `cargo bench` passes `--bench`; everything else is a scene.
     let scenes: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     if scenes.is_empty() {

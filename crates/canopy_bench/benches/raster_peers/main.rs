@@ -1,7 +1,7 @@
 //! Canopy's rasterizer against two real CPU renderers on the standard scene, in one process,
 //! interleaved frame by frame so that the machine's noise hits every renderer alike.
 //!
-//! Run with `cargo bench --profile dev --bench peers` (the rasterizer and the peers are built
+//! Run with `cargo bench -p canopy_bench --profile dev --bench peers` (the rasterizer and the peers are built
 //! optimized in that profile); `-- --rounds N` sets the frames timed per renderer and camera
 //! (default 40), `--workers N` Canopy's pool workers beside the calling thread (default one per
 //! other core; 0 draws on the calling thread alone), and `--canopy-only` leaves the peers out of

@@ -2,7 +2,7 @@
 //! (heights and meshes, as the world kind makes them), the memory a resident chunk's meshes
 //! take, and what that gives for the resident set the streaming radii allow.
 //!
-//! Run with `cargo bench --bench world_chunks`.
+//! Run with `cargo bench -p canopy_bench --bench world_chunks`.
 
 use canopy::terrain::bands::{BandBlend, BandRule};
 use canopy::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};

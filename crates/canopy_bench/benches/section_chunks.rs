@@ -6,7 +6,7 @@
 //! camera still, every frame drawn, the three alternating in rounds; the frames' wall-clock
 //! time (simulation, streaming and raster) is taken.
 //!
-//! Run with `cargo bench --profile dev --bench section_chunks [-- FRAMES]` (the profile of
+//! Run with `cargo bench -p canopy_bench --profile dev --bench section_chunks [-- FRAMES]` (the profile of
 //! `cargo run`).
 
 #[path = "common/frame_times.rs"]
@@ -142,6 +142,7 @@ fn difference(a: &Framebuffer, b: &Framebuffer) -> (f64, f64) {
 }
 
 fn main() {
+    canopy_bench::at_workspace_root();
     // `cargo bench` passes `--bench`; a number is the frames measured per scene and round.
     let count: u32 = std::env::args().skip(1).find_map(|a| a.parse().ok()).unwrap_or(300);
     let folder = tempfile::tempdir().expect("a temporary folder");

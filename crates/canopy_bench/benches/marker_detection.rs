@@ -5,7 +5,7 @@
 //! pose. Runs alternate between the two; the median run is reported, with how many frames
 //! each found the marker in and how far its corners were from the truth.
 //!
-//! Run with `cargo bench -p canopy_vision --bench detection`.
+//! Run with `cargo bench -p canopy_bench --bench detection`.
 
 use aruco_rs::ImageBuffer;
 use aruco_rs::core::detector::Detector;

@@ -1,11 +1,11 @@
 //! The batch deformation behind `canopy deform`: a mesh file read and welded, a region
 //! outlined on it, shrunk by a deformer, put back and written, with a report of what was done.
 
-use super::deform::{Method, Settings, Variant};
-use super::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
-use super::region::{Mark, RegionError};
-use super::surface::{Surface, SurfaceError};
-use super::workbench::{ShrinkError, ShrinkReport, shrink};
+use crate::soft_body::deform::{Method, Settings, Variant};
+use crate::soft_body::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
+use crate::soft_body::region::{Mark, RegionError};
+use crate::soft_body::surface::{Surface, SurfaceError};
+use crate::soft_body::workbench::{ShrinkError, ShrinkReport, shrink};
 use bevy::math::Vec3;
 use std::path::Path;
 
@@ -122,8 +122,8 @@ pub fn method(name: &str, variant: &str) -> Result<Method, BatchError> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::sample;
     use super::*;
+    use crate::soft_body::sample;
 
     #[test]
     fn marks_are_vertex_indices_or_points_and_anything_else_is_named() {

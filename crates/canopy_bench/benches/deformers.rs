@@ -3,7 +3,7 @@
 //! why each stopped, and for the per-edge constraints, edge projections a second (the hot
 //! loop the dynamic soft bodies will share).
 //!
-//! Run with `cargo bench --bench deformers`; `cargo bench --bench deformers -- edge` runs only
+//! Run with `cargo bench -p canopy_bench --bench deformers`; `cargo bench -p canopy_bench --bench deformers -- edge` runs only
 //! the methods whose names contain `edge`.
 
 use canopy::soft_body::deform::{Method, Settings, Variant, deform};

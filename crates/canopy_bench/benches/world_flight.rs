@@ -10,7 +10,7 @@
 //! took from its cores (`steal` in `/proc/stat`, in ticks of 10 ms), and how many chunks were
 //! spawned in it.
 //!
-//! Run with `cargo bench --profile dev --bench world_flight [-- SECONDS]` (the profile of
+//! Run with `cargo bench -p canopy_bench --profile dev --bench world_flight [-- SECONDS]` (the profile of
 //! `cargo run`); prints a table per flight, the slow frames' trace and the ratios the goal is
 //! stated in.
 
@@ -140,6 +140,7 @@ fn fly(frames: u32, frozen: bool) -> Result<Vec<Frame>, String> {
 }
 
 fn main() {
+    canopy_bench::at_workspace_root();
     // `cargo bench` passes `--bench`; a number is the flight's length in seconds.
     let seconds: f32 = std::env::args().skip(1).find_map(|a| a.parse().ok()).unwrap_or(60.0);
     let frames = (seconds / STEP_S).round() as u32;

@@ -1,7 +1,7 @@
 //! Ray casts against forests of tapered segments, through the bounding volume hierarchy and,
 //! for comparison, by scanning every segment.
 //!
-//! Run with `cargo bench --profile dev --bench tree_queries`.
+//! Run with `cargo bench -p canopy_bench --profile dev --bench tree_queries`.
 
 use bevy::math::Vec3;
 use canopy::tree::{SegmentBvh, TaperedSegment};

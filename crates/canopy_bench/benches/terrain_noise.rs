@@ -6,7 +6,7 @@
 //! take turns within each round, so a slow spell of the machine falls on all of them. Ratios are
 //! taken per round and reported as their median and range.
 //!
-//! Run with `cargo bench --profile dev --bench terrain_noise [-- --rounds N]`.
+//! Run with `cargo bench -p canopy_bench --profile dev --bench terrain_noise [-- --rounds N]`.
 
 use canopy::terrain::Heightmap;
 use canopy::terrain::bands::BandRule;
