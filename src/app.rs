@@ -13,6 +13,7 @@ use crate::scene::{ScenePlugin, register_scene_source};
 use crate::shape::ShapeKind;
 use crate::sloth::SlothKind;
 use crate::soft_body::SoftBodyKind;
+use crate::spatial::SpatialPlugin;
 use crate::terrain::TerrainKind;
 use crate::tree::TreeKind;
 use crate::ui::pacing::FramePacing;
@@ -82,6 +83,7 @@ impl PluginGroup for CanopyPlugins {
             .add(ControlsPlugin)
             .add(ScenePlugin { path: self.scene, kinds: kinds.clone() })
             .add(ViewPlugin)
+            .add(SpatialPlugin)
             .add(RenderSettingsPlugin);
         let group = kinds.add_plugins(group).add(RasterPlugin { size, every_frame });
         match self.display {

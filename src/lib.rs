@@ -68,6 +68,7 @@ pub mod scene;
 pub mod shape;
 pub mod sloth;
 pub mod soft_body;
+pub mod spatial;
 pub mod terrain;
 pub mod tree;
 pub mod ui;

@@ -175,7 +175,8 @@ fn generated_forests_are_deterministic_valid_and_never_overwrite() {
 
 #[test]
 fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
-    use canopy::soft_body::{mesh_io, sample};
+    use canopy::soft_body::sample;
+    use canopy::spatial::mesh_io;
     let folder = tempfile::tempdir().unwrap();
     let belly = sample::belly(25);
     let input = folder.path().join("belly.obj");

@@ -2,10 +2,10 @@
 //! outlined on it, shrunk by a deformer, put back and written, with a report of what was done.
 
 use crate::soft_body::deform::{Method, Settings, Variant};
-use crate::soft_body::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
 use crate::soft_body::region::{Mark, RegionError};
-use crate::soft_body::surface::{Surface, SurfaceError};
 use crate::soft_body::workbench::{ShrinkError, ShrinkReport, shrink};
+use crate::spatial::mesh_io::{self, MeshError, MeshReport, TriangleMesh};
+use crate::spatial::surface::{Surface, SurfaceError};
 use bevy::math::Vec3;
 use std::path::Path;
 

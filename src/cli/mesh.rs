@@ -4,8 +4,8 @@
 use super::deform_batch::{self, BatchError};
 use super::refuse_to_replace;
 use crate::soft_body::deform::Settings;
-use crate::soft_body::mesh_io;
 use crate::soft_body::sample::Shape;
+use crate::spatial::mesh_io;
 use clap::builder::PossibleValue;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};

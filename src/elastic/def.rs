@@ -11,12 +11,14 @@
 //!     poisson_ratio: 0.4
 //! ```
 
-use super::xpbd::{Attachment, Body, Embedding, Material};
+use super::material::Material;
+use super::tet_mesh::Embedding;
+use super::xpbd::{Attachment, Body};
 use crate::foundation::kind::BuildContext;
 use crate::foundation::values::{Color, FolderFile, Point, PositiveMetres, Size, UnitInterval, checked_number};
 use crate::foundation::yaml::FileError;
 use crate::soft_body::def::{MeshFile, SampleDef};
-use crate::soft_body::mesh_io::{MeshReport, TriangleMesh};
+use crate::spatial::mesh_io::{MeshReport, TriangleMesh};
 use crate::tree::TreeKind;
 use bevy::color::Srgba;
 use bevy::math::Vec3;
@@ -214,8 +216,8 @@ pub struct ElasticBuilt {
     pub body: Body,
     /// The surface's vertices in the tetrahedra.
     pub embedding: Embedding,
-    /// The surface's triangles.
-    pub triangles: Vec<[u32; 3]>,
+    /// The surface's triangles (shared with what picks the body).
+    pub triangles: Arc<Vec<[u32; 3]>>,
     /// What welding its file found (nothing for a sample).
     pub read: MeshReport,
     /// The side of its lattice's cells, metres.

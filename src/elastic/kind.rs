@@ -4,7 +4,8 @@
 use super::def::{ElasticBodyDef, ElasticBuilt, MAX_TETS, stem_anchor, stems};
 use super::panel;
 use super::plugin::{self, ElasticAction, ElasticPlugin, spawn_elastic_body};
-use super::xpbd::{Body, TetError, TetMesh};
+use super::tet_mesh::{TetError, TetMesh};
+use super::xpbd::Body;
 use crate::foundation::actions::RegisterActions;
 use crate::foundation::keys::RegisterKeys;
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
@@ -88,7 +89,14 @@ impl EntityKind for ElasticBodyKind {
             body.stems = stems(&body, anchor, cell);
         }
         let shaken_loose = anchor.zip(def.stem.as_ref().and_then(|stem| stem.shaken_loose_m)).map(|(a, m)| (a, m.0));
-        Ok(Arc::new(ElasticBuilt { body, embedding, triangles: surface.triangles, read, cell_m: cell, shaken_loose }))
+        Ok(Arc::new(ElasticBuilt {
+            body,
+            embedding,
+            triangles: Arc::new(surface.triangles),
+            read,
+            cell_m: cell,
+            shaken_loose,
+        }))
     }
 
     fn spawn(def: &ElasticBodyDef, built: &Arc<ElasticBuilt>, entity: &mut EntityWorldMut) {

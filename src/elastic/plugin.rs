@@ -2,7 +2,6 @@
 //! step, the keys, dragging with the mouse, actions, the write-back of the surface and the
 //! dump.
 
-use super::collide::Collider;
 use super::def::{Bending, Damping, ElasticBodyDef, ElasticBuilt, Friction, Modulus, Poisson, Substeps};
 use super::xpbd::{Attachment, Body, World as Surroundings};
 use crate::foundation::dump::{DumpState, RegisterDump};
@@ -12,16 +11,12 @@ use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
 use crate::raster::{MeshData, RasterMesh};
-use crate::shape::Shape;
 use crate::soft_body::draw::surface_mesh;
-use crate::soft_body::pick::SurfaceBvh;
-use crate::terrain::TerrainBody;
-use crate::terrain::ground::Ground;
-use crate::terrain::section::Geometry;
-use crate::tree::mesh::add_tube;
-use crate::tree::plugin::TreeBody;
+use crate::spatial::SpatialSystems;
+use crate::spatial::pick::{Pickable, Picked, Pointer};
+use crate::spatial::solid::{Collider, Solid};
+use crate::spatial::tube::add_tube;
 use crate::view::CameraParams;
-use crate::world::WorldBody;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use serde::Deserialize;
@@ -209,16 +204,15 @@ impl ElasticParams {
     }
 }
 
-/// The solids the bodies meet this step, gathered from the scene's shapes, terrains and
-/// trees, with the names of the entities they are.
+/// The solids the bodies meet this step: every [`Solid`] of the scene, shapes first, then
+/// grounds, then supports, each group in the scene's order, with the names of the entities
+/// they are.
 #[derive(Resource, Debug, Clone, Default)]
 pub struct Solids {
     /// The solids.
     pub colliders: Arc<Vec<Collider>>,
     /// The entity each one is.
     pub names: Arc<Vec<String>>,
-    /// Grounds and supports as made last, by entity: made again only when their entity changes.
-    made: Vec<(Entity, Collider)>,
 }
 
 /// Spawns an elastic body's components; its surface is drawn in world coordinates.
@@ -314,7 +308,8 @@ impl Plugin for ElasticPlugin {
                 FixedUpdate,
                 (shake_loose, gather_solids, step_bodies).chain().in_set(SimSystems::Dynamics).in_set(ElasticSystems),
             )
-            .add_systems(PostUpdate, write_back_surfaces.in_set(WriteBackSystems).in_set(ElasticSystems));
+            .add_systems(PostUpdate, write_back_surfaces.in_set(WriteBackSystems).in_set(ElasticSystems))
+            .add_systems(PostUpdate, publish_surfaces.in_set(SpatialSystems::Publish).in_set(ElasticSystems));
     }
 }
 
@@ -339,74 +334,14 @@ fn shake_loose(mut hands: MessageReader<HandPlanted>, mut bodies: Query<&mut Ela
     }
 }
 
-/// Gathers the solids: shapes as they are placed now, and the terrains' and worlds' grounds
-/// and the trees' supports, made again only when they changed.
-fn gather_solids(
-    mut solids: ResMut<Solids>,
-    shapes: Query<(&SceneEntity, &Shape, &GlobalTransform)>,
-    terrains: Query<(Entity, &SceneEntity, Ref<TerrainBody>, Ref<GlobalTransform>)>,
-    trees: Query<(Entity, &SceneEntity, Ref<TreeBody>)>,
-    worlds: Query<(Entity, &SceneEntity, Ref<WorldBody>)>,
-) {
-    let mut colliders = Vec::new();
-    let mut names = Vec::new();
-    for (scene, shape, placed) in &shapes {
-        colliders.push(Collider::shape(shape.0, placed.affine()));
-        names.push(scene.name.clone());
-    }
-    let mut made = std::mem::take(&mut solids.made);
-    let mut reuse = |entity: Entity, changed: bool, make: &dyn Fn() -> Option<Collider>| -> Option<Collider> {
-        let index = made.iter().position(|(e, _)| *e == entity);
-        match index {
-            Some(i) if !changed => Some(made[i].1.clone()),
-            _ => {
-                let collider = make()?;
-                if let Some(i) = index {
-                    made.remove(i);
-                }
-                made.push((entity, collider.clone()));
-                Some(collider)
-            }
-        }
-    };
-    for (entity, scene, body, placed) in &terrains {
-        let changed = body.is_changed() || placed.is_changed();
-        let ground = reuse(entity, changed, &|| {
-            let (section, height_m) = body.shown?;
-            let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
-            Some(Collider::Ground(Arc::new(Ground::of_section(
-                &body.map,
-                section,
-                geometry,
-                body.barycentre,
-                placed.affine(),
-            ))))
-        });
-        if let Some(ground) = ground {
-            colliders.push(ground);
-            names.push(scene.name.clone());
-        }
-    }
-    for (entity, scene, world) in &worlds {
-        // Chunks come and go, but the ground they draw is the world's heights: made once.
-        let ground = reuse(entity, world.is_added(), &|| {
-            let (heights, geometry) = world.ground();
-            Some(Collider::World { heights: heights.clone(), geometry })
-        });
-        if let Some(ground) = ground {
-            colliders.push(ground);
-            names.push(scene.name.clone());
-        }
-    }
-    for (entity, scene, tree) in &trees {
-        let supports = reuse(entity, tree.is_changed(), &|| Some(Collider::Supports(Arc::new(tree.bvh.clone()))));
-        if let Some(supports) = supports {
-            colliders.push(supports);
-            names.push(scene.name.clone());
-        }
-    }
-    made.retain(|(entity, _)| terrains.contains(*entity) || trees.contains(*entity) || worlds.contains(*entity));
-    *solids = Solids { colliders: Arc::new(colliders), names: Arc::new(names), made };
+/// Gathers the solids as their kinds last wrote them.
+fn gather_solids(mut solids: ResMut<Solids>, scene: Query<(&SceneEntity, &Solid)>) {
+    let mut found: Vec<(&SceneEntity, &Collider)> =
+        scene.iter().map(|(entity, Solid(collider))| (entity, collider)).collect();
+    found.sort_by_key(|(entity, collider)| (collider.rank(), entity.index));
+    let names = found.iter().map(|(entity, _)| entity.name.clone()).collect();
+    let colliders = found.into_iter().map(|(_, collider)| collider.clone()).collect();
+    *solids = Solids { colliders: Arc::new(colliders), names: Arc::new(names) };
 }
 
 /// Steps every body that is not paused by the fixed step, bodies in parallel.
@@ -466,9 +401,10 @@ fn act_on_keys(keys: Res<ButtonInput<KeyCode>>, mut bodies: Query<&mut ElasticBo
     }
 }
 
-/// Grabs the body under the pointer where a drag starts, moves the hand in the plane facing
-/// the camera through the point grabbed as the pointer moves, and lets go when it ends.
+/// Grabs the body a drag's start picked, moves the hand in the plane facing the camera through
+/// the point grabbed as the pointer moves, and lets go when the drag ends.
 fn drag_with_the_mouse(
+    mut picks: MessageReader<Picked>,
     mut drags: MessageReader<ViewDragged>,
     cameras: Query<&CameraParams>,
     mut bodies: Query<(&mut ElasticBody, &SceneEntity)>,
@@ -476,26 +412,18 @@ fn drag_with_the_mouse(
     mut selections: MessageWriter<SelectEntity>,
 ) {
     let Some(camera) = cameras.iter().next().map(CameraParams::camera) else { return };
+    for picked in picks.read().filter(|picked| picked.pointer == Pointer::Grab) {
+        let Ok((mut elastic, scene)) = bodies.get_mut(picked.hit.entity) else { continue };
+        let forward = (camera.target - camera.eye).normalize_or(Vec3::NEG_Z);
+        elastic.grab(picked.hit.point, forward);
+        selections.write(SelectEntity(scene.name.clone()));
+        grab.held = true;
+    }
     for drag in drags.read() {
         let (origin, direction) = camera.ray(drag.ndc, drag.aspect);
         match drag.phase {
-            DragPhase::Start => {
-                let hit = bodies
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(index, (elastic, _))| {
-                        let bvh = SurfaceBvh::new(&elastic.surface, &elastic.start.triangles);
-                        bvh.pick(origin, direction).map(|hit| (index, hit.point, hit.distance))
-                    })
-                    .min_by(|a, b| a.2.total_cmp(&b.2));
-                let Some((index, point, _)) = hit else { continue };
-                let forward = (camera.target - camera.eye).normalize_or(Vec3::NEG_Z);
-                if let Some((mut elastic, scene)) = bodies.iter_mut().nth(index) {
-                    elastic.grab(point, forward);
-                    selections.write(SelectEntity(scene.name.clone()));
-                    grab.held = true;
-                }
-            }
+            // Grabs come picked, above.
+            DragPhase::Start => {}
             DragPhase::Move => {
                 for (mut elastic, _) in &mut bodies {
                     let Some((point, normal)) = elastic.hand_plane else { continue };
@@ -518,6 +446,14 @@ fn drag_with_the_mouse(
                 grab.held = false;
             }
         }
+    }
+}
+
+/// A body that moved can be grabbed where its surface is now.
+fn publish_surfaces(bodies: Query<(Entity, &ElasticBody), Changed<ElasticBody>>, mut commands: Commands) {
+    for (entity, elastic) in &bodies {
+        let positions = Arc::new(elastic.surface.clone());
+        commands.entity(entity).insert(Pickable::Mesh { positions, triangles: elastic.start.triangles.clone() });
     }
 }
 

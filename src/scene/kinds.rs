@@ -5,6 +5,7 @@
 //! and in which they are built: a kind's checks see what the kinds before it built (the sloth
 //! comes after the trees it hangs from).
 
+use super::kind_list::{KindList, Then};
 use super::schema::{EntityDef, SceneDef, SceneFile, WriteScene};
 use crate::foundation::kind::{
     BuildContext, Built, EntityContext, EntityKind, EntityRecord, KindDef, ReferencedFile, SharedBuilds, Standalone,
@@ -12,70 +13,11 @@ use crate::foundation::kind::{
 use crate::foundation::yaml::{FileError, parse_yaml};
 use bevy::app::{App, Plugin, PluginGroupBuilder};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
-use serde::de::MapAccess;
-use serde::ser::SerializeMap;
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// A kind's key and its definition, as an entity's mapping holds them.
-pub type KindValue = (&'static str, Box<dyn KindDef>);
-
-/// The kinds of `L`, then kind `K`: a node of a [`KindList`].
-pub struct Then<L, K>(PhantomData<fn() -> (L, K)>);
-
-/// A list of kinds known by type, so that serde can read and write each kind's definition
-/// with the deserializer at hand (and its errors keep their place in the file).
-pub trait KindList: Send + Sync + 'static {
-    /// Every key, in registration order.
-    fn keys() -> Vec<&'static str>;
-
-    /// Reads the value of an entity's `key` as that kind's definition; `None` if no kind has
-    /// the key.
-    fn next_value<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<KindValue, A::Error>>;
-
-    /// Writes `def` as the value of `key`; `None` if no kind has the key.
-    fn serialize_entry<M: SerializeMap>(key: &str, def: &dyn KindDef, map: &mut M) -> Option<Result<(), M::Error>>;
-}
-
-impl KindList for () {
-    fn keys() -> Vec<&'static str> {
-        Vec::new()
-    }
-
-    fn next_value<'de, A: MapAccess<'de>>(_key: &str, _map: &mut A) -> Option<Result<KindValue, A::Error>> {
-        None
-    }
-
-    fn serialize_entry<M: SerializeMap>(_key: &str, _def: &dyn KindDef, _map: &mut M) -> Option<Result<(), M::Error>> {
-        None
-    }
-}
-
-impl<L: KindList, K: EntityKind> KindList for Then<L, K> {
-    fn keys() -> Vec<&'static str> {
-        let mut keys = L::keys();
-        keys.push(K::KEY);
-        keys
-    }
-
-    fn next_value<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<KindValue, A::Error>> {
-        if key != K::KEY {
-            return L::next_value(key, map);
-        }
-        Some(map.next_value::<K::Def>().map(|def| (K::KEY, Box::new(def) as Box<dyn KindDef>)))
-    }
-
-    fn serialize_entry<M: SerializeMap>(key: &str, def: &dyn KindDef, map: &mut M) -> Option<Result<(), M::Error>> {
-        if key != K::KEY {
-            return L::serialize_entry(key, def, map);
-        }
-        let def = def.as_any().downcast_ref::<K::Def>()?;
-        Some(map.serialize_entry(key, def))
-    }
-}
 
 /// What [`EntityKind::register`] adds for kind `K`, as a plugin that follows the kind's own.
 struct KindRegistration<K>(PhantomData<fn() -> K>);

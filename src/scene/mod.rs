@@ -6,11 +6,13 @@
 //! |---|---|
 //! | [`schema`] | the file format: camera, light, background, render settings, the entity list |
 //! | [`kinds`] | the registry of entity kinds: reading, checking, building, spawning, saving |
+//! | [`kind_list`] | the registry's kinds as a list of types, for serde to read and write each definition |
 //!
 //! The scene file is served by its own asset source, [`SCENE_SOURCE`], rooted at the file's
 //! folder, so any file on disk can be played and watched. A (re)load that fails keeps the
 //! last good scene running and records the error in [`ActiveScene`].
 
+pub mod kind_list;
 pub mod kinds;
 pub mod schema;
 

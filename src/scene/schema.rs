@@ -3,9 +3,9 @@
 //! that span several of these fields.
 //!
 //! Every entity is a mapping with an optional `name` and exactly one kind key; the kind's
-//! value is that kind's definition (see [`super::kinds`]).
+//! value is that kind's definition (see [`super::kind_list`]).
 
-use super::kinds::{KindList, KindValue};
+use super::kind_list::{KindList, KindValue};
 use crate::foundation::kind::{KindDef, Standalone};
 use crate::foundation::values::{Color, FieldOfView, Point, PositiveMetres, UnitInterval};
 use crate::foundation::yaml::{FileError, deserialize_str_with, locate_key as locate};

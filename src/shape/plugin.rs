@@ -8,6 +8,8 @@ use crate::foundation::schedule::{SimSystems, WriteBackSystems};
 use crate::foundation::values::{Angles, Color, MAX_METRES, Point, Size, srgb_channels, wrap_degrees};
 use crate::raster::RasterMesh;
 use crate::raster::primitives::Primitive;
+use crate::spatial::SpatialSystems;
+use crate::spatial::solid::{Collider, Solid};
 use bevy::ecs::world::EntityRef;
 use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
@@ -116,7 +118,8 @@ impl Plugin for ShapePlugin {
             .register_dump::<Shape>()
             .register_dump::<ShapeParams>()
             .add_systems(FixedUpdate, spin_shapes.in_set(SimSystems::Deform).in_set(ShapeSystems))
-            .add_systems(PostUpdate, write_back_shapes.in_set(WriteBackSystems).in_set(ShapeSystems));
+            .add_systems(PostUpdate, write_back_shapes.in_set(WriteBackSystems).in_set(ShapeSystems))
+            .add_systems(PostUpdate, publish_solids.in_set(SpatialSystems::Publish).in_set(ShapeSystems));
     }
 }
 
@@ -136,6 +139,13 @@ fn write_back_shapes(mut shapes: Query<(&ShapeParams, &mut Transform, &mut Raste
     for (params, mut transform, mut mesh) in &mut shapes {
         *transform = params.transform();
         mesh.material.color = params.color_channels();
+    }
+}
+
+/// Every shape is a solid where it stands now.
+fn publish_solids(shapes: Query<(Entity, &Shape, &GlobalTransform), Changed<GlobalTransform>>, mut commands: Commands) {
+    for (entity, shape, placed) in &shapes {
+        commands.entity(entity).insert(Solid(Collider::shape(shape.0, placed.affine())));
     }
 }
 

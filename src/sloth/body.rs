@@ -9,7 +9,7 @@
 
 use super::rig::{BodyFrame, Proportions};
 use super::supports::Supports;
-use crate::tree::TaperedSegment;
+use crate::spatial::segment::TaperedSegment;
 use bevy::math::Vec3;
 
 /// Time constant of the heading's easing, seconds.

@@ -9,7 +9,7 @@ use super::locomotion::Sloth;
 use super::rig::{BodyFrame, JOINTS, Limb};
 use super::skin::{LIMB_RADII, Skin, palm, thickness_scale};
 use crate::raster::{MeshData, vertex_normals};
-use crate::tree::mesh::add_tube;
+use crate::spatial::tube::add_tube;
 use bevy::math::Vec3;
 
 /// Vertices around each claw.

@@ -2,7 +2,9 @@
 //! length (metres from the support's first point) and one hierarchy for the nearest-surface
 //! queries of foothold search and body clearance.
 
-use crate::tree::{SegmentBvh, SupportKind, SurfacePoint, TaperedSegment, Tree};
+use crate::spatial::bvh::SegmentBvh;
+use crate::spatial::segment::{SurfacePoint, TaperedSegment};
+use crate::tree::{SupportKind, Tree};
 use bevy::math::Vec3;
 
 /// A support as a path: axis polyline, radii, and arc length at each point.

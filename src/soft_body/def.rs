@@ -12,12 +12,12 @@
 //! ```
 
 use super::deform::{Deformer, Method, Settings, Variant};
-use super::mesh_io::{self, MeshReport, TriangleMesh};
 use super::sample::{SIZES, Shape};
-use super::surface::Surface;
 use crate::foundation::kind::{BuildContext, EntityContext, ReferencedFile};
 use crate::foundation::values::{Color, FileType, FolderFile, Point, checked_number};
 use crate::foundation::yaml::FileError;
+use crate::spatial::mesh_io::{self, MeshReport, TriangleMesh};
+use crate::spatial::surface::Surface;
 use bevy::color::Srgba;
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};

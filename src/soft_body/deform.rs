@@ -22,7 +22,7 @@
 //! Neither global constraint is linear: their projections search back along the step (halving
 //! it while `|C|` does not fall), where the source's edge-sum step goes as it is.
 
-use super::surface::{Surface, triangle_cross};
+use crate::spatial::surface::{Surface, triangle_cross};
 use bevy::math::Vec3;
 
 /// Which deformer.
@@ -386,8 +386,8 @@ impl Deformer {
 #[cfg(test)]
 mod tests {
     use super::super::sample;
-    use super::super::surface::Facts;
     use super::*;
+    use crate::spatial::surface::Facts;
 
     /// A belly on a patch of body surface, its border fixed: what a region cut from a scanned
     /// body looks like.

@@ -7,25 +7,19 @@
 //! | [`def`] | the `soft_body:` entry of a scene file: a mesh file or a sample, where it stands, the deformer |
 //! | [`plugin`] | [`SoftBodyPlugin`]: marks picked in the view, actions and keys, the write-back, the dump; the panel section |
 //! | [`draw`] | the meshes shown: the surface tinted by region or by shift, the marks as balls |
-//! | [`surface`] | a triangle surface with its derived edges and adjacency, and the facts a deformation is judged by |
 //! | [`deform`] | the deformers: per-edge lengths, the sum of edge lengths, the area; their stopping rules and reports |
-//! | [`mesh_io`] | OBJ, PLY and STL meshes read and welded, OBJ and PLY written |
 //! | [`region`] | the region outlined by marks on a surface: the loop along the surface, the smaller side, cut out and put back |
 //! | [`sample`] | sample surfaces made by the project: a belly patch, a cap, a sphere, a torus, a torso |
-//! | [`pick`] | points picked on a surface by a ray through a hierarchy of its triangles |
 //! | [`workbench`] | the workflow: marks, the region, shrinks kept as a collection of models |
 
 pub mod def;
 pub mod deform;
 pub mod draw;
 pub mod kind;
-pub mod mesh_io;
 mod panel;
-pub mod pick;
 pub mod plugin;
 pub mod region;
 pub mod sample;
-pub mod surface;
 pub mod workbench;
 
 pub use def::SoftBodyDef;

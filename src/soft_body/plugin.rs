@@ -5,18 +5,19 @@
 use super::def::{SoftBodyBuilt, SoftBodyDef};
 use super::deform::{Deformer, Method, Settings, Variant};
 use super::draw::{marker_mesh, region_tints, shift_tints, surface_mesh};
-use super::mesh_io::{self, MeshReport};
-use super::pick::SurfaceBvh;
 use super::region::{Mark, RegionError};
 use super::workbench::{ShrinkError, ShrinkJob, Shrunk, Workbench};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::entity::SceneEntity;
-use crate::foundation::messages::{SelectEntity, ViewClicked};
+use crate::foundation::messages::SelectEntity;
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, LongWorkArrival, WriteBackSystems};
 use crate::foundation::values::{Point, first_free_path, srgb_channels};
 use crate::raster::RasterMesh;
-use crate::view::CameraParams;
+use crate::spatial::SpatialSystems;
+use crate::spatial::mesh_io::{self, MeshReport};
+use crate::spatial::pick::{Pickable, Picked, Pointer};
+use crate::spatial::surface_bvh::SurfaceBvh;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
@@ -96,14 +97,14 @@ pub struct SoftBody {
     /// A shrink is under way off the main thread.
     pub shrinking: bool,
     /// The triangles of a surface for picking, and which surface (0 the original).
-    picking: (SurfaceBvh, usize),
+    picking: (Arc<SurfaceBvh>, usize),
 }
 
 impl SoftBody {
     /// A soft body on `built`'s surface.
     pub fn new(built: &SoftBodyBuilt) -> Self {
         let bench = Workbench::new(built.surface.clone());
-        let picking = (SurfaceBvh::new(bench.shown_positions(), &bench.original().triangles), bench.shown());
+        let picking = (Arc::new(SurfaceBvh::new(bench.shown_positions(), &bench.original().triangles)), bench.shown());
         Self {
             region: Err(RegionError::TooFewMarks(0)),
             bench,
@@ -114,10 +115,9 @@ impl SoftBody {
         }
     }
 
-    /// The surface point shown under the ray from `origin` along the unit `direction`, both
-    /// in the body's own coordinates.
-    pub fn pick(&self, origin: Vec3, direction: Vec3) -> Option<super::pick::SurfacePick> {
-        self.picking.0.pick(origin, direction)
+    /// The triangles of the surface shown, for picking, in the body's own coordinates.
+    pub fn picking(&self) -> Arc<SurfaceBvh> {
+        self.picking.0.clone()
     }
 
     /// Does `action` with the deformer `params` name; for [`SoftBodyAction::Apply`], returns
@@ -164,7 +164,7 @@ impl SoftBody {
     fn follow_shown(&mut self) {
         if self.picking.1 != self.bench.shown() {
             let bvh = SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles);
-            self.picking = (bvh, self.bench.shown());
+            self.picking = (Arc::new(bvh), self.bench.shown());
         }
         self.region = self.bench.region().map(|region| RegionShown {
             inside: region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect(),
@@ -400,36 +400,33 @@ impl Plugin for SoftBodyPlugin {
                 (mark_clicked_points, act_on_keys).in_set(ControlSystems::Input).in_set(SoftBodySystems),
             )
             .add_systems(RunFixedMainLoop, take_shrinks.in_set(ControlSystems::Apply).in_set(SoftBodySystems))
-            .add_systems(PostUpdate, write_back_soft_bodies.in_set(WriteBackSystems).in_set(SoftBodySystems));
+            .add_systems(PostUpdate, write_back_soft_bodies.in_set(WriteBackSystems).in_set(SoftBodySystems))
+            .add_systems(PostUpdate, publish_surfaces.in_set(SpatialSystems::Publish).in_set(SoftBodySystems));
     }
 }
 
-/// Marks the surface point under a click in the view (its nearest vertex stands for it) and
-/// selects the soft body in the panel.
+/// Marks the vertex nearest a click that picked a soft body, and selects the body.
 fn mark_clicked_points(
-    mut clicks: MessageReader<ViewClicked>,
-    cameras: Query<&CameraParams>,
-    mut bodies: Query<(&mut SoftBody, &ShrinkParams, &GlobalTransform, &SceneEntity)>,
+    mut picks: MessageReader<Picked>,
+    mut bodies: Query<(&mut SoftBody, &ShrinkParams, &SceneEntity)>,
     mut selections: MessageWriter<SelectEntity>,
 ) {
-    let Some(camera) = cameras.iter().next().map(CameraParams::camera) else { return };
-    for click in clicks.read() {
-        let (origin, direction) = camera.ray(click.ndc, click.aspect);
-        let nearest = bodies
-            .iter()
-            .enumerate()
-            .filter_map(|(index, (body, _, placed, _))| {
-                let to_local = placed.affine().inverse();
-                let local_direction = to_local.transform_vector3(direction).try_normalize()?;
-                let hit = body.pick(to_local.transform_point3(origin), local_direction)?;
-                Some((index, hit.vertex, placed.transform_point(hit.point).distance(origin)))
-            })
-            .min_by(|a, b| a.2.total_cmp(&b.2));
-        let Some((index, vertex, _)) = nearest else { continue };
-        if let Some((mut body, params, _, scene)) = bodies.iter_mut().nth(index) {
-            // A mark starts no shrink.
-            let _ = body.perform(SoftBodyAction::MarkVertex(vertex), params);
-            selections.write(SelectEntity(scene.name.clone()));
+    for picked in picks.read().filter(|picked| picked.pointer == Pointer::Click) {
+        let (Ok((mut body, params, scene)), Some(vertex)) = (bodies.get_mut(picked.hit.entity), picked.hit.vertex)
+        else {
+            continue;
+        };
+        // A mark starts no shrink.
+        let _ = body.perform(SoftBodyAction::MarkVertex(vertex), params);
+        selections.write(SelectEntity(scene.name.clone()));
+    }
+}
+
+/// A soft body can be picked on the surface it shows, where it stands now.
+fn publish_surfaces(bodies: Query<(Entity, Ref<SoftBody>, Ref<GlobalTransform>)>, mut commands: Commands) {
+    for (entity, body, placed) in &bodies {
+        if body.is_changed() || placed.is_changed() {
+            commands.entity(entity).insert(Pickable::Surface { bvh: body.picking(), to_world: placed.affine() });
         }
     }
 }

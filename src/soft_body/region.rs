@@ -2,7 +2,7 @@
 //! a closed loop, and the part of the surface inside it (the smaller side), cut out as a
 //! [`Surface`] whose loop vertices are fixed and whose inside may move.
 
-use super::surface::{Surface, SurfaceError, triangle_cross};
+use crate::spatial::surface::{Surface, SurfaceError, triangle_cross};
 use bevy::math::Vec3;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
@@ -365,7 +365,7 @@ mod tests {
     #[test]
     fn a_region_outlined_on_the_belly_shrinks_with_its_outline_held() {
         use super::super::deform::{Method, Settings, Variant, deform};
-        use super::super::surface::Facts;
+        use crate::spatial::surface::Facts;
         let belly = sample::belly(25);
         let at = |i: u32, j: u32| Mark::Vertex(j * 25 + i);
         let region = select(&belly, &[at(6, 6), at(18, 6), at(18, 18), at(6, 18)], 1e-3).unwrap();

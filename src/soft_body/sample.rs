@@ -1,6 +1,6 @@
 //! Sample surfaces made by the project itself, so that nothing is missing to deform.
 
-use super::surface::{Surface, triangle_cross};
+use crate::spatial::surface::{Surface, triangle_cross};
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::f32::consts::TAU;

@@ -3,9 +3,9 @@
 //! compared with the original and with each other, and saved.
 
 use super::deform::{Method, Settings, SettingsError, Stop, Variant, deform};
-use super::mesh_io::TriangleMesh;
 use super::region::{Mark, Region, RegionError, select, vertex_of};
-use super::surface::{Facts, Surface};
+use crate::spatial::mesh_io::TriangleMesh;
+use crate::spatial::surface::{Facts, Surface};
 use bevy::math::Vec3;
 use serde::Serialize;
 use std::time::Instant;

@@ -3,6 +3,7 @@
 
 use super::Heightmap;
 use super::section::{Geometry, Section};
+use crate::spatial::solid::HeightField;
 use bevy::math::{Affine3A, Quat, Vec3};
 use bevy::transform::components::Transform;
 
@@ -116,6 +117,17 @@ impl Ground {
         let out = self.to_world.transform_point3(local + normal * (below * normal.y)) - p;
         let depth = out.length();
         (depth > 0.0).then(|| (depth, out / depth))
+    }
+}
+
+/// The section's ground is what solids meet of the terrain.
+impl HeightField for Ground {
+    fn penetration(&self, p: Vec3) -> Option<(f32, Vec3)> {
+        Ground::penetration(self, p)
+    }
+
+    fn height(&self, x: f32, z: f32) -> Option<f32> {
+        self.height_under(x, z)
     }
 }
 

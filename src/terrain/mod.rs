@@ -12,9 +12,8 @@
 //! | [`generate`] | the generators (fBm, diamond-square, hills) and the layered recipe |
 //! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
 //! | [`section`] | the visible section and its mesh, split by band |
+//! | [`surfaces`] | the surfaces a terrain is drawn in, a band or a border each, with their materials |
 //! | [`ground`] | the visible section as a solid: height and normal under a point, on the triangles drawn |
-//! | [`chunk`] | chunks of an unbounded world: heights at world positions and levels of detail, edges shared bit for bit |
-//! | [`stream`] | which chunks to have around a camera: nearest and ahead first, unloaded beyond a larger radius |
 //! | [`bands`] | the height bands, their rule and the project's band textures |
 //!
 //! Parameters (`<name>.<parameter>`, all from [`TerrainParams`]): `section.{x,z}` (the
@@ -24,7 +23,6 @@
 //! makes the map again).
 
 pub mod bands;
-pub mod chunk;
 pub mod def;
 pub mod generate;
 pub mod ground;
@@ -35,7 +33,7 @@ pub mod noise;
 pub mod panel;
 pub mod plugin;
 pub mod section;
-pub mod stream;
+pub mod surfaces;
 
 pub use def::TerrainDef;
 pub use heightmap::Heightmap;

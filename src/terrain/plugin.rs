@@ -2,25 +2,27 @@
 //! compute pool, the section's meshes written back when anything they show changed, its dump
 //! and its panel section.
 
-use super::bands::{Band, BandRule, band_texture};
-use super::def::{BandsDef, TerrainBuilt, TerrainDef};
+use super::bands::{Band, BandRule};
+use super::def::{TerrainBuilt, TerrainDef};
 use super::generate::{PerlinLayer, Recipe};
-use super::ground::placement;
+use super::ground::{Ground, placement};
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
-use super::section::{BORDERS, Geometry, Section, mesh_section};
+use super::section::{Geometry, Section, mesh_section};
+use super::surfaces::{TerrainSurface, surface_materials};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::{first_free_path, wrap_degrees};
-use crate::raster::texture::material;
-use crate::raster::{Material, RasterMesh, Texture};
+use crate::raster::RasterMesh;
+use crate::spatial::SpatialSystems;
+use crate::spatial::solid::{Collider, Solid};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, block_on};
 use serde_json::{Map, Value, json};
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The visible section as parameters (`<name>.section.x`, ...): whole numbers held as `f32`
@@ -147,50 +149,6 @@ struct PendingMap {
 /// Frames between a regeneration request and taking its map in.
 const GENERATION_FRAMES: u32 = 3;
 
-/// What one mesh of a terrain shows, a child of the terrain entity.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TerrainSurface {
-    /// The triangles showing one band alone.
-    Band(Band),
-    /// With blending, the triangles where the pair of bands at this index of [`BORDERS`] meet.
-    Border(usize),
-}
-
-impl TerrainSurface {
-    /// The surface's place in [`SectionMesh::into_surfaces`](super::section::SectionMesh::into_surfaces).
-    pub fn index(self) -> usize {
-        match self {
-            TerrainSurface::Band(band) => band.index(),
-            TerrainSurface::Border(index) => 5 + index,
-        }
-    }
-}
-
-/// The project's band textures, made once.
-fn project_textures() -> &'static [Arc<Texture>; 5] {
-    static TEXTURES: OnceLock<[Arc<Texture>; 5]> = OnceLock::new();
-    TEXTURES.get_or_init(|| Band::ALL.map(|band| Arc::new(band_texture(band))))
-}
-
-/// The material of `band`: the scene's texture for it, or the project's.
-fn band_material(bands: &BandsDef, band: Band) -> Material {
-    match bands.textures.all()[band.index()] {
-        Some(texture) => material(Vec3::ONE, Some(texture)),
-        None => Material { texture: Some(project_textures()[band.index()].clone()), ..Material::colored(Vec3::ONE) },
-    }
-}
-
-/// Each surface a terrain of `bands` is drawn in, with its material: the five bands, and with
-/// blending the borders, each band's texture fading into the next one's.
-pub(crate) fn surface_materials(bands: &BandsDef) -> Vec<(TerrainSurface, Material)> {
-    let plain = Band::ALL.map(|band| (TerrainSurface::Band(band), band_material(bands, band)));
-    let borders = BORDERS.into_iter().enumerate().filter(|_| bands.blend.is_some()).map(|(index, (lower, upper))| {
-        let material = Material { blend: band_material(bands, upper).texture, ..band_material(bands, lower) };
-        (TerrainSurface::Border(index), material)
-    });
-    plain.into_iter().chain(borders).collect()
-}
-
 /// The first Perlin layer of a recipe, whose parameters the panel and timelines edit.
 fn main_layer(recipe: Option<&Recipe>) -> PerlinLayer {
     recipe.and_then(|r| r.layers.iter().find_map(|l| l.perlin)).unwrap_or_default()
@@ -311,7 +269,8 @@ impl Plugin for TerrainPlugin {
                     .in_set(TerrainSystems),
             )
             .add_systems(Update, regenerate.after(ControlSystems::Load).in_set(TerrainSystems))
-            .add_systems(PostUpdate, write_back_terrain.in_set(WriteBackSystems).in_set(TerrainSystems));
+            .add_systems(PostUpdate, write_back_terrain.in_set(WriteBackSystems).in_set(TerrainSystems))
+            .add_systems(PostUpdate, publish_ground.in_set(SpatialSystems::Publish).in_set(TerrainSystems));
     }
 }
 
@@ -485,6 +444,20 @@ fn write_back_terrain(
             body.mesh_time = started.elapsed();
         }
         *transform = params.transform(body.barycentre);
+    }
+}
+
+/// A terrain's shown section is the ground solids meet, where the terrain stands now; made
+/// again when the section or the terrain's place changed.
+fn publish_ground(terrains: Query<(Entity, Ref<TerrainBody>, Ref<GlobalTransform>)>, mut commands: Commands) {
+    for (entity, body, placed) in &terrains {
+        if !(body.is_changed() || placed.is_changed()) {
+            continue;
+        }
+        let Some((section, height_m)) = body.shown else { continue };
+        let geometry = Geometry { cell_m: body.cell_m, height_m, texture_cells: body.texture_cells };
+        let ground = Ground::of_section(&body.map, section, geometry, body.barycentre, placed.affine());
+        commands.entity(entity).insert(Solid(Collider::Ground(Arc::new(ground))));
     }
 }
 

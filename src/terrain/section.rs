@@ -347,7 +347,7 @@ fn blended_surface(weights: [&[f32; 5]; 3]) -> (usize, Option<Border>) {
 
 /// Unit normals of the section's vertices, row by row: the sum of the (area-weighted) normals
 /// of the up to six map triangles around each vertex.
-pub(super) fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
+pub(crate) fn vertex_normals(map: &Heightmap, section: Section, geometry: Geometry) -> Vec<Vec3> {
     let [x0, z0] = section.origin.map(i64::from);
     let [w, h] = section.size.map(|n| n as usize);
     // The face normals (area-weighted) of the cells around the section's vertices, from one

@@ -8,8 +8,7 @@
 //! | [`plugin`] | [`TreePlugin`] and its set [`TreeSystems`]: the live tree, picking, edits with undo, mesh write-back, dump |
 //! | [`panel`] | the window's tree section: counts, the picked support and its editor |
 //! | [`model`] | supports from their descriptions (polylines or forks), trunk or branch |
-//! | [`geometry`] | one tapered segment: signed distance, closest surface point, ray hit |
-//! | [`bvh`] | a bounding volume hierarchy over segments (ray cast, nearest, within a radius) or any primitive a ray hits |
+//! | [`body`] | [`TreeBody`]: a tree as it stands, the component other kinds read |
 //! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
 //! | [`generate`] | the seeded tree and forest generator |
 //! | [`edit`] | checked edits of a written-out tree |
@@ -18,24 +17,21 @@
 //! world. Where the rules live: a support tilted more than 70 degrees from horizontal is a
 //! trunk ([`model`]); a fork starts inside its parent at a fraction of its length ([`model`]).
 
-pub mod bvh;
+pub mod body;
 pub mod def;
 pub mod edit;
 pub mod generate;
-pub mod geometry;
 pub mod kind;
 pub mod mesh;
 pub mod model;
 pub mod panel;
 pub mod plugin;
 
-pub use bvh::{Bvh, Nearest, Primitive, RayHit, SegmentBvh};
+pub use body::TreeBody;
 pub use def::{SupportDef, TreeDef};
 pub use generate::{GeneratorSettings, ScatterSettings};
-pub use geometry::{SegmentHit, SurfacePoint, TaperedSegment};
 pub use kind::TreeKind;
 pub use model::{Shape, Support, SupportKind, SupportSpec, Tree, TreeError};
 pub use plugin::{
-    ChunkTrees, Pick, ScatteredTrees, SelectedSupport, TreeBody, TreePlugin, TreeSource, TreeSystems, edit_tree, pick,
-    undo_tree_edit,
+    ChunkTrees, ScatteredTrees, SelectedSupport, TreePlugin, TreeSource, TreeSystems, edit_tree, undo_tree_edit,
 };

@@ -2,7 +2,7 @@
 //! each point, built from the scene's descriptions (polylines, or branches forking from a
 //! parent), and classified as trunks or branches.
 
-use super::geometry::TaperedSegment;
+use crate::spatial::segment::TaperedSegment;
 use bevy::math::Vec3;
 use std::fmt;
 

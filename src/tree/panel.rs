@@ -1,9 +1,10 @@
 //! The tree's section of the window's panel: its supports, the one picked in the view and
 //! its editor.
 
+use super::body::TreeBody;
 use super::edit;
 use super::model::SupportKind;
-use super::plugin::{SelectedSupport, TreeBody, TreeSource, edit_tree, undo_tree_edit};
+use super::plugin::{SelectedSupport, TreeSource, edit_tree, undo_tree_edit};
 use bevy::prelude::*;
 use bevy_egui::egui;
 

@@ -1,14 +1,14 @@
 //! The `world:` entry of a scene file: the heights (a recipe without bounds, or a finite map),
 //! the chunks, the streaming radii and levels, and the bands.
 
+use super::chunk::{LEVELS, WorldHeights};
+use super::stream::StreamSettings;
 use crate::foundation::kind::BuildContext;
 use crate::foundation::values::PositiveMetres;
 use crate::foundation::yaml::FileError;
-use crate::terrain::chunk::{LEVELS, WorldHeights};
 use crate::terrain::def::{BandsDef, HeightDef, draw_seed};
 use crate::terrain::generate::{Function, Layer, Recipe};
 use crate::terrain::section::Geometry;
-use crate::terrain::stream::StreamSettings;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 

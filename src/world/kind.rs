@@ -1,13 +1,13 @@
 //! The `world` entity kind: how its entries are checked, built, spawned and saved, and what
 //! the app offers for its entities beside its plugin.
 
+use super::chunk::CHUNK_CELLS;
 use super::def::{WorldBuilt, WorldDef};
 use super::panel;
 use super::plugin::spawn_world;
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
-use crate::terrain::chunk::CHUNK_CELLS;
 use crate::terrain::def::HeightDef;
 use crate::terrain::section::Geometry;
 use bevy::app::App;

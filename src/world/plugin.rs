@@ -6,15 +6,18 @@
 //! late), so that headless runs with the same camera path have the same chunks at the same
 //! frames.
 
+use super::chunk::{ChunkHeights, ChunkKey, LEVELS, SIDES, WorldHeights};
 use super::def::{WorldBuilt, WorldDef};
+use super::ground::WorldGround;
+use super::stream::{StreamSettings, plan};
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::schedule::ControlSystems;
 use crate::raster::{Material, MeshData, RasterMesh};
+use crate::spatial::SpatialSystems;
+use crate::spatial::ground::GroundPatch;
+use crate::spatial::solid::{Collider, Solid};
 use crate::terrain::bands::BandRule;
-use crate::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, SIDES, WorldHeights};
-use crate::terrain::plugin::{TerrainSurface, surface_materials};
 use crate::terrain::section::Geometry;
-use crate::terrain::stream::{StreamSettings, plan};
+use crate::terrain::surfaces::{TerrainSurface, surface_materials};
 use crate::view::CameraParams;
 use bevy::ecs::world::EntityWorldMut;
 use bevy::prelude::*;
@@ -42,7 +45,7 @@ impl Plugin for WorldPlugin {
     fn build(&self, app: &mut App) {
         app.register_dump::<WorldBody>().add_systems(
             Update,
-            (stream_chunks, spawn_finished, hang_skirts).chain().after(ControlSystems::Input).in_set(WorldSystems),
+            (stream_chunks, spawn_finished, hang_skirts).chain().in_set(SpatialSystems::Ground).in_set(WorldSystems),
         );
     }
 }
@@ -224,8 +227,11 @@ impl WorldBody {
 
 /// Spawns a world entity of `def`.
 pub(super) fn spawn_world(entity: &mut EntityWorldMut, def: &WorldDef, built: &WorldBuilt) {
+    // Its ground is the same for as long as it lives: a solid from the start.
+    let ground = WorldGround { heights: built.heights.clone(), geometry: built.geometry };
     entity.insert((
         Transform::default(),
+        Solid(Collider::Ground(Arc::new(ground))),
         WorldBody {
             maker: Arc::new(ChunkMaker {
                 heights: built.heights.clone(),
@@ -309,10 +315,13 @@ fn spawn_finished(mut worlds: Query<(Entity, &mut WorldBody)>, mut commands: Com
             body.making_time += made.time;
             body.recent.push_back(now);
             let chunk = WorldChunk { key, level, checksum: made.checksum };
+            let (corner, side) = body.chunk_square(key);
+            let patch =
+                GroundPatch { key: IVec2::new(key.x, key.z), level, corner: Vec2::new(corner.0, corner.1), side };
             // The meshes are placed in the world already: with no transform of their own, the
             // vertices neighbouring chunks share stay alike bit for bit.
             let entity = commands
-                .spawn((chunk, Transform::IDENTITY, ChildOf(world)))
+                .spawn((chunk, patch, Transform::IDENTITY, ChildOf(world)))
                 .with_children(|parts| spawn_surfaces(parts, &body.surfaces, &made.surfaces))
                 .id();
             let resident = Resident { level, entity, checksum: made.checksum, skirts: made.skirts, hung: [None; 4] };

@@ -218,7 +218,7 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
     let saved = body.save(folder.path(), "torso", 1, "ply").unwrap();
     let again = body.save(folder.path(), "torso", 1, "ply").unwrap();
     assert_ne!(saved, again, "an earlier file is never overwritten");
-    let (read, _) = canopy::soft_body::mesh_io::read(&saved).unwrap();
+    let (read, _) = canopy::spatial::mesh_io::read(&saved).unwrap();
     assert_eq!(read.positions, body.bench.positions(1).unwrap());
     assert!(body.save(folder.path(), "torso", 2, "obj").is_err(), "there is no second model");
 

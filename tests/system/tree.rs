@@ -59,12 +59,14 @@ fn tree_scenes_play_and_dump_their_supports() {
 
 #[test]
 fn a_ray_through_a_branch_on_screen_picks_that_branch() {
-    use canopy::tree::{TreeBody, pick};
+    use canopy::spatial::pick::{Pickable, nearest_hit};
+    use canopy::tree::TreeBody;
     use canopy::view::CameraParams;
     let mut app = small_app(&path("scenes/tree.yaml"));
     let world = app.world_mut();
     let camera = world.query::<&CameraParams>().single(world).unwrap().camera();
     let aspect = SMALL.x as f32 / SMALL.y as f32;
+    let mut pickables = world.query::<(bevy::prelude::Entity, &Pickable)>();
     let mut trees = world.query::<(bevy::prelude::Entity, &TreeBody)>();
     let (_, body) = trees.single(world).unwrap();
     let index = |name: &str| body.tree.supports.iter().position(|s| s.name == name).unwrap();
@@ -72,18 +74,19 @@ fn a_ray_through_a_branch_on_screen_picks_that_branch() {
         let (point, _, _) = body.tree.supports[index(name)].at(fraction);
         let ndc = camera.view_projection(aspect).project_point3(point);
         let (origin, direction) = camera.ray(ndc.truncate(), aspect);
-        let picked = pick(trees.iter(world), origin, direction).expect("a hit");
-        assert_eq!(picked.support, index(name), "aiming at {name}");
+        let picked = nearest_hit(pickables.iter(world), origin, direction).expect("a hit");
+        assert_eq!(body.segment_supports[picked.part], index(name), "aiming at {name}");
         // The hit lies about where the axis point aimed at does (within the branch's radius).
         let length = body.tree.supports[index(name)].length();
-        assert!((picked.fraction - fraction).abs() * length < 0.3, "{name}: {} vs {fraction}", picked.fraction);
-        assert!(picked.normal.dot(direction) < 0.0, "the normal faces the ray");
+        let at = body.fraction_along(picked.part, picked.along);
+        assert!((at - fraction).abs() * length < 0.3, "{name}: {at} vs {fraction}");
+        assert!(picked.normal.expect("a segment's normal").dot(direction) < 0.0, "the normal faces the ray");
         // The hit is on the near side of the axis point aimed at.
         assert!(picked.point.distance(point) < 0.3 && picked.distance < (point - origin).length(), "{picked:?}");
     }
     // Aiming at the sky hits nothing.
     let (origin, direction) = camera.ray(bevy::math::Vec2::new(0.9, 0.9), aspect);
-    assert!(pick(trees.iter(world), origin, direction).is_none());
+    assert!(nearest_hit(pickables.iter(world), origin, direction).is_none());
 
     // A click in the view selects the support under it.
     let (low, _, _) = body.tree.supports[index("low")].at(0.7);

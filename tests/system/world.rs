@@ -5,11 +5,11 @@
 
 use super::common::*;
 use canopy::run::{RunOptions, run_headless};
-use canopy::terrain::chunk::{ChunkHeights, ChunkKey, SIDES, WorldHeights};
 use canopy::terrain::heightmap::Heightmap;
 use canopy::terrain::image_io::{self, Encoding};
 use canopy::tree::{ChunkTrees, SupportKind};
 use canopy::view::CameraParams;
+use canopy::world::chunk::{ChunkHeights, ChunkKey, SIDES, WorldHeights};
 use canopy::world::{ChunkSkirt, WorldBody, WorldChunk};
 use serde_json::Value;
 
@@ -156,7 +156,7 @@ fn chunks_made_in_advance_stream_as_the_same_chunks_at_the_same_frames() {
                 .flat_map(|frame| {
                     let camera = bevy::math::Vec2::new(frame as f32 * 4.0, 150.0);
                     let none = std::collections::HashMap::new();
-                    canopy::terrain::stream::plan(&stream, camera, bevy::math::Vec2::X, &none, &none).requests
+                    canopy::world::stream::plan(&stream, camera, bevy::math::Vec2::X, &none, &none).requests
                 })
                 .collect();
             for mut body in app.world_mut().query::<&mut WorldBody>().iter_mut(app.world_mut()) {

@@ -8,7 +8,7 @@
 
 use canopy::soft_body::deform::{Method, Settings, Variant, deform};
 use canopy::soft_body::sample;
-use canopy::soft_body::surface::Facts;
+use canopy::spatial::surface::Facts;
 use std::time::Instant;
 
 /// Iterations at most, so that the largest regions finish in seconds.

@@ -8,7 +8,9 @@
 //! Run with `cargo bench -p canopy_bench --bench soft_bodies`.
 
 use bevy::math::Vec3;
-use canopy::elastic::xpbd::{Body, Material, TetMesh, World};
+use canopy::elastic::material::Material;
+use canopy::elastic::tet_mesh::TetMesh;
+use canopy::elastic::xpbd::{Body, World};
 use canopy::soft_body::sample;
 use rapier3d::prelude as rp;
 use std::time::Instant;

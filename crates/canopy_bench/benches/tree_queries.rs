@@ -4,7 +4,8 @@
 //! Run with `cargo bench -p canopy_bench --profile dev --bench tree_queries`.
 
 use bevy::math::Vec3;
-use canopy::tree::{SegmentBvh, TaperedSegment};
+use canopy::spatial::bvh::SegmentBvh;
+use canopy::spatial::segment::TaperedSegment;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 

@@ -5,10 +5,10 @@
 //! Run with `cargo bench -p canopy_bench --bench world_chunks`.
 
 use canopy::terrain::bands::{BandBlend, BandRule};
-use canopy::terrain::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
 use canopy::terrain::generate::Recipe;
 use canopy::terrain::section::Geometry;
-use canopy::terrain::stream::StreamSettings;
+use canopy::world::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
+use canopy::world::stream::StreamSettings;
 use std::hint::black_box;
 use std::time::Instant;
 

@@ -7,7 +7,7 @@
 //! nearest box first and prune boxes that cannot beat the best answer so far. Every query gives
 //! exactly the answer of a scan over all primitives (see the property tests).
 
-use super::geometry::{SegmentHit, SurfacePoint, TaperedSegment};
+use super::segment::{SegmentHit, SurfacePoint, TaperedSegment};
 use bevy::math::Vec3;
 
 /// Most primitives in a leaf.

@@ -132,7 +132,7 @@ impl Surface {
 }
 
 /// Twice the area vector of triangle `t` at `positions`: its normal times twice its area.
-pub(super) fn triangle_cross(positions: &[Vec3], [a, b, c]: [u32; 3]) -> Vec3 {
+pub fn triangle_cross(positions: &[Vec3], [a, b, c]: [u32; 3]) -> Vec3 {
     let [a, b, c] = [a, b, c].map(|v| positions[v as usize]);
     (b - a).cross(c - a)
 }

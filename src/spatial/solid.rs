@@ -1,14 +1,36 @@
-//! The static solids a body's particles stay out of: planes, balls and boxes, the scene's
-//! shapes as they are placed, the terrain's and the streamed world's ground and the trees'
-//! supports.
+//! Solids: what a body's particles stay out of. Planes, balls and boxes; the scene's shapes
+//! as they are placed; grounds given as height fields (a terrain's section, a streamed
+//! world); the trees' supports as tapered segments in their hierarchy of bounds.
+//!
+//! Every kind whose entities are solid writes a [`Solid`] on them, after transforms are
+//! propagated ([`SpatialSystems::Solids`](super::SpatialSystems::Solids)); what moves
+//! through them reads only that component and never the kinds that made it.
 
+use super::bvh::SegmentBvh;
 use crate::raster::primitives::Primitive;
-use crate::terrain::chunk::WorldHeights;
-use crate::terrain::ground::Ground;
-use crate::terrain::section::Geometry;
-use crate::tree::SegmentBvh;
+use bevy::ecs::component::Component;
 use bevy::math::{Affine3A, Vec3};
+use std::fmt::Debug;
 use std::sync::Arc;
+
+/// A ground under which nothing may go: heights over the horizontal plane.
+pub trait HeightField: Debug + Send + Sync {
+    /// Whether a point of the box from `min` to `max` could lie under the ground: false only
+    /// where none can.
+    fn may_touch(&self, _min: Vec3, _max: Vec3) -> bool {
+        true
+    }
+
+    /// How deep `p` lies under the ground, metres, and the unit direction out, if it is under.
+    fn penetration(&self, p: Vec3) -> Option<(f32, Vec3)>;
+
+    /// The ground's height under the horizontal point `(x, z)`, metres, where there is ground.
+    fn height(&self, x: f32, z: f32) -> Option<f32>;
+}
+
+/// The solid an entity is, for everything that moves through the scene.
+#[derive(Component, Debug, Clone)]
+pub struct Solid(pub Collider);
 
 /// A static solid particles cannot enter.
 #[derive(Debug, Clone)]
@@ -45,20 +67,22 @@ pub enum Collider {
         /// The world's frame to the shape's.
         to_local: Affine3A,
     },
-    /// The terrain's visible section.
-    Ground(Arc<Ground>),
-    /// A streamed world's ground, everywhere, as its finest level draws it.
-    World {
-        /// The world's heights.
-        heights: WorldHeights,
-        /// Its metres between samples and for a height of 1.
-        geometry: Geometry,
-    },
+    /// A ground: a terrain's visible section, a streamed world's heights.
+    Ground(Arc<dyn HeightField>),
     /// The trees' supports, every segment of them.
     Supports(Arc<SegmentBvh>),
 }
 
 impl Collider {
+    /// Where solids of this kind come among the solids a body meets: shapes, grounds, supports.
+    pub fn rank(&self) -> u8 {
+        match self {
+            Collider::Plane { .. } | Collider::Sphere { .. } | Collider::Box { .. } | Collider::Shape { .. } => 0,
+            Collider::Ground(_) => 1,
+            Collider::Supports(_) => 2,
+        }
+    }
+
     /// A shape placed by `to_world`.
     pub fn shape(primitive: Primitive, to_world: Affine3A) -> Self {
         Collider::Shape { primitive, to_world, to_local: to_world.inverse() }
@@ -74,9 +98,7 @@ impl Collider {
                 bvh.within((min + max) * 0.5, (max - min).length() * 0.5, &mut found);
                 !found.is_empty()
             }
-            Collider::World { heights, geometry } => {
-                min.y <= heights.highest_over([min.x, min.z], [max.x, max.z], *geometry)
-            }
+            Collider::Ground(ground) => ground.may_touch(min, max),
             _ => true,
         }
     }
@@ -110,12 +132,6 @@ impl Collider {
                 (depth > 0.0).then(|| (depth, out / depth))
             }
             Collider::Ground(ground) => ground.penetration(p),
-            Collider::World { heights, geometry } => {
-                let (height, normal) = heights.ground_surface(p.x, p.z, *geometry);
-                // Out along the normal to the triangle's plane.
-                let depth = (height - p.y) * normal.y;
-                (depth > 0.0).then_some((depth, normal))
-            }
             Collider::Supports(bvh) => {
                 let nearest = bvh.nearest(p, 0.0)?;
                 let depth = -nearest.surface.distance;
@@ -177,7 +193,7 @@ fn cylinder(local: Vec3) -> Option<(f32, Vec3)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tree::TaperedSegment;
+    use crate::spatial::segment::TaperedSegment;
     use bevy::math::Quat;
 
     #[test]

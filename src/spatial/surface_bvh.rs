@@ -1,7 +1,7 @@
 //! Picking points on a surface: a ray cast against its triangles through a bounding volume
 //! hierarchy, so that a click on a surface of a hundred thousand triangles tests a few dozen.
 
-use crate::tree::bvh::{Bvh, Primitive};
+use super::bvh::{Bvh, Primitive};
 use bevy::math::Vec3;
 
 /// One triangle of a surface, by its corners in metres.
@@ -96,8 +96,8 @@ impl SurfaceBvh {
 
 #[cfg(test)]
 mod tests {
-    use super::super::sample;
     use super::*;
+    use crate::soft_body::sample;
     use proptest::prelude::*;
 
     proptest! {

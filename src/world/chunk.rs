@@ -15,12 +15,12 @@
 //! (see [`stream`](super::stream)); a skirt, a strip hanging down from every edge of a chunk,
 //! fills the pixels that the meeting of their different triangles could still leave open.
 
-use super::bands::BandRule;
-use super::generate::Recipe;
-use super::ground::cell_surface;
-use super::heightmap::Heightmap;
-use super::noise::Fbm;
-use super::section::{
+use crate::terrain::bands::BandRule;
+use crate::terrain::generate::Recipe;
+use crate::terrain::ground::cell_surface;
+use crate::terrain::heightmap::Heightmap;
+use crate::terrain::noise::Fbm;
+use crate::terrain::section::{
     Geometry, MorphTargets, Placement, SampleFrame, Section, SectionMesh, mesh_section_in, vertex_normals,
 };
 use bevy::math::Vec3;
