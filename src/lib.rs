@@ -4,20 +4,20 @@
 //!
 //! # Layers
 //!
-//! Modules import only from the layers below them (a test, `tests/architecture.rs`, reads the
-//! `use crate::` lines and refuses a cycle):
+//! Modules import only from the layers below them (`tests/architecture.rs` reads the
+//! `crate::` paths of every file and refuses an upward use, a cycle, and a kind reaching into
+//! another kind's plugin):
 //!
 //! | layer | modules | what it holds |
 //! |---|---|---|
-//! | app | [`app`], [`run`], [`ui`], `main` | the plugin group and the list of kinds, headless runs, the window |
-//! | domains | [`shape`], [`muscle`], [`tree`], [`sloth`], [`soft_body`], [`terrain`], [`view`], [`raster`], [`controls`] | each a folder of pure cores and one plugin; a domain may use another's pure core |
+//! | app | [`app`], [`run`], [`ui`], [`cli`], `main` | the plugin group and the list of kinds, headless runs, the window, the command line |
+//! | kinds | [`shape`], [`muscle`], [`tree`], [`sloth`], [`terrain`], [`world`], [`soft_body`], [`elastic`], [`ar`] | each a folder: an entry (`kind.rs`), its file format (`def.rs`), its plugin and panel, its pure cores; a kind may use another's pure cores |
+//! | services | [`spatial`], [`view`], [`raster`], [`controls`] | what things are made of and the picking system; camera and light; the rasterizer's plugin; keys and timelines |
 //! | scene | [`scene`] | loading, checking, spawning and saving through the kind registry, naming no kind |
 //! | foundation | [`foundation`] | the entity marker, the kind trait, checked values, located errors, parameters, dumps, keys, panel sections, the schedule |
-//! | rasterizer | the `canopy_raster` crate | pixels from plain data |
+//! | crates | `canopy_raster`, `canopy_vision` | pixels, markers and cameras from plain data |
 //!
-//! An entity kind is a folder (`def.rs` with its file format and its
-//! [`EntityKind`](foundation::kind::EntityKind), `plugin.rs`, its pure cores) and one line in
-//! [`app::entity_kinds`].
+//! An entity kind is a folder and one line in [`app::entity_kinds`].
 //!
 //! | plugin | module | what it does |
 //! |---|---|---|
@@ -25,12 +25,17 @@
 //! | [`ControlsPlugin`](controls::ControlsPlugin) | [`controls`] | global keys, scripted timelines |
 //! | [`ScenePlugin`](scene::ScenePlugin) | [`scene`] | YAML scene assets, hot reload, spawning |
 //! | [`ViewPlugin`](view::ViewPlugin) | [`view`] | camera and light entities and their keys |
+//! | [`SpatialPlugin`](spatial::SpatialPlugin) | [`spatial`] | the order of the spatial sets; one ray cast under the pointer into every pickable, the nearest hit handed to its kind |
 //! | [`RenderSettingsPlugin`](raster::RenderSettingsPlugin) | [`raster`] | the `render` entity: shading and shadows |
 //! | [`ShapePlugin`](shape::ShapePlugin) | [`shape`] | the `shape` entity kind |
 //! | [`MusclePlugin`](muscle::MusclePlugin) | [`muscle`] | the `muscle` entity kind |
+//! | [`TerrainPlugin`](terrain::TerrainPlugin) | [`terrain`] | the `terrain` entity kind: heightmaps, the visible section, bands |
+//! | [`WorldPlugin`](world::WorldPlugin) | [`world`] | the `world` entity kind: an unbounded terrain streamed in chunks |
 //! | [`TreePlugin`](tree::TreePlugin) | [`tree`] | the `tree` entity kind: supports, queries, editing |
 //! | [`SlothPlugin`](sloth::SlothPlugin) | [`sloth`] | the `sloth` entity kind: rig, IK, gait, footholds |
-//! | [`TerrainPlugin`](terrain::TerrainPlugin) | [`terrain`] | the `terrain` entity kind: heightmaps, the visible section, bands |
+//! | [`SoftBodyPlugin`](soft_body::SoftBodyPlugin) | [`soft_body`] | the `soft_body` entity kind: regions of surfaces shrunk by deformers |
+//! | [`ElasticPlugin`](elastic::ElasticPlugin) | [`elastic`] | the `elastic_body` entity kind: soft solids by XPBD |
+//! | [`ArPlugin`](ar::ArPlugin) | [`ar`] | the `ar` entity kind: the scene on a marker over a camera's frames |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: the frame and the egui panel composed on the CPU, key help |
 //!
@@ -45,6 +50,8 @@
 //! | a support tilted more than 70 degrees from horizontal is a trunk | [`tree::model`] |
 //! | the diagonal-sequence gait: footfall order and timing from speed | [`sloth::gait`] |
 //! | the leg order, "hind feet never ahead of fore feet", with the step lengths it works with | [`sloth::foothold`] |
+//! | what a body's particles meet, and how deep a point lies inside it | [`spatial::solid`] |
+//! | the nearest hit under the pointer across every kind | [`spatial::pick`] |
 //! | joint limits from the animal's range of motion | [`sloth::rig`] |
 //! | trunks climbed head up; transfers between a branch and its trunk | [`sloth::transfer`] |
 //! | the top-left fill rule and the edge functions | `canopy_raster::setup` |

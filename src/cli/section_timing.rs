@@ -9,7 +9,8 @@
 
 use crate::raster::{Camera, Frame, Framebuffer, Instance, Lens, Light, Material, RenderSettings, Renderer};
 use crate::terrain::bands::{Band, BandRule, band_texture};
-use crate::terrain::generate::{PerlinLayer, perlin};
+use crate::terrain::generate::perlin;
+use crate::terrain::recipe::PerlinLayer;
 use crate::terrain::section::{Geometry, Section, mesh_section};
 use crate::ui::plot::save_egui_png;
 use bevy::math::{Mat4, UVec2, Vec3};

@@ -3,9 +3,9 @@
 use super::refuse_to_replace;
 use crate::terrain::bands::{Band, band_texture};
 use crate::terrain::def::draw_seed;
-use crate::terrain::generate::{DiamondSquareLayer, HillsLayer, Layer, PerlinLayer, Recipe};
 use crate::terrain::heightmap::Heightmap;
 use crate::terrain::image_io::{self, Encoding};
+use crate::terrain::recipe::{DiamondSquareLayer, HillsLayer, Layer, PerlinLayer, Recipe};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

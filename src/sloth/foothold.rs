@@ -19,7 +19,8 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::locomotion::{Foot, GRIP_TOLERANCE, Sloth, Step, in_wood, wood_at};
+use super::feet::{Foot, GRIP_TOLERANCE, Step, in_wood, wood_at};
+use super::locomotion::Sloth;
 use super::rig::{BodyFrame, Limb, Proportions};
 use super::supports::{SupportPath, Supports};
 use crate::tree::SupportKind;

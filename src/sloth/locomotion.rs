@@ -5,52 +5,13 @@
 
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
+use super::feet::{Foot, GRIP_TOLERANCE, Step, Swing, in_wood};
 use super::gait::{self, GaitTiming, SWING_FRACTION, SwingArc};
+use super::moves::Transfer;
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
-use super::transfer::Transfer;
 use crate::tree::SupportKind;
 use bevy::math::Vec3;
-
-/// How a foot stands.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Foot {
-    /// The support it grips (or will grip, while swinging): index into [`Supports::paths`].
-    pub support: usize,
-    /// Arc length of its grip along that support, metres.
-    pub s: f32,
-    /// The grip point on the support's surface, metres.
-    pub grip: Vec3,
-    /// The swing in progress, if any.
-    pub swing: Option<Swing>,
-    /// The limb's joint angles, radians.
-    pub angles: [f32; JOINTS],
-    /// Where the limb's grip point is (forward kinematics of `angles`), metres.
-    pub position: Vec3,
-}
-
-impl Foot {
-    /// Where the limb's IK aims: the grip, or the point of the swing arc.
-    pub fn target(&self) -> Vec3 {
-        self.swing.map_or(self.grip, |swing| swing.arc.at(swing.elapsed / swing.duration))
-    }
-
-    /// Planted (not swinging)?
-    pub fn planted(&self) -> bool {
-        self.swing.is_none()
-    }
-}
-
-/// A swing in progress.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Swing {
-    /// The path of the foot.
-    pub arc: SwingArc,
-    /// Seconds since lift-off.
-    pub elapsed: f32,
-    /// Seconds from lift-off to touch-down.
-    pub duration: f32,
-}
 
 /// A foot touching down, for the gait record.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -109,24 +70,10 @@ pub enum PlaceError {
     },
 }
 
-/// Largest distance, metres, between an IK grip point and its grip that still counts as
-/// holding on: the foothold search only accepts grips the limb reaches this closely.
-pub const GRIP_TOLERANCE: f32 = 0.004;
-
 /// How far a placed foot's grip moves at a time, metres, and in how many moves at most either
 /// way, to come clear of another support's wood near a junction.
 const WOOD_SHIFT_STEP: f32 = 0.02;
 const WOOD_SHIFTS: usize = 15;
-
-/// Whether a grip at `grip` sinks into some support's wood (where one grows out of another).
-pub(super) fn in_wood(grip: Vec3, supports: &Supports) -> bool {
-    wood_at(grip, supports).is_some()
-}
-
-/// The support whose wood a grip at `grip` sinks into, if it sinks into one.
-pub(super) fn wood_at(grip: Vec3, supports: &Supports) -> Option<usize> {
-    supports.nearest(grip, GRIP_TOLERANCE).filter(|hit| hit.surface.distance < -GRIP_TOLERANCE).map(|hit| hit.support)
-}
 
 /// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
 /// is about to lift.
@@ -484,15 +431,4 @@ impl Sloth {
     pub fn mean_speed(&self) -> f32 {
         if self.moving_time > 0.0 { self.distance / self.moving_time } else { 0.0 }
     }
-}
-
-/// Where a foot will land.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Step {
-    /// Index of the support.
-    pub support: usize,
-    /// Arc length along it, metres.
-    pub s: f32,
-    /// The grip point on its surface, metres.
-    pub grip: Vec3,
 }

@@ -14,7 +14,9 @@
 //! | [`supports`] | every support of the scene as a path, with nearest-surface queries |
 //! | [`foothold`] | where a lifted foot lands (the source's FindNextStep): the step rules and the leg order |
 //! | [`body`] | the body hanging from its grips, its heading and clearance |
+//! | [`feet`] | how each foot stands or swings, where one lands, whether a grip sinks into wood |
 //! | [`locomotion`] | one sloth, one fixed step at a time |
+//! | [`moves`] | a transfer's moves and their playback |
 //! | [`transfer`] | planned moves between a branch and the trunk it grows from |
 //! | [`biceps`] | each forelimb's biceps: the muscle kind's node model, its length set by the elbow |
 //! | [`skin`] | one smooth surface over body and limbs, made once and posed by the rig (linear blend skinning), with its coat and face |
@@ -31,11 +33,13 @@ pub mod biceps;
 pub mod body;
 pub mod ccd;
 pub mod def;
+pub mod feet;
 pub mod foothold;
 pub mod gait;
 pub mod kind;
 pub mod locomotion;
 pub mod mesh;
+pub mod moves;
 pub mod plugin;
 pub mod rig;
 pub mod skin;

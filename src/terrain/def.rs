@@ -1,10 +1,10 @@
 //! The `terrain:` entry of a scene file, and the kind that reads, builds, spawns and saves it.
 
 use super::bands::{Band, BandBlend, BandRule};
-use super::generate::{Function, Layer, Recipe};
 use super::ground::Ground;
 use super::heightmap::Heightmap;
 use super::image_io;
+use super::recipe::{Function, Layer, Recipe};
 use crate::foundation::kind::{BuildContext, EntityContext, ReferencedFile};
 use crate::foundation::values::{Degrees, FolderFile, Point, PositiveMetres, checked_number};
 use crate::foundation::yaml::FileError;

@@ -9,7 +9,8 @@
 //! | [`panel`] | the window's terrain section: figures, new seed, save |
 //! | [`heightmap`] | the grid of heights and the map algebra |
 //! | [`noise`] | Perlin noise and fBm: the reference formula and the fast row path |
-//! | [`generate`] | the generators (fBm, diamond-square, hills) and the layered recipe |
+//! | [`recipe`] | the layered recipe of generated heights, as terrains and worlds hold it, and its checks |
+//! | [`generate`] | the generators (fBm, diamond-square, hills) and a recipe's heights from them |
 //! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
 //! | [`section`] | the visible section and its mesh, split by band |
 //! | [`surfaces`] | the surfaces a terrain is drawn in, a band or a border each, with their materials |
@@ -32,6 +33,7 @@ pub mod kind;
 pub mod noise;
 pub mod panel;
 pub mod plugin;
+pub mod recipe;
 pub mod section;
 pub mod surfaces;
 

@@ -4,10 +4,10 @@
 
 use super::bands::{Band, BandRule};
 use super::def::{TerrainBuilt, TerrainDef};
-use super::generate::{PerlinLayer, Recipe};
 use super::ground::{Ground, placement};
 use super::heightmap::Heightmap;
 use super::image_io::{self, Encoding};
+use super::recipe::{PerlinLayer, Recipe};
 use super::section::{Geometry, Section, mesh_section};
 use super::surfaces::{TerrainSurface, surface_materials};
 use crate::foundation::dump::{DumpState, RegisterDump};

@@ -7,7 +7,7 @@ use crate::foundation::kind::BuildContext;
 use crate::foundation::values::PositiveMetres;
 use crate::foundation::yaml::FileError;
 use crate::terrain::def::{BandsDef, HeightDef, draw_seed};
-use crate::terrain::generate::{Function, Layer, Recipe};
+use crate::terrain::recipe::{Function, Layer, Recipe};
 use crate::terrain::section::Geometry;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -113,7 +113,7 @@ impl WorldDef {
             return Ok((WorldHeights::Map(Arc::new(map)), seed));
         }
         let recipe = self.recipe();
-        let located = |error: crate::terrain::generate::RecipeError| {
+        let located = |error: crate::terrain::recipe::RecipeError| {
             cx.entity.field_error(error.key, error.nth, &error.field, &error.message)
         };
         recipe.check().map_err(located)?;

@@ -8,6 +8,7 @@ mod common;
 mod controls;
 mod elastic;
 mod muscle;
+mod saving;
 mod scene;
 mod shape;
 mod sloth;

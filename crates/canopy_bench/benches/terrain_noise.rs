@@ -10,8 +10,9 @@
 
 use canopy::terrain::Heightmap;
 use canopy::terrain::bands::BandRule;
-use canopy::terrain::generate::{PerlinLayer, perlin};
+use canopy::terrain::generate::perlin;
 use canopy::terrain::noise::{Fbm, FbmSettings};
+use canopy::terrain::recipe::PerlinLayer;
 use canopy::terrain::section::{Geometry, Section, mesh_section};
 use fastnoise_lite::{FastNoiseLite, FractalType, NoiseType};
 use noise::{MultiFractal, NoiseFn};

@@ -5,7 +5,7 @@
 //! Run with `cargo bench -p canopy_bench --bench world_chunks`.
 
 use canopy::terrain::bands::{BandBlend, BandRule};
-use canopy::terrain::generate::Recipe;
+use canopy::terrain::recipe::Recipe;
 use canopy::terrain::section::Geometry;
 use canopy::world::chunk::{ChunkHeights, ChunkKey, LEVELS, WorldHeights};
 use canopy::world::stream::StreamSettings;
