@@ -13,6 +13,9 @@ use std::fmt;
 /// small enough that `f32` arithmetic on it stays meaningful.
 pub const MAX_METRES: f64 = 1.0e6;
 
+/// The largest angle a scene file holds, either way, degrees: one hundred turns.
+pub const MAX_DEGREES: f64 = 36_000.0;
+
 /// A number as a message shows it: plainly, or in exponent form when very large or small.
 pub fn shown(value: f64) -> String {
     if value != 0.0 && value.is_finite() && !(1e-6..1e9).contains(&value.abs()) {
@@ -91,7 +94,7 @@ checked_number!(
     /// An angle in degrees, finite and within one hundred turns either way.
     Degrees(f32),
     "an angle in degrees between -36000 and 36000",
-    |v| v.abs() <= 36_000.0
+    |v| v.abs() <= MAX_DEGREES
 );
 checked_number!(
     /// A vertical field of view in degrees, strictly between 0 and 180.
@@ -234,6 +237,14 @@ fn serialize_vec3<S: serde::Serializer>(v: Vec3, serializer: S) -> Result<S::Ok,
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Point(pub Vec3);
 
+impl Point {
+    /// The point a scene file holds nearest `v`: each coordinate within [`MAX_METRES`].
+    pub fn nearest(v: Vec3) -> Self {
+        let metres = MAX_METRES as f32;
+        Point(v.clamp(Vec3::splat(-metres), Vec3::splat(metres)))
+    }
+}
+
 impl serde::Serialize for Point {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         serialize_vec3(self.0, serializer)
@@ -249,6 +260,14 @@ impl<'de> Deserialize<'de> for Point {
 /// Three angles `[x, y, z]` in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Angles(pub Vec3);
+
+impl Angles {
+    /// The angles a scene file holds nearest `v`: each within [`MAX_DEGREES`].
+    pub fn nearest(v: Vec3) -> Self {
+        let degrees = MAX_DEGREES as f32;
+        Angles(v.clamp(Vec3::splat(-degrees), Vec3::splat(degrees)))
+    }
+}
 
 impl serde::Serialize for Angles {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {

@@ -9,7 +9,7 @@ use super::surface;
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::params::RegisterParams;
 use crate::foundation::schedule::{ControlSystems, SimSystems, WriteBackSystems};
-use crate::foundation::values::{Angles, MAX_METRES, Point, srgb_channels, wrap_degrees};
+use crate::foundation::values::{Angles, Point, srgb_channels, wrap_degrees};
 use crate::raster::primitives::{Primitive, PrimitiveMeshes};
 use crate::raster::{MeshData, RasterMesh};
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
@@ -80,9 +80,8 @@ struct Rod(u8);
 /// what a scene file holds.
 pub(super) fn save_live(def: &mut MuscleDef, entity: EntityRef) {
     let Some(placement) = entity.get::<Placement>() else { return };
-    let metres = MAX_METRES as f32;
-    def.position = Point(placement.position.clamp(Vec3::splat(-metres), Vec3::splat(metres)));
-    def.rotation_deg = Angles(placement.rotation_deg.clamp(Vec3::splat(-36_000.0), Vec3::splat(36_000.0)));
+    def.position = Point::nearest(placement.position);
+    def.rotation_deg = Angles::nearest(placement.rotation_deg);
     def.scale = Scale(placement.scale.clamp(1e-6, 1e6));
 }
 

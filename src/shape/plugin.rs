@@ -47,9 +47,6 @@ impl From<&ShapeDef> for ShapeParams {
     }
 }
 
-/// The largest angle or angular rate a scene file holds, degrees (per second).
-const MAX_DEGREES: f32 = 36_000.0;
-
 /// The smallest size a shape may be edited down to, in metres.
 const MIN_SIZE: f32 = 1e-3;
 
@@ -75,15 +72,13 @@ impl ShapeParams {
 /// rotation stays unless the shape stands still.
 pub(super) fn save_live(def: &mut ShapeDef, entity: EntityRef) {
     let Some(params) = entity.get::<ShapeParams>() else { return };
-    let metres = MAX_METRES as f32;
-    def.position = Point(params.position.clamp(Vec3::splat(-metres), Vec3::splat(metres)));
-    def.size = Size(params.size.clamp(Vec3::splat(MIN_SIZE), Vec3::splat(metres)));
+    def.position = Point::nearest(params.position);
+    def.size = Size(params.size.clamp(Vec3::splat(MIN_SIZE), Vec3::splat(MAX_METRES as f32)));
     let [red, green, blue] = [params.color.red, params.color.green, params.color.blue].map(|c| c.clamp(0.0, 1.0));
     def.color = Color(Srgba::rgb(red, green, blue));
-    let degrees = |angles: Vec3| Angles(angles.clamp(Vec3::splat(-MAX_DEGREES), Vec3::splat(MAX_DEGREES)));
-    def.spin_deg_per_s = degrees(params.spin_deg_per_s);
+    def.spin_deg_per_s = Angles::nearest(params.spin_deg_per_s);
     if params.spin_deg_per_s == Vec3::ZERO {
-        def.rotation_deg = degrees(params.rotation_deg);
+        def.rotation_deg = Angles::nearest(params.rotation_deg);
     }
 }
 

@@ -129,8 +129,6 @@ pub struct Picked {
     pub hit: Hit,
     /// How the pointer picked it.
     pub pointer: Pointer,
-    /// The ray's unit direction.
-    pub direction: Vec3,
 }
 
 /// Casts every click and every drag's start in the view into every [`Pickable`] and writes
@@ -142,18 +140,13 @@ pub(super) fn pick_under_pointer(
     pickables: Query<(Entity, &Pickable)>,
     mut picked: MessageWriter<Picked>,
 ) {
-    let Some(camera) = cameras.iter().next().map(CameraParams::camera) else {
-        clicks.clear();
-        drags.clear();
-        return;
-    };
+    let Some(camera) = cameras.iter().next().map(CameraParams::camera) else { return };
     let clicked = clicks.read().map(|click| (click.ndc, click.aspect, Pointer::Click));
-    let grabbed =
-        drags.read().filter(|drag| drag.phase == DragPhase::Start).map(|drag| (drag.ndc, drag.aspect, Pointer::Grab));
-    for (ndc, aspect, pointer) in clicked.collect::<Vec<_>>().into_iter().chain(grabbed.collect::<Vec<_>>()) {
+    let grabbed = drags.read().filter(|drag| drag.phase == DragPhase::Start);
+    for (ndc, aspect, pointer) in clicked.chain(grabbed.map(|drag| (drag.ndc, drag.aspect, Pointer::Grab))) {
         let (origin, direction) = camera.ray(ndc, aspect);
         if let Some(hit) = nearest_hit(pickables.iter(), origin, direction) {
-            picked.write(Picked { hit, pointer, direction });
+            picked.write(Picked { hit, pointer });
         }
     }
 }

@@ -3,7 +3,7 @@
 //! edit that would break it is refused with the reason and changes nothing.
 
 use super::{SupportDef, TreeDef};
-use crate::foundation::values::{Degrees, Length, Radius, UnitInterval};
+use crate::foundation::values::{Degrees, Length, MAX_DEGREES, Radius, UnitInterval};
 
 /// A number of a fork that the editor changes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,7 +115,7 @@ pub fn apply(def: &TreeDef, edit: Edit) -> Result<TreeDef, String> {
                 }
             };
             let angle = |value: f32| {
-                if value.abs() <= 36_000.0 {
+                if f64::from(value.abs()) <= MAX_DEGREES {
                     Ok(Degrees(value))
                 } else {
                     Err("expected at most 36000 degrees".to_string())
