@@ -10,7 +10,7 @@
 //!
 //! | layer | modules | what it holds |
 //! |---|---|---|
-//! | app | [`app`], [`run`], [`ui`], [`cli`], `main` | the plugin group and the list of kinds, headless runs, the window, the command line |
+//! | app | [`app`], [`run`], [`scene_test`], [`ui`], [`cli`], `main` | the plugin group and the list of kinds, headless runs, scene tests, the window, the command line |
 //! | kinds | [`shape`], [`muscle`], [`tree`], [`sloth`], [`terrain`], [`world`], [`soft_body`], [`elastic`], [`ar`] | each a folder: an entry (`kind.rs`), its file format (`def.rs`), its plugin and panel, its pure cores; a kind may use another's pure cores |
 //! | services | [`spatial`], [`view`], [`raster`], [`controls`] | what things are made of and the picking system; camera and light; the rasterizer's plugin; keys and timelines |
 //! | scene | [`scene`] | loading, checking, spawning and saving through the kind registry, naming no kind |
@@ -72,6 +72,7 @@ pub mod muscle;
 pub mod raster;
 pub mod run;
 pub mod scene;
+pub mod scene_test;
 pub mod shape;
 pub mod sloth;
 pub mod soft_body;

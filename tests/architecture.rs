@@ -22,7 +22,7 @@ const FOUNDATION: &str = "foundation";
 const SCENE: &str = "scene";
 const SERVICES: &[&str] = &["spatial", "view", "raster", "controls"];
 const KINDS: &[&str] = &["shape", "muscle", "tree", "sloth", "terrain", "world", "soft_body", "elastic", "ar"];
-const APP: &[&str] = &["app", "cli", "run", "ui", "lib", "main"];
+const APP: &[&str] = &["app", "cli", "run", "scene_test", "ui", "lib", "main"];
 /// The longest a file of `src/` may be, in lines.
 const MAX_LINES: usize = 800;
 

@@ -300,3 +300,204 @@ fn ar_tools_print_markers_poses_and_sequences() {
         stderr(&unknown)
     );
 }
+
+/// The scene tests of `tests/scenes/`, through the runner as a user runs it: every one passes,
+/// and the JUnit report read back lists each test once.
+#[test]
+fn shipped_scene_tests_pass() {
+    let folder = tempfile::tempdir().unwrap();
+    let junit = folder.path().join("junit.xml");
+    let artifacts = folder.path().join("artifacts");
+    let output = canopy(&[
+        "test",
+        "tests/scenes",
+        "--jobs",
+        "2",
+        "--junit",
+        junit.to_str().unwrap(),
+        "--artifacts",
+        artifacts.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}\n{}", stderr(&output));
+    let listed = canopy(&["test", "tests/scenes", "--list"]);
+    let names: Vec<String> = String::from_utf8_lossy(&listed.stdout).lines().map(str::to_string).collect();
+    let report = quick_junit::Report::deserialize_from_str(&std::fs::read_to_string(junit).unwrap()).unwrap();
+    let mut cases: Vec<String> =
+        report.test_suites.iter().flat_map(|s| s.test_cases.iter().map(|c| c.name.to_string())).collect();
+    cases.sort();
+    assert_eq!(cases, names);
+    assert!(stdout.ends_with(&format!("{} passed, 0 failed\n", names.len())), "{stdout}");
+}
+
+/// A scene test file in a temporary folder, its scene named by absolute path.
+fn scene_test(folder: &Path, name: &str, scene: &str, body: &str) -> std::path::PathBuf {
+    let scene = std::env::current_dir().unwrap().join(scene);
+    let path = folder.join(format!("{name}.test.yaml"));
+    std::fs::write(&path, format!("scene: {}\n{body}", scene.display())).unwrap();
+    path
+}
+
+fn run_tests(folder: &Path, extra: &[&str]) -> (Output, String) {
+    let artifacts = folder.join("artifacts");
+    let mut args = vec!["test", folder.to_str().unwrap(), "--jobs", "2", "--artifacts", artifacts.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let output = canopy(&args);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    (output, stdout)
+}
+
+#[test]
+fn each_kind_of_expectation_passes_and_fails_with_the_values_it_read() {
+    let folder = tempfile::tempdir().unwrap();
+    let dir = folder.path();
+    let timeline = "timeline:\n  - { at: 0.0, press: [KeyW] }\n  - { at: 1.0, release: [KeyW] }\n";
+    scene_test(
+        dir,
+        "holds",
+        "scenes/sloth.yaml",
+        &format!(
+            "seconds: 2\n{timeline}expect:\n  - {{ at: 0, that: sloth.distance_travelled == 0.0 }}\n  - {{ at: 1.5, that: sloth.distance_travelled > 0.05 }}\n  - always: sloth.min_body_clearance >= 0\n  - {{ eventually: sloth.distance_travelled > 0.02, before: 1 }}\n  - always: sloth.feet.all(l, !sloth.feet[l].planted || math.abs(sloth.feet[l].surface_distance) < 0.02)\n"
+        ),
+    );
+    scene_test(
+        dir,
+        "fails",
+        "scenes/sloth.yaml",
+        &format!(
+            "seconds: 2\n{timeline}expect:\n  - at: 1.5\n    that: sloth.distance_travelled > 5\n  - always: sloth.distance_travelled < 0.05\n  - {{ eventually: sloth.support == \"tree/twin\", before: 1.5 }}\n  - always: sloth.body_position\n"
+        ),
+    );
+    let (output, stdout) = run_tests(dir, &[]);
+    assert_eq!(output.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("passed  holds"), "{stdout}");
+    assert!(stdout.contains("FAILED  fails"), "{stdout}");
+    let fails = dir.join("fails.test.yaml");
+    let at = format!(
+        "{}:8:11: at 1.500 s: sloth.distance_travelled > 5 is false (sloth.distance_travelled = ",
+        fails.display()
+    );
+    assert!(stdout.contains(&at), "{stdout}");
+    let always = format!("{}:9:13: at ", fails.display());
+    assert!(
+        stdout.contains(&always)
+            && stdout.contains("(the first step it fails): sloth.distance_travelled < 0.05 is false"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(
+            "by 1.500 s: sloth.support == \"tree/twin\" never held (at 1.500 s: sloth.support = \"tree/bough\")"
+        ),
+        "{stdout}"
+    );
+    assert!(stdout.contains("sloth.body_position cannot be evaluated: gives ["), "{stdout}");
+    assert!(stdout.ends_with("1 passed, 1 failed\n"), "{stdout}");
+    let left = dir.join("artifacts/fails");
+    let dump: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(left.join("dump.json")).unwrap()).unwrap();
+    assert!(dump["time"].as_f64().unwrap() < 1.0, "the dump of the first failure, an `always` early on");
+    assert!(std::fs::read_dir(&left).unwrap().flatten().any(|e| e.file_name().to_string_lossy().starts_with("frame-")));
+    assert!(!dir.join("artifacts/holds").exists());
+}
+
+#[test]
+fn golden_frames_fail_with_a_diff_and_are_written_only_when_blessed() {
+    let folder = tempfile::tempdir().unwrap();
+    let dir = folder.path();
+    let body = "frames: 10\nexpect:\n  - { at: 0.1, screenshot: golden/demo.png, size: [160, 90] }\n";
+    scene_test(dir, "shot", "scenes/demo.yaml", body);
+    let golden = dir.join("golden/demo.png");
+    let (output, stdout) = run_tests(dir, &[]);
+    assert_eq!(output.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("no golden image at") && stdout.contains("--bless"), "{stdout}");
+    assert!(!golden.exists(), "no golden is written unasked");
+    let (output, stdout) = run_tests(dir, &["--bless"]);
+    assert!(output.status.success(), "{stdout}");
+    assert!(stdout.contains(&format!("wrote {}", golden.display())), "{stdout}");
+    let (output, stdout) = run_tests(dir, &[]);
+    assert!(output.status.success(), "{stdout}");
+    // Paint a block into the golden: the frame now differs there, and the diff shows where.
+    let mut image = image::open(&golden).unwrap().to_rgba8();
+    for x in 10..40 {
+        for y in 10..30 {
+            image.put_pixel(x, y, image::Rgba([0, 255, 0, 255]));
+        }
+    }
+    image.save(&golden).unwrap();
+    let (output, stdout) = run_tests(dir, &[]);
+    assert_eq!(output.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("the frame differs from") && stdout.contains("4.17 % of its pixels"), "{stdout}");
+    let diff = image::open(dir.join("artifacts/shot/demo.diff.png")).unwrap().to_rgba8();
+    assert_eq!(diff.get_pixel(20, 20), &image::Rgba([255, 0, 0, 255]));
+    assert_ne!(diff.get_pixel(100, 60), &image::Rgba([255, 0, 0, 255]));
+    assert!(dir.join("artifacts/shot/demo.png").exists() && dir.join("artifacts/shot/demo.golden.png").exists());
+    let (output, stdout) = run_tests(dir, &["--bless"]);
+    assert!(output.status.success() && stdout.contains("wrote"), "{stdout}");
+    assert_ne!(image::open(&golden).unwrap().to_rgba8().get_pixel(20, 20), &image::Rgba([0, 255, 0, 255]));
+}
+
+#[test]
+fn repeated_runs_must_agree_and_shards_filters_and_reports_choose_and_say() {
+    let folder = tempfile::tempdir().unwrap();
+    let dir = folder.path();
+    for name in ["a", "b", "c", "d", "e"] {
+        scene_test(
+            dir,
+            name,
+            "scenes/demo.yaml",
+            "frames: 6\nrepeat: 2\nexpect:\n  - always: spinner.rotation_deg[1] >= 0\n",
+        );
+    }
+    let mut union: Vec<String> = Vec::new();
+    for k in 1..=3 {
+        let (output, stdout) = run_tests(dir, &["--list", "--shard", &format!("{k}/3")]);
+        assert!(output.status.success());
+        union.extend(stdout.lines().map(str::to_string));
+    }
+    union.sort();
+    assert_eq!(union, ["a", "b", "c", "d", "e"]);
+    let (output, stdout) = run_tests(dir, &["--filter", "c", "--json"]);
+    assert!(output.status.success(), "{stdout}{}", stderr(&output));
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!((report["passed"].as_u64(), report["tests"][0]["name"].as_str()), (Some(1), Some("c")));
+    assert!(report["tests"][0]["evaluations"].as_u64().unwrap() >= 6);
+    let (output, _) = run_tests(dir, &["--shard", "4/3"]);
+    assert_eq!(output.status.code(), Some(2), "a bad command line");
+}
+
+/// Each malformed test file in `tests/malformed_tests/`, the line its error must point at (None:
+/// the whole file), and words the message must hold.
+const MALFORMED_TESTS: &[(&str, Option<usize>, &str)] = &[
+    ("at_after_end", Some(4), "after the run ends at 1 s"),
+    ("empty", None, "the file is empty"),
+    ("expression_syntax", Some(5), "does not parse"),
+    ("missing_scene", Some(1), "no file at"),
+    ("timeline_parameter", Some(4), "ball.nothing"),
+    ("unknown_entity", Some(4), "no entity or variable `bal`; did you mean `ball`?"),
+    ("unknown_expectation_field", Some(5), "unknown field `within`"),
+    ("unknown_field", Some(5), "`ball` has no field `postion`; did you mean `position`?"),
+    ("unknown_key", Some(4), "unknown key `KeyQQ`"),
+    ("yaml_syntax", Some(5), ""),
+];
+
+#[test]
+fn malformed_test_files_name_their_line_and_exit_2() {
+    let mut files = 0;
+    for entry in std::fs::read_dir("tests/malformed_tests").unwrap().flatten() {
+        files += 1;
+        let path = entry.path();
+        let name = path.file_name().unwrap().to_string_lossy().replace(".test.yaml", "");
+        let (_, line, words) =
+            MALFORMED_TESTS.iter().find(|(n, ..)| *n == name).unwrap_or_else(|| panic!("{name}: no expectation"));
+        let output = canopy(&["test", path.to_str().unwrap()]);
+        let text = format!("{}{}", String::from_utf8_lossy(&output.stdout), stderr(&output));
+        assert_eq!(output.status.code(), Some(2), "{name}: {text}");
+        let place = match line {
+            Some(line) => format!("{}:{line}:", path.display()),
+            None => format!("{}: ", path.display()),
+        };
+        assert!(text.contains(&place), "{name}: expected {place} in {text}");
+        assert!(text.contains(words), "{name}: expected {words} in {text}");
+    }
+    assert_eq!(files, MALFORMED_TESTS.len(), "every malformed file has an expectation");
+}

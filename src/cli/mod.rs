@@ -5,6 +5,7 @@
 //! | module | commands |
 //! |---|---|
 //! | [`play`] | `play` (the default), `run`, `check` |
+//! | [`test`] | `test`: scene tests |
 //! | [`tree`] | `tree generate` |
 //! | [`terrain`] | `terrain generate`, `terrain stats`, `terrain textures` |
 //! | [`mesh`] | `mesh sample`, `deform`, with [`deform_batch`] |
@@ -21,6 +22,7 @@ pub mod mesh;
 pub mod play;
 pub mod section_timing;
 pub mod terrain;
+pub mod test;
 pub mod tree;
 
 use crate::raster::MAX_TARGET_SIZE;
@@ -46,6 +48,9 @@ enum Command {
     Run(play::RunArgs),
     /// Check scene files without running them; exit 0 only if all are valid.
     Check(play::CheckArgs),
+    /// Run scene tests (`*.test.yaml`): exit 0 if all pass, 1 if one fails, 2 if one cannot
+    /// run as written.
+    Test(test::TestArgs),
     /// Tree tools.
     Tree {
         #[command(subcommand)]
@@ -82,6 +87,7 @@ pub fn main() -> ExitCode {
         Command::Play(args) => args.play(),
         Command::Run(args) => args.run(),
         Command::Check(args) => args.check(),
+        Command::Test(args) => args.test(),
         Command::Tree { action } => action.run(),
         Command::Terrain { action } => action.run(),
         Command::Deform(args) => args.deform(),

@@ -96,9 +96,13 @@ pub struct Timeline {
 impl Timeline {
     /// Reads a timeline file.
     pub fn load(path: &Path) -> Result<Self, FileError> {
-        let mut events: Vec<TimelineEvent> = read_yaml_file(path, "a list of timeline events")?;
+        Ok(Self::new(read_yaml_file(path, "a list of timeline events")?))
+    }
+
+    /// A timeline of `events`, in any order.
+    pub fn new(mut events: Vec<TimelineEvent>) -> Self {
         events.sort_by(|a, b| a.at.0.total_cmp(&b.at.0));
-        Ok(Self { events, next: 0, frames: 0 })
+        Self { events, next: 0, frames: 0 }
     }
 
     /// Checks every parameter setting and action against the entities of the loaded scene.
