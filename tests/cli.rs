@@ -501,3 +501,51 @@ fn malformed_test_files_name_their_line_and_exit_2() {
     }
     assert_eq!(files, MALFORMED_TESTS.len(), "every malformed file has an expectation");
 }
+
+#[test]
+fn watch_reruns_a_test_when_its_file_changes() {
+    use std::io::{BufRead, BufReader};
+    use std::time::Duration;
+    let folder = tempfile::tempdir().unwrap();
+    let dir = folder.path();
+    let body = |limit: f64| format!("frames: 3\nexpect:\n  - always: spinner.rotation_deg[1] < {limit}\n");
+    let test = scene_test(dir, "watched", "scenes/demo.yaml", &body(90.0));
+    scene_test(dir, "other", "scenes/demo.yaml", &body(90.0));
+    let artifacts = dir.join("artifacts");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_canopy"))
+        .args(["test", dir.to_str().unwrap(), "--watch", "--artifacts", artifacts.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (sender, lines) = std::sync::mpsc::channel();
+    let stdout = child.stdout.take().unwrap();
+    std::thread::spawn(move || BufReader::new(stdout).lines().map_while(Result::ok).for_each(|l| drop(sender.send(l))));
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let (watching, waiting) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        stderr.lines().map_while(Result::ok).filter(|l| l.starts_with("watching")).for_each(|_| {
+            let _ = watching.send(());
+        })
+    });
+    let until_tally = || {
+        let mut seen = Vec::new();
+        while let Ok(line) = lines.recv_timeout(Duration::from_secs(60)) {
+            let tally = line.contains(" passed, ");
+            seen.push(line);
+            if tally {
+                break;
+            }
+        }
+        seen
+    };
+    assert_eq!(until_tally().last().map(String::as_str), Some("2 passed, 0 failed"));
+    waiting.recv_timeout(Duration::from_secs(60)).expect("it watches after the first run");
+    std::fs::write(&test, std::fs::read_to_string(&test).unwrap().replace(&body(90.0), &body(1.0))).unwrap();
+    let rerun = until_tally();
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(rerun.iter().any(|l| l.starts_with("FAILED  watched")), "{rerun:?}");
+    assert!(!rerun.iter().any(|l| l.contains("other")), "only the changed test reruns: {rerun:?}");
+    assert_eq!(rerun.last().map(String::as_str), Some("0 passed, 1 failed"));
+}

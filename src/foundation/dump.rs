@@ -48,11 +48,23 @@ pub fn write_dump(path: &std::path::Path, dump: &Value) -> std::io::Result<()> {
 
 /// The dump of the whole scene as it is now.
 pub fn dump_state(world: &mut World) -> Value {
-    let mut entities: Vec<(Entity, SceneEntity)> =
-        world.query::<(Entity, &SceneEntity)>().iter(world).map(|(e, s)| (e, s.clone())).collect();
+    let entities: Vec<Value> = dump_entities(world, |_| true).into_iter().map(|(_, dump)| dump).collect();
+    let clock = world.get_resource::<SimClock>().copied().unwrap_or_default();
+    json!({ "frame": clock.frame, "time": clock.elapsed.as_secs_f64(), "entities": entities })
+}
+
+/// The dumps of the scene entities that `wanted` accepts, in scene order, each with its
+/// entity: what [`dump_state`] lists, for a reader that needs only some.
+pub fn dump_entities(world: &mut World, wanted: impl Fn(&SceneEntity) -> bool) -> Vec<(Entity, Value)> {
+    let mut entities: Vec<(Entity, SceneEntity)> = world
+        .query::<(Entity, &SceneEntity)>()
+        .iter(world)
+        .filter(|(_, scene)| wanted(scene))
+        .map(|(e, s)| (e, s.clone()))
+        .collect();
     entities.sort_by_key(|(_, scene)| scene.index);
     let registry = world.get_resource::<DumpRegistry>().map(|r| r.0.clone()).unwrap_or_default();
-    let entities: Vec<Value> = entities
+    entities
         .into_iter()
         .map(|(entity, scene)| {
             let mut out = Map::new();
@@ -61,9 +73,7 @@ pub fn dump_state(world: &mut World) -> Value {
             for contribute in &registry {
                 contribute(world, entity, &mut out);
             }
-            Value::Object(out)
+            (entity, Value::Object(out))
         })
-        .collect();
-    let clock = world.get_resource::<SimClock>().copied().unwrap_or_default();
-    json!({ "frame": clock.frame, "time": clock.elapsed.as_secs_f64(), "entities": entities })
+        .collect()
 }

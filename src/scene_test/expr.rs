@@ -133,9 +133,9 @@ impl Check {
         &self.source
     }
 
-    /// The variables the expression reads.
-    pub fn roots(&self) -> impl Iterator<Item = &str> {
-        self.reads.iter().map(|read| read.segments[0].as_str())
+    /// The paths the expression reads, each a variable and the fields selected from it.
+    pub fn paths(&self) -> impl Iterator<Item = &[String]> {
+        self.reads.iter().map(|read| read.segments.as_slice())
     }
 
     /// Checks every path the expression reads against the scene's state, field by field as far

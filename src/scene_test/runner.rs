@@ -5,15 +5,16 @@
 
 use crate::app::{FIXED_HZ, entity_kinds, headless_app};
 use crate::controls::timeline::Timeline;
-use crate::foundation::dump::write_dump;
+use crate::foundation::dump::{dump_state, write_dump};
 use crate::foundation::yaml::FileError;
 use crate::raster::plugin::{RasterTarget, RenderPolicy};
 use crate::run::update_until_loaded;
 use crate::scene_test::expr::{Verdict, context};
 use crate::scene_test::file::{DEFAULT_SIZE, Expectation, Input, SceneTest, Screenshot, What, When, located};
 use crate::scene_test::golden::{compare, diff_image};
-use crate::scene_test::state::Scope;
+use crate::scene_test::state::{Reads, Scope};
 use bevy::app::App;
+use cel::Context;
 use image::RgbaImage;
 use serde_json::Value as Json;
 use std::fmt;
@@ -162,6 +163,11 @@ struct Pass<'t> {
     app: App,
     /// The variables any expression reads.
     roots: Vec<String>,
+    /// What of them the expressions read.
+    reads: Reads,
+    /// CEL's environment and Canopy's functions; each step binds its variables in a scope
+    /// inside it.
+    root: Context<'static, 'static>,
     /// Per expectation: done with (an `eventually` met, an `always` failed once).
     settled: Vec<bool>,
     /// Per expectation: what an `eventually` read last, for its message at the deadline.
@@ -193,24 +199,31 @@ impl<'t> Pass<'t> {
             })?;
             app.insert_resource(timeline);
         }
-        let scope = Scope::of(app.world_mut());
+        let scope = Scope::of(app.world_mut(), None);
         let mut errors = Vec::new();
-        let mut roots: Vec<String> = Vec::new();
+        let mut reads = Reads::default();
         for expectation in &test.expectations {
             if let What::That(check) = &expectation.what {
                 if let Err(error) = check.check_names(&scope.variables) {
                     errors.push(located(&test.file, expectation.origin, error));
                 }
-                roots.extend(check.roots().map(str::to_string));
+                check.paths().for_each(|path| reads.add(path));
             }
         }
         if !errors.is_empty() {
             return Err(errors);
         }
-        roots.sort();
-        roots.dedup();
+        let roots = reads.roots();
         let count = test.expectations.len();
-        Ok(Self { test, app, roots, settled: vec![false; count], last_values: vec![String::new(); count] })
+        Ok(Self {
+            test,
+            app,
+            roots,
+            reads,
+            root: context(),
+            settled: vec![false; count],
+            last_values: vec![String::new(); count],
+        })
     }
 
     /// Takes every step, checking as it goes (when `checking`), and returns the last dump.
@@ -244,7 +257,7 @@ impl<'t> Pass<'t> {
         if failed_once && !frame_kept {
             self.keep_frame(steps, folder);
         }
-        crate::foundation::dump::dump_state(self.app.world_mut())
+        dump_state(self.app.world_mut())
     }
 
     /// Whether step `step` draws a frame: for a screenshot, for an `at` expression (the frame
@@ -269,9 +282,8 @@ impl<'t> Pass<'t> {
         if !self.test.expectations.iter().zip(&self.settled).any(|(e, settled)| due(e, *settled)) {
             return;
         }
-        let scope = Scope::of(self.app.world_mut());
-        let root = context();
-        let context = scope.bind(&root, self.roots.iter().map(String::as_str));
+        let scope = Scope::of(self.app.world_mut(), Some(&self.roots));
+        let context = scope.bind(&self.root, &self.reads);
         let time = step as f64 / FIXED_HZ;
         for (index, expectation) in self.test.expectations.iter().enumerate() {
             if !due(expectation, self.settled[index]) {
@@ -327,7 +339,7 @@ impl<'t> Pass<'t> {
         // The dump of the first failure stays; `go` keeps the frame.
         let dump_path = folder.join("dump.json");
         if !dump_path.exists() && std::fs::create_dir_all(folder).is_ok() {
-            let _ = write_dump(&dump_path, &scope.dump);
+            let _ = write_dump(&dump_path, &dump_state(self.app.world_mut()));
         }
     }
 

@@ -9,13 +9,15 @@
 //! | `time` | simulated seconds since the scene went live |
 //! | `frame` | fixed steps taken |
 
-use crate::foundation::dump::dump_state;
+use crate::foundation::dump::dump_entities;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::params::{ParamValue, list_params};
+use crate::foundation::schedule::SimClock;
 use crate::scene_test::expr::to_cel;
 use bevy::prelude::*;
 use cel::Context;
 use serde_json::{Map, Value as Json, json};
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Names an entity cannot be reached by directly: CEL's reserved words and the scope's own.
 const NOT_VARIABLES: &[&str] = &[
@@ -53,27 +55,23 @@ const NOT_VARIABLES: &[&str] = &[
 pub struct Scope {
     /// Variable name to value.
     pub variables: Map<String, Json>,
-    /// The state dump it was made from, as written on a failure.
-    pub dump: Json,
 }
 
 impl Scope {
-    /// The scope of `world` as it is now.
-    pub fn of(world: &mut World) -> Self {
-        let dump = dump_state(world);
-        let mut entities: Vec<(Entity, usize)> =
-            world.query::<(Entity, &SceneEntity)>().iter(world).map(|(e, s)| (e, s.index)).collect();
-        entities.sort_by_key(|(_, index)| *index);
+    /// The scope of `world` as it is now: every variable, or (with `roots`) only those
+    /// named, dumping no more entities than they need.
+    pub fn of(world: &mut World, roots: Option<&[String]>) -> Self {
+        let all = roots.is_none_or(|roots| roots.iter().any(|root| root == "entities"));
+        let wanted = |scene: &SceneEntity| all || roots.is_some_and(|roots| roots.contains(&scene.name));
         let mut by_name = Map::new();
-        let listed = dump["entities"].as_array().into_iter().flatten();
-        for ((entity, _), fields) in entities.iter().zip(listed) {
-            let Some(name) = fields["name"].as_str() else { continue };
-            if by_name.contains_key(name) {
+        for (entity, fields) in dump_entities(world, wanted) {
+            let Json::Object(mut fields) = fields else { continue };
+            let Some(name) = fields.get("name").and_then(Json::as_str).map(str::to_string) else { continue };
+            if by_name.contains_key(&name) {
                 // Unnamed entities of one kind share their kind's name: the first answers.
                 continue;
             }
-            let mut fields = fields.as_object().cloned().unwrap_or_default();
-            for param in list_params(world, *entity) {
+            for param in list_params(world, entity) {
                 let value = match param.value {
                     ParamValue::Number(v) => json!(v),
                     ParamValue::Bool(v) => json!(v),
@@ -81,7 +79,7 @@ impl Scope {
                 };
                 merge(&mut fields, &param.path, value);
             }
-            by_name.insert(name.to_string(), Json::Object(fields));
+            by_name.insert(name, Json::Object(fields));
         }
         let mut variables = Map::new();
         for (name, fields) in &by_name {
@@ -89,25 +87,55 @@ impl Scope {
                 variables.insert(name.clone(), fields.clone());
             }
         }
-        variables.insert("entities".into(), Json::Object(by_name));
-        variables.insert("time".into(), dump["time"].clone());
-        variables.insert("frame".into(), dump["frame"].clone());
-        Self { variables, dump }
+        if all {
+            variables.insert("entities".into(), Json::Object(by_name));
+        }
+        let clock = world.get_resource::<SimClock>().copied().unwrap_or_default();
+        variables.insert("time".into(), json!(clock.elapsed.as_secs_f64()));
+        variables.insert("frame".into(), json!(clock.frame));
+        Self { variables }
     }
 
-    /// Binds the variables `roots` names in an inner scope of `root`.
-    pub fn bind<'a, 'r>(
-        &self,
-        root: &'a Context<'static, 'static>,
-        roots: impl IntoIterator<Item = &'r str>,
-    ) -> Context<'a, 'static> {
+    /// Binds the variables `reads` needs in an inner scope of `root`.
+    pub fn bind<'a>(&self, root: &'a Context<'static, 'static>, reads: &Reads) -> Context<'a, 'static> {
         let mut context = root.new_inner_scope();
-        for name in roots {
-            if let Some(value) = self.variables.get(name) {
-                context.add_variable_from_value(name, to_cel(value));
-            }
+        for (name, fields) in &reads.0 {
+            let Some(value) = self.variables.get(name) else { continue };
+            let value = match (fields, value) {
+                (Some(fields), Json::Object(all)) => {
+                    let map = fields.iter().filter_map(|f| all.get(f).map(|v| (f.clone(), v.clone()))).collect();
+                    to_cel(&Json::Object(map))
+                }
+                _ => to_cel(value),
+            };
+            context.add_variable_from_value(name, value);
         }
         context
+    }
+}
+
+/// What a test's expressions read of each variable: the fields selected from it, or all of
+/// it (`None`) where a variable is used whole, so that a step converts no more of the state
+/// than is read.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Reads(BTreeMap<String, Option<BTreeSet<String>>>);
+
+impl Reads {
+    /// Adds a path read: a variable and the fields selected from it.
+    pub fn add(&mut self, path: &[String]) {
+        let Some((root, fields)) = path.split_first() else { return };
+        let entry = self.0.entry(root.clone()).or_insert_with(|| Some(BTreeSet::new()));
+        match (entry, fields.first()) {
+            (Some(selected), Some(field)) => {
+                selected.insert(field.clone());
+            }
+            (entry, _) => *entry = None,
+        }
+    }
+
+    /// The variables read.
+    pub fn roots(&self) -> Vec<String> {
+        self.0.keys().cloned().collect()
     }
 }
 
@@ -147,6 +175,20 @@ mod tests {
         assert_eq!(fields["position"], json!([1.0, 2.0, 3.0]));
         assert_eq!(fields["speed"], json!(0.2));
         assert_eq!(fields["gait"]["delay_s"], json!(0.2));
+    }
+
+    #[test]
+    fn a_step_binds_only_the_fields_read_unless_a_variable_is_used_whole() {
+        let path = |p: &str| p.split('.').map(str::to_string).collect::<Vec<_>>();
+        let mut reads = Reads::default();
+        reads.add(&path("sloth.feet.lf"));
+        reads.add(&path("sloth.support"));
+        reads.add(&path("plum"));
+        reads.add(&path("plum.dropped"));
+        assert_eq!(reads.roots(), ["plum", "sloth"]);
+        let sloth: BTreeSet<String> = ["feet", "support"].map(String::from).into();
+        assert_eq!(reads.0["sloth"], Some(sloth));
+        assert_eq!(reads.0["plum"], None);
     }
 
     #[test]

@@ -27,8 +27,8 @@ fn verdict(source: &str) -> Verdict {
     check.check_names(&scope).unwrap();
     let root = context();
     let mut context = root.new_inner_scope();
-    for name in check.roots() {
-        context.add_variable_from_value(name, to_cel(&scope[name]));
+    for path in check.paths() {
+        context.add_variable_from_value(path[0].clone(), to_cel(&scope[&path[0]]));
     }
     check.evaluate(&context)
 }
