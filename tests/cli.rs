@@ -549,3 +549,20 @@ fn watch_reruns_a_test_when_its_file_changes() {
     assert!(!rerun.iter().any(|l| l.contains("other")), "only the changed test reruns: {rerun:?}");
     assert_eq!(rerun.last().map(String::as_str), Some("0 passed, 1 failed"));
 }
+
+#[test]
+fn sloth_gait_prints_the_study_beside_the_walk_and_draws_the_footfalls() {
+    let folder = tempfile::tempdir().unwrap();
+    let plot = folder.path().join("footfalls.png");
+    let output =
+        canopy(&["sloth", "gait", "scenes/sloth/pole.yaml", "--seconds", "10", "--plot", plot.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}{}", stderr(&output));
+    assert!(stdout.contains("(1.50 +- 0.20)") && stdout.contains("(0.60 +- 0.05)"), "{stdout}");
+    assert!(stdout.contains("in the diagonal sequence") && stdout.contains("largest slip"), "{stdout}");
+    let image = image::open(&plot).unwrap();
+    assert!(image.width() > 200, "{} px wide", image.width());
+    let missing = canopy(&["sloth", "gait", "scenes/demo.yaml", "--seconds", "1"]);
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(stderr(&missing).contains("the scene has no sloth"), "{}", stderr(&missing));
+}

@@ -7,6 +7,7 @@
 //! | [`play`] | `play` (the default), `run`, `check` |
 //! | [`test`] | `test`: scene tests |
 //! | [`tree`] | `tree generate` |
+//! | [`sloth`] | `sloth gait` |
 //! | [`terrain`] | `terrain generate`, `terrain stats`, `terrain textures` |
 //! | [`mesh`] | `mesh sample`, `deform`, with [`deform_batch`] |
 //! | [`ar`] | `ar marker`, `ar sequence`, `ar detect` |
@@ -21,6 +22,7 @@ pub mod deform_batch;
 pub mod mesh;
 pub mod play;
 pub mod section_timing;
+pub mod sloth;
 pub mod terrain;
 pub mod test;
 pub mod tree;
@@ -56,6 +58,11 @@ enum Command {
         #[command(subcommand)]
         action: tree::TreeCommand,
     },
+    /// Sloth tools: the gait measured beside the study's.
+    Sloth {
+        #[command(subcommand)]
+        action: sloth::SlothCommand,
+    },
     /// Heightmap tools.
     Terrain {
         #[command(subcommand)]
@@ -89,6 +96,7 @@ pub fn main() -> ExitCode {
         Command::Check(args) => args.check(),
         Command::Test(args) => args.test(),
         Command::Tree { action } => action.run(),
+        Command::Sloth { action } => action.run(),
         Command::Terrain { action } => action.run(),
         Command::Deform(args) => args.deform(),
         Command::Mesh { action } => action.run(),

@@ -26,7 +26,9 @@ pub struct CcdSettings {
 
 impl Default for CcdSettings {
     fn default() -> Self {
-        Self { tolerance: 3e-3, max_sweeps: 16 }
+        // Half a millimetre: a planted foot then slips less than 1 mm a step on the study's
+        // pole (with 3 mm it wandered 4-6 mm), and every scenario still passes.
+        Self { tolerance: 5e-4, max_sweeps: 16 }
     }
 }
 

@@ -20,6 +20,48 @@ pub const MIN_STRIDE: f32 = 0.21;
 /// Part of a cycle a foot swings: contact lasts twice as long.
 pub const SWING_FRACTION: f32 = 1.0 / 3.0;
 
+/// A measure of the study's, as mean and standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measured {
+    /// Mean.
+    pub mean: f32,
+    /// Standard deviation.
+    pub sd: f32,
+}
+
+impl Measured {
+    /// Whether `value` lies within one standard deviation of the mean.
+    pub fn within(&self, value: f32) -> bool {
+        (value - self.mean).abs() <= self.sd
+    }
+}
+
+/// One limb pair's figures in the study's Table 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StudyGait {
+    /// Contact, seconds.
+    pub contact_s: Measured,
+    /// Swing, seconds.
+    pub swing_s: Measured,
+    /// Stride, metres.
+    pub stride_m: Measured,
+}
+
+/// The study's steady-state walk at 0.2-0.3 m/s on its 40 mm pole (Table 1), forelimbs then
+/// hindlimbs.
+pub const STEADY_STATE: [StudyGait; 2] = [
+    StudyGait {
+        contact_s: Measured { mean: 1.50, sd: 0.20 },
+        swing_s: Measured { mean: 0.84, sd: 0.20 },
+        stride_m: Measured { mean: 0.59, sd: 0.05 },
+    },
+    StudyGait {
+        contact_s: Measured { mean: 1.66, sd: 0.25 },
+        swing_s: Measured { mean: 0.67, sd: 0.15 },
+        stride_m: Measured { mean: 0.60, sd: 0.05 },
+    },
+];
+
 /// The timing of one gait.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GaitTiming {

@@ -11,6 +11,7 @@
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
 //! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
+//! | [`gait_log`] | the gait measured: contact, swing, duty factor, stride, footfall order, joint excursions, foot slip |
 //! | [`supports`] | every support of the scene as a path, with nearest-surface queries |
 //! | [`foothold`] | where a lifted foot lands (the source's FindNextStep): the step rules and the leg order |
 //! | [`body`] | the body hanging from its grips, its heading and clearance |
@@ -36,6 +37,7 @@ pub mod def;
 pub mod feet;
 pub mod foothold;
 pub mod gait;
+pub mod gait_log;
 pub mod kind;
 pub mod locomotion;
 pub mod mesh;
@@ -49,5 +51,7 @@ pub mod transfer;
 pub use def::{Facing, SlothDef, WalkDirection};
 pub use kind::SlothKind;
 pub use locomotion::{Drive, PlaceError, Placement, Sloth};
-pub use plugin::{SlothBody, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSkin, SlothSource, SlothSystems};
+pub use plugin::{
+    SlothBody, SlothGait, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSkin, SlothSource, SlothSystems,
+};
 pub use supports::Supports;

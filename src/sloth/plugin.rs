@@ -4,6 +4,7 @@
 use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::def::{SlothDef, Speed, WalkDirection};
 use super::gait;
+use super::gait_log::{GaitLog, LimbState};
 use super::locomotion::{Drive, Sloth};
 use super::mesh;
 use super::rig::{JOINTS, Limb};
@@ -65,6 +66,15 @@ pub struct SlothMuscles {
     pub biceps: [Biceps; 2],
 }
 
+/// A sloth's gait as measured since it was last placed (a new log with each placing).
+#[derive(Component, Debug, Clone, Default)]
+pub struct SlothGait(pub GaitLog);
+
+/// The feet of `sloth` as the gait log watches them.
+fn limb_states(sloth: &Sloth) -> [LimbState; 4] {
+    sloth.feet.map(|foot| LimbState { planted: foot.planted(), position: foot.position, angles: foot.angles })
+}
+
 /// A sloth's skin, made once for its proportions and posed by its rig every frame.
 #[derive(Component, Debug, Clone)]
 pub struct SlothSkin(pub Arc<Skin>);
@@ -89,6 +99,7 @@ pub(super) fn spawn_sloth(
         SlothParams { speed: def.speed.0, autorun: def.autorun, direction: def.direction },
         SlothInput::default(),
         FocusPoint(sloth.frame.centre),
+        SlothGait(GaitLog::new(&limb_states(&sloth))),
         SlothBody { sloth, supports },
     ));
 }
@@ -132,11 +143,12 @@ impl Plugin for SlothPlugin {
         app.register_params::<SlothParams>()
             .register_dump::<SlothBody>()
             .register_dump::<SlothMuscles>()
+            .register_dump::<SlothGait>()
             .add_systems(RunFixedMainLoop, sloth_keys.in_set(ControlSystems::Input).in_set(SlothSystems))
             .add_systems(RunFixedMainLoop, place_sloths.in_set(ControlSystems::Apply).in_set(SlothSystems))
             .add_systems(
                 FixedUpdate,
-                (walk_sloths, flex_biceps).chain().in_set(SimSystems::Locomotion).in_set(SlothSystems),
+                (walk_sloths, (flex_biceps, record_gaits)).chain().in_set(SimSystems::Locomotion).in_set(SlothSystems),
             )
             .add_systems(PostUpdate, write_back_sloths.in_set(WriteBackSystems).in_set(SlothSystems));
     }
@@ -184,7 +196,8 @@ fn place_sloths(
         }
         match source.0.place(&supports, params.speed) {
             Ok(sloth) => {
-                commands.entity(entity).insert(SlothBody { sloth, supports: supports.clone() });
+                let gait = SlothGait(GaitLog::new(&limb_states(&sloth)));
+                commands.entity(entity).insert((gait, SlothBody { sloth, supports: supports.clone() }));
             }
             Err(error) => {
                 error!("sloth `{}` not placed: {error}", scene_entity.name);
@@ -223,6 +236,13 @@ fn walk_sloths(
         if params.autorun && input.hold == 0.0 && sloth.blocked.is_some() {
             params.autorun = false;
         }
+    }
+}
+
+/// Takes each sloth's feet into its gait log.
+fn record_gaits(mut sloths: Query<(&SlothBody, &mut SlothGait)>) {
+    for (body, mut gait) in &mut sloths {
+        gait.0.observe(body.sloth.time, &limb_states(&body.sloth));
     }
 }
 
@@ -317,5 +337,37 @@ impl DumpState for SlothBody {
         out.insert("mean_speed".into(), json!(sloth.mean_speed()));
         out.insert("body_clearance".into(), json!(sloth.clearance));
         out.insert("min_body_clearance".into(), json!(sloth.min_clearance));
+    }
+}
+
+impl DumpState for SlothGait {
+    fn dump(&self, out: &mut Map<String, Value>) {
+        let figures = self.0.figures(0.0);
+        let limbs: Map<String, Value> = Limb::ALL
+            .into_iter()
+            .zip(&figures.limbs)
+            .map(|(limb, f)| {
+                let excursions: Map<String, Value> = limb
+                    .joint_names()
+                    .into_iter()
+                    .zip(f.excursion_deg)
+                    .map(|(name, e)| (name.to_string(), json!(e)))
+                    .collect();
+                let value = json!({
+                    "contacts": f.contacts,
+                    "contact_s": f.contact_s,
+                    "swing_s": f.swing_s,
+                    "duty_factor": f.duty_factor,
+                    "stride_m": f.stride_m,
+                    "excursion_deg": excursions,
+                    "slip_max_m": f.slip_max_m,
+                });
+                (limb.key().to_string(), value)
+            })
+            .collect();
+        out.insert(
+            "gait".into(),
+            json!({ "limbs": limbs, "diagonal_share": figures.diagonal_share, "footfalls": figures.footfalls.len() }),
+        );
     }
 }

@@ -212,8 +212,9 @@ pub struct LimbRig {
 
 /// Contact-phase amplitudes from the source's range-of-motion table, degrees: girdle, upper,
 /// lower, hand/foot.
-const FORE_AMPLITUDE_DEG: [f32; 4] = [41.5, 98.1, 92.3, 36.8];
-const HIND_AMPLITUDE_DEG: [f32; 4] = [8.5, 75.7, 53.4, 17.8];
+pub const FORE_AMPLITUDE_DEG: [f32; 4] = [41.5, 98.1, 92.3, 36.8];
+/// The hindlimb's, likewise: pelvis, thigh, lower leg, foot.
+pub const HIND_AMPLITUDE_DEG: [f32; 4] = [8.5, 75.7, 53.4, 17.8];
 
 /// Rest angles, degrees: abduction (outwards), then flexion of each bone relative to the one
 /// before, measured from the limb's reach direction towards the head.
