@@ -7,6 +7,7 @@ use crate::elastic::ElasticBodyKind;
 use crate::foundation::FoundationPlugin;
 use crate::foundation::schedule::LongWorkArrival;
 use crate::muscle::MuscleKind;
+use crate::raster::lines::LinesPlugin;
 use crate::raster::{RasterPlugin, RenderSettingsPlugin};
 use crate::scene::kinds::{KindRegistry, Kinds};
 use crate::scene::{ScenePlugin, register_scene_source};
@@ -85,7 +86,7 @@ impl PluginGroup for CanopyPlugins {
             .add(ViewPlugin)
             .add(SpatialPlugin)
             .add(RenderSettingsPlugin);
-        let group = kinds.add_plugins(group).add(RasterPlugin { size, every_frame });
+        let group = kinds.add_plugins(group).add(RasterPlugin { size, every_frame }).add(LinesPlugin);
         match self.display {
             Display::Window => group.add(UiPlugin),
             Display::Headless { .. } => group,

@@ -37,6 +37,7 @@
 //! | [`ElasticPlugin`](elastic::ElasticPlugin) | [`elastic`] | the `elastic_body` entity kind: soft solids by XPBD |
 //! | [`ArPlugin`](ar::ArPlugin) | [`ar`] | the `ar` entity kind: the scene on a marker over a camera's frames |
 //! | [`RasterPlugin`](raster::RasterPlugin) | [`raster`] | the CPU rasterizer |
+//! | [`LinesPlugin`](raster::lines::LinesPlugin) | [`raster`] | lines drawn into the frame in 3D, for debug views |
 //! | [`UiPlugin`](ui::UiPlugin) | [`ui`] | the window: the frame and the egui panel composed on the CPU, key help |
 //!
 //! [`CanopyPlugins`] adds them all; [`app`] assembles windowed and headless apps.

@@ -351,3 +351,17 @@ fn the_ar_scene_plays_its_camera_frames_with_the_scene_on_the_marker() {
         assert!(red > 40, "the outline's first side: {red} pixels");
     }
 }
+
+#[test]
+#[ignore = "needs Xvfb and xdotool; .ci/run runs it"]
+fn f3_shows_the_sloths_debug_view_in_the_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let x = Xvfb::start();
+    let (app, _window) = play(&x, &project_file("scenes/sloth/pole.yaml"), dir.path(), 300);
+    press(&x, "F3");
+    wait_for_exit(app);
+    let shot = image::open(dir.path().join("window.png")).unwrap().to_rgb8();
+    let [r, g, b, _] = canopy::sloth::debug::CHAIN;
+    let chain = shot.pixels().filter(|p| p.0 == [r, g, b]).count();
+    assert!(chain > 20, "the limb chains drawn in the view: {chain} pixels");
+}

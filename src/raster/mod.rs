@@ -3,6 +3,7 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`lines`] | lines drawn into the frame in 3D, behind surfaces or on top: the debug views' |
 //! | [`plugin`] | [`RasterPlugin`]: every [`RasterMesh`] drawn into the framebuffer after transform propagation |
 //! | [`settings`] | the scene's `render` entity: shading and shadows as parameters and keys |
 //! | [`primitives`] | the primitive solids, meshed once and shared |
@@ -10,6 +11,7 @@
 
 pub use canopy_raster::*;
 
+pub mod lines;
 pub mod plugin;
 pub mod primitives;
 pub mod settings;

@@ -179,7 +179,8 @@ fn collect_meshes(meshes: Query<(&RasterMesh, &GlobalTransform)>, mut queue: Res
     }));
 }
 
-fn rasterize(
+/// Draws the frame.
+pub(super) fn rasterize(
     view: Res<RenderView>,
     queue: Res<RenderQueue>,
     mut target: ResMut<RasterTarget>,

@@ -1,8 +1,8 @@
-//! Feet: how each stands or swings, where one will land, and whether a grip holds on the wood
-//! or sinks into another support's.
+//! Feet: how each stands or swings, where one will land and the grips the search tried on the
+//! way, and whether a grip holds on the wood or sinks into another support's.
 
 use super::gait::SwingArc;
-use super::rig::JOINTS;
+use super::rig::{JOINTS, Limb};
 use super::supports::Supports;
 use bevy::math::Vec3;
 
@@ -69,4 +69,53 @@ pub struct Step {
     pub s: f32,
     /// The grip point on its surface, metres.
     pub grip: Vec3,
+}
+
+/// Why the foothold search refused a candidate grip.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// Beyond the support's ends (less the margin the feet keep from them).
+    OffSupport,
+    /// Less than [`MIN_STEP`](super::foothold::MIN_STEP) the way the sloth is going.
+    TooShort,
+    /// It would break the leg order: a leading foot behind its pair, a trailing foot past the
+    /// leading foot on its side.
+    LegOrder,
+    /// A leading foot more than `MAX_LEAD` strides ahead of its pair.
+    TooFarAhead,
+    /// It sinks into another support's wood.
+    InWood,
+    /// The body hanging from it would be pressed into a support.
+    PressesBody,
+    /// Some limb would not reach its grip within its joint limits.
+    OutOfReach,
+}
+
+impl Refusal {
+    /// The reason in a few words.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Refusal::OffSupport => "off the support",
+            Refusal::TooShort => "too short",
+            Refusal::LegOrder => "leg order",
+            Refusal::TooFarAhead => "too far ahead of its pair",
+            Refusal::InWood => "in another support's wood",
+            Refusal::PressesBody => "presses the body into a support",
+            Refusal::OutOfReach => "out of reach",
+        }
+    }
+}
+
+/// A candidate grip the foothold search tried (the source drew these as its debug traces).
+/// Grips are made on the limb's own side of the support, so none is ever on the wrong side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Probe {
+    /// The limb it was for.
+    pub limb: Limb,
+    /// Where the foot stood, metres.
+    pub from: Vec3,
+    /// The grip tried, metres.
+    pub grip: Vec3,
+    /// Why it was refused; `None` for the grip taken.
+    pub refusal: Option<Refusal>,
 }

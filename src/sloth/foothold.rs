@@ -19,7 +19,7 @@
 
 use super::body::{self, NearSupports};
 use super::ccd;
-use super::feet::{Foot, GRIP_TOLERANCE, Step, in_wood, wood_at};
+use super::feet::{Foot, GRIP_TOLERANCE, Probe, Refusal, Step, in_wood, wood_at};
 use super::locomotion::Sloth;
 use super::rig::{BodyFrame, Limb, Proportions};
 use super::supports::{SupportPath, Supports};
@@ -104,15 +104,22 @@ const MAX_PUSH_AT_STEP: f32 = 0.03;
 const NEIGHBOUR_REACH: f32 = 0.45;
 
 impl Sloth {
-    /// The next grip for `limb` moving in `direction` (+1 forward, -1 back), if there is one.
-    pub fn find_next_step(&self, limb: Limb, direction: f32, supports: &Supports) -> Option<Step> {
+    /// The next grip for `limb` moving in `direction` (+1 forward, -1 back), if there is one;
+    /// every candidate tried goes into `probes`.
+    pub fn find_next_step(
+        &self,
+        limb: Limb,
+        direction: f32,
+        supports: &Supports,
+        probes: &mut Vec<Probe>,
+    ) -> Option<Step> {
         let foot = &self.feet[limb.index()];
         let motion = self.frame.forward * direction;
         if let Some(target) = self.change_to
             && foot.support != target
             && (limb.is_fore()
                 || Limb::ALL.iter().filter(|l| l.is_fore()).all(|l| self.feet[l.index()].support == target))
-            && let Some(step) = self.step_onto(limb, target, motion, supports)
+            && let Some(step) = self.step_onto(limb, target, motion, supports, probes)
         {
             return Some(step);
         }
@@ -123,9 +130,13 @@ impl Sloth {
         let leading = limb.is_fore() == (direction > 0.0);
         let stride = self.timing().stride;
         let mut step = stride;
+        let mut probe =
+            |grip: Vec3, refusal: Option<Refusal>| probes.push(Probe { limb, from: foot.grip, grip, refusal });
         while step >= MIN_STEP {
             let s = foot.s + along * step;
-            if (range.0..=range.1).contains(&s) {
+            if !(range.0..=range.1).contains(&s) {
+                probe(path.at(s.clamp(0.0, path.length())).point, Some(Refusal::OffSupport));
+            } else {
                 // Up and down a trunk a foot keeps its bearing round it: only side steps turn.
                 let grip = match path.kind {
                     SupportKind::Trunk => path.surface_towards(s, foot.grip - path.at(foot.s).point),
@@ -134,18 +145,23 @@ impl Sloth {
                 let candidate = Step { support: foot.support, s, grip };
                 let lead = ahead(&candidate, pair, along, motion);
                 if leading && lead < 0.0 {
+                    probe(grip, Some(Refusal::LegOrder));
                     break;
                 }
-                if (!leading || lead <= MAX_LEAD * stride)
-                    && self.valid(limb, &candidate, along, motion, false, supports)
-                {
+                let checked = if leading && lead > MAX_LEAD * stride {
+                    Err(Refusal::TooFarAhead)
+                } else {
+                    self.check(limb, &candidate, along, motion, false, supports)
+                };
+                probe(grip, checked.err());
+                if checked.is_ok() {
                     return Some(candidate);
                 }
             }
             step -= RETRY_STEP;
         }
         if leading && self.change_to.is_none() {
-            return self.continuation(limb, motion, supports);
+            return self.continuation(limb, motion, supports, probes);
         }
         None
     }
@@ -153,7 +169,7 @@ impl Sloth {
     /// At the end of its support, a leading foot looks for another support of the same kind
     /// ahead within half a stride (a branch it turns onto, or the one it grows from) and steps
     /// onto it. Between a branch and a trunk the sloth transfers instead.
-    fn continuation(&self, limb: Limb, motion: Vec3, supports: &Supports) -> Option<Step> {
+    fn continuation(&self, limb: Limb, motion: Vec3, supports: &Supports, probes: &mut Vec<Probe>) -> Option<Step> {
         let foot = &self.feet[limb.index()];
         let half_stride = self.timing().stride * 0.5;
         let probe = foot.grip + motion * half_stride;
@@ -165,11 +181,18 @@ impl Sloth {
             .map(|index| (index, supports.paths[index].distance(probe)))
             .collect();
         candidates.sort_by(|a, b| a.1.total_cmp(&b.1));
-        candidates.iter().find_map(|&(index, _)| self.step_onto(limb, index, motion, supports))
+        candidates.iter().find_map(|&(index, _)| self.step_onto(limb, index, motion, supports, probes))
     }
 
     /// A grip for `limb` on the support it is changing to, beside its stride or closer.
-    fn step_onto(&self, limb: Limb, target: usize, motion: Vec3, supports: &Supports) -> Option<Step> {
+    fn step_onto(
+        &self,
+        limb: Limb,
+        target: usize,
+        motion: Vec3,
+        supports: &Supports,
+        probes: &mut Vec<Probe>,
+    ) -> Option<Step> {
         let foot = &self.feet[limb.index()];
         let path = &supports.paths[target];
         let stride = self.timing().stride;
@@ -183,27 +206,37 @@ impl Sloth {
             let along = self.along(path, s, direction);
             let grip = path.surface_towards(s, self.side_on(path, s, limb));
             let candidate = Step { support: target, s, grip };
-            self.valid(limb, &candidate, along, motion, true, supports).then_some(candidate)
+            let checked = self.check(limb, &candidate, along, motion, true, supports);
+            probes.push(Probe { limb, from: foot.grip, grip, refusal: checked.err() });
+            checked.is_ok().then_some(candidate)
         })
     }
 
-    /// Whether `step` keeps the leg order and lies within the limb's reach; a change of branch
+    /// Whether `step` keeps the leg order and lies within the limb's reach (else why not); a change of branch
     /// may step sideways without moving ahead, and a leading foot may land beside its pair.
     /// `along` is the way arc length grows in the direction of motion on the step's support.
-    fn valid(&self, limb: Limb, step: &Step, along: f32, motion: Vec3, changing: bool, supports: &Supports) -> bool {
+    fn check(
+        &self,
+        limb: Limb,
+        step: &Step,
+        along: f32,
+        motion: Vec3,
+        changing: bool,
+        supports: &Supports,
+    ) -> Result<(), Refusal> {
         let foot = &self.feet[limb.index()];
         // Where a branch grows out of another, its grips must not sink into the other's wood.
         if in_wood(step.grip, supports) {
-            return false;
+            return Err(Refusal::InWood);
         }
         if ahead(step, foot, along, motion) < if changing { 0.0 } else { MIN_STEP } {
-            return false;
+            return Err(Refusal::TooShort);
         }
         let leading = limb.is_fore() == (motion.dot(self.frame.forward) > 0.0);
         let pair_lead = ahead(step, &self.feet[limb.pair().index()], along, motion);
         let side_lead = ahead(step, &self.feet[limb.same_side().index()], along, motion);
         if !keeps_leg_order(leading, changing, pair_lead, side_lead) {
-            return false;
+            return Err(Refusal::LegOrder);
         }
         // With the body where the feet will put it at touch-down, every foot must still reach
         // its grip; and the stepping foot also at the end of the contact that follows.
@@ -217,7 +250,7 @@ impl Sloth {
         // A step that would press the body into a support (its head into the trunk ahead, say)
         // is not taken: the sloth stops there.
         if touchdown.centre.distance(hanging) > MAX_PUSH_AT_STEP {
-            return false;
+            return Err(Refusal::PressesBody);
         }
         let timing = self.timing();
         let later = BodyFrame { centre: touchdown.centre + motion * (self.speed * timing.contact()), ..touchdown };
@@ -226,9 +259,10 @@ impl Sloth {
             ccd::solve(&self.rigs[l.index()], frame, &mut angles, grips[l.index()], &self.ccd).error <= GRIP_TOLERANCE
         };
         // The stepping limb first: it is the one most often out of reach.
-        reaches(limb, &touchdown)
+        let reached = reaches(limb, &touchdown)
             && reaches(limb, &later)
-            && Limb::ALL.iter().filter(|&&l| l != limb).all(|&l| reaches(l, &touchdown))
+            && Limb::ALL.iter().filter(|&&l| l != limb).all(|&l| reaches(l, &touchdown));
+        if reached { Ok(()) } else { Err(Refusal::OutOfReach) }
     }
 
     /// The limb's side of `path` at `s`: its right for right limbs. Along a branch that is

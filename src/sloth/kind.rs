@@ -2,12 +2,15 @@
 //! the app offers for its entities beside its plugin.
 
 use super::biceps::Biceps;
+use super::debug::{SlothDebug, SlothDebugPlugin};
 use super::def::SlothDef;
 use super::locomotion::Sloth;
+use super::panel;
 use super::plugin::{self, SlothPlugin};
 use super::supports::Supports;
 use crate::foundation::keys::RegisterKeys;
 use crate::foundation::kind::{BuildContext, EntityKind};
+use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
 use crate::tree::TreeKind;
 use bevy::app::App;
@@ -38,6 +41,7 @@ impl EntityKind for SlothKind {
 
     fn spawn(def: &SlothDef, (sloth, supports, biceps): &Self::Built, entity: &mut EntityWorldMut) {
         plugin::spawn_sloth(entity, def, sloth.clone(), supports.clone(), biceps.clone());
+        entity.insert(SlothDebug::default());
     }
 
     fn save_live(def: &mut SlothDef, entity: EntityRef) {
@@ -45,6 +49,8 @@ impl EntityKind for SlothKind {
     }
 
     fn register(app: &mut App) {
-        app.register_kind_keys::<Self>(&plugin::SLOTH_KEYS);
+        app.register_kind_keys::<Self>(&plugin::SLOTH_KEYS)
+            .register_panel_section::<Self>(panel::sloth_section)
+            .add_plugins(SlothDebugPlugin);
     }
 }

@@ -5,7 +5,7 @@
 
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
-use super::feet::{Foot, GRIP_TOLERANCE, Step, Swing, in_wood};
+use super::feet::{Foot, GRIP_TOLERANCE, Probe, Step, Swing, in_wood};
 use super::gait::{self, GaitTiming, SWING_FRACTION, SwingArc};
 use super::moves::Transfer;
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
@@ -115,6 +115,8 @@ pub struct Sloth {
     pub min_clearance: f32,
     /// IK settings for all limbs.
     pub ccd: CcdSettings,
+    /// Each limb's last foothold search: every grip it tried, and why each was refused.
+    pub probes: [Vec<Probe>; 4],
     /// The transfer between a branch and a trunk under way, if one is.
     pub transfer: Option<Transfer>,
     /// Stopped going forward next to a support it may transfer onto, the sloth waits for its
@@ -178,6 +180,7 @@ impl Sloth {
             clearance: f32::INFINITY,
             min_clearance: f32::INFINITY,
             ccd: CcdSettings::default(),
+            probes: Default::default(),
             transfer: None,
             transfer_pending: false,
             near: NearSupports::default(),
@@ -292,7 +295,13 @@ impl Sloth {
             }
             let step = match around {
                 Some(around) => self.find_side_step(limb, around, supports),
-                None => self.find_next_step(limb, direction, supports),
+                None => {
+                    let mut probes = std::mem::take(&mut self.probes[limb.index()]);
+                    probes.clear();
+                    let step = self.find_next_step(limb, direction, supports, &mut probes);
+                    self.probes[limb.index()] = probes;
+                    step
+                }
             };
             self.stuck[limb.index()] = step.is_none();
             if let Some(step) = step {

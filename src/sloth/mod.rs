@@ -9,6 +9,7 @@
 //! | [`def`] | the `sloth:` entry of a scene file |
 //! | [`plugin`] | [`SlothPlugin`] and its set [`SlothSystems`]: parameters `<name>.speed`, `.autorun`, `.direction`, keys, the walk, mesh write-back, dump |
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
+//! | [`debug`] | the debug view: foothold probes and why each was refused, targets, limb chains, body frame, a transfer's path |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
 //! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
 //! | [`gait_log`] | the gait measured: contact, swing, duty factor, stride, footfall order, joint excursions, foot slip |
@@ -22,6 +23,7 @@
 //! | [`biceps`] | each forelimb's biceps: the muscle kind's node model, its length set by the elbow |
 //! | [`skin`] | one smooth surface over body and limbs, made once and posed by the rig (linear blend skinning), with its coat and face |
 //! | [`mesh`] | the render mesh from the pose: skin, claws, biceps |
+//! | [`panel`] | the panel section: where it is and what it does, limbs, joints against their limits, the footfall diagram, the gait measured |
 //!
 //! Where the source's rules live: the diagonal sequence and its timing in [`gait`]; the leg
 //! order ("hind feet never ahead of fore feet") with the step lengths and margins it works
@@ -33,6 +35,7 @@
 pub mod biceps;
 pub mod body;
 pub mod ccd;
+pub mod debug;
 pub mod def;
 pub mod feet;
 pub mod foothold;
@@ -42,6 +45,7 @@ pub mod kind;
 pub mod locomotion;
 pub mod mesh;
 pub mod moves;
+pub mod panel;
 pub mod plugin;
 pub mod rig;
 pub mod skin;

@@ -100,6 +100,16 @@ impl Transfer {
         Self { target, moves, current: 0, elapsed: None }
     }
 
+    /// Where the body's centre ends each move still to come, metres: the plan's path.
+    pub fn path(&self, half_torso: f32) -> Vec<Vec3> {
+        self.moves[self.current..].iter().map(|m| m.frame_at(1.0, half_torso).centre).collect()
+    }
+
+    /// The move under way (from 0) and how many there are.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.current, self.moves.len())
+    }
+
     /// Advances `dt` seconds.
     pub(super) fn advance(&mut self, dt: f32, half_torso: f32) -> TransferStep {
         let mut lifts = Vec::new();

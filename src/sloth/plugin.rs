@@ -119,14 +119,17 @@ const BACK_KEY: KeyCode = KeyCode::KeyS;
 const AUTORUN_KEY: KeyCode = KeyCode::KeyR;
 const LEFT_KEY: KeyCode = KeyCode::KeyA;
 const RIGHT_KEY: KeyCode = KeyCode::KeyD;
+/// Switches the debug view (see [`super::debug`]).
+pub(super) const DEBUG_KEY: KeyCode = KeyCode::F3;
 
 /// The sloth's keys and what they do, for the key help.
-pub(super) const SLOTH_KEYS: [(KeyCode, &str); 5] = [
+pub(super) const SLOTH_KEYS: [(KeyCode, &str); 6] = [
     (FORWARD_KEY, "walk forward, or climb up a trunk (hold)"),
     (BACK_KEY, "walk back, or climb down a trunk (hold)"),
     (AUTORUN_KEY, "autorun on or off (stops where no foothold is found)"),
     (LEFT_KEY, "change to the branch on the left; on a trunk, hold to step round it"),
     (RIGHT_KEY, "change to the branch on the right; on a trunk, hold to step round it"),
+    (DEBUG_KEY, "the debug view on or off: foothold probes, targets, limb chains, body frame"),
 ];
 
 /// Every system of the sloth kind, in whichever phase it runs: a handle for ordering other

@@ -12,6 +12,7 @@ mod saving;
 mod scene;
 mod shape;
 mod sloth;
+mod sloth_debug;
 mod soft_body;
 mod terrain;
 mod tree;

@@ -1,6 +1,6 @@
 //! The colour and depth targets the rasterizer draws into.
 
-use bevy_math::Vec2;
+use bevy_math::{Vec2, Vec3};
 use std::path::Path;
 
 /// Depth of an empty pixel: the far plane. Depth values are normalized device depth in
@@ -86,6 +86,28 @@ impl Framebuffer {
                 if x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32 {
                     let i = (y as usize * self.width as usize + x as usize) * 4;
                     self.color[i..i + 4].copy_from_slice(&rgba);
+                }
+            }
+        }
+    }
+
+    /// Draws a line two pixels wide between two points given as pixel coordinates and depth
+    /// (`z`, normalized device depth), interpolating the depth along it: with `depth_tested`,
+    /// a pixel is drawn only where the line is not behind what the frame holds there (a line
+    /// lying on a surface shows). The depths are left as they are.
+    pub fn draw_line_depth(&mut self, from: Vec3, to: Vec3, rgba: [u8; 4], depth_tested: bool) {
+        /// Depth a line may lie behind a surface and still show: lines drawn on a surface.
+        const ON_SURFACE: f32 = 2e-4;
+        let steps = (to.truncate() - from.truncate()).abs().max_element().ceil().clamp(1.0, 16_384.0) as u32;
+        for step in 0..=steps {
+            let point = from.lerp(to, step as f32 / steps as f32);
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let (x, y) = ((point.x - 0.5 + dx).floor(), (point.y - 0.5 + dy).floor());
+                if x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32 {
+                    let i = y as usize * self.width as usize + x as usize;
+                    if !depth_tested || point.z <= self.depth[i] + ON_SURFACE {
+                        self.color[i * 4..i * 4 + 4].copy_from_slice(&rgba);
+                    }
                 }
             }
         }
@@ -216,6 +238,25 @@ mod tests {
             assert_eq!((framebuffer.pixel(x, 0), framebuffer.pixel(x, 3)), ([0, 0, 0, 0], [0, 0, 0, 0]));
         }
         assert!(framebuffer.depth().iter().all(|&d| d == FAR_DEPTH));
+    }
+
+    #[test]
+    fn a_depth_tested_line_hides_behind_surfaces_and_shows_on_them() {
+        let mut framebuffer = Framebuffer::new(8, 4);
+        // A surface at depth 0.5 over the left half.
+        for y in 0..4 {
+            for x in 0..4 {
+                framebuffer.depth[y * 8 + x] = 0.5;
+            }
+        }
+        let (red, green) = ([255, 0, 0, 255], [0, 255, 0, 255]);
+        framebuffer.draw_line_depth(Vec3::new(0.0, 1.5, 0.7), Vec3::new(8.0, 1.5, 0.7), red, true);
+        assert_eq!((framebuffer.pixel(1, 1), framebuffer.pixel(6, 1)), ([0, 0, 0, 0], red), "behind, then in the open");
+        framebuffer.draw_line_depth(Vec3::new(0.0, 1.5, 0.5), Vec3::new(8.0, 1.5, 0.5), green, true);
+        assert_eq!(framebuffer.pixel(1, 1), green, "on the surface");
+        framebuffer.draw_line_depth(Vec3::new(0.0, 1.5, 0.9), Vec3::new(8.0, 1.5, 0.9), red, false);
+        assert_eq!(framebuffer.pixel(1, 1), red, "on top");
+        assert_eq!(framebuffer.depth()[9], 0.5, "depths are left");
     }
 
     #[test]
