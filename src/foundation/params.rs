@@ -4,7 +4,7 @@
 //! A parameter name is `<entity>.<field path>`: the entity's name (or its kind, for unnamed
 //! entities, which then addresses every unnamed entity of that kind), then a reflection path
 //! into one of the entity's parameter components, for example `light.azimuth_deg` or
-//! `ball.position.y`. Numbers (`f32`, `f64`), booleans and choices (enums of unit variants,
+//! `ball.position.y`. Numbers (`f32`, `f64`, and `u32` counts, which take whole numbers), booleans and choices (enums of unit variants,
 //! named in snake case, e.g. `render.shading: phong`) can be set.
 
 use crate::foundation::entity::SceneEntity;
@@ -67,6 +67,8 @@ pub struct ParamEntry {
     pub value: ParamValue,
     /// The names a choice accepts; empty for numbers and switches.
     pub choices: Vec<String>,
+    /// A count: it takes whole numbers only.
+    pub whole: bool,
 }
 
 /// Why a parameter could not be set.
@@ -136,6 +138,8 @@ fn read_leaf(value: &dyn PartialReflect) -> Option<ParamValue> {
         Some(ParamValue::Number(*v as f64))
     } else if let Some(v) = value.try_downcast_ref::<f64>() {
         Some(ParamValue::Number(*v))
+    } else if let Some(v) = value.try_downcast_ref::<u32>() {
+        Some(ParamValue::Number(f64::from(*v)))
     } else if let Some(v) = value.try_downcast_ref::<bool>() {
         Some(ParamValue::Bool(*v))
     } else if let (ReflectRef::Enum(e), Some(_)) = (value.reflect_ref(), choices(value)) {
@@ -148,7 +152,8 @@ fn read_leaf(value: &dyn PartialReflect) -> Option<ParamValue> {
 /// Lists the settable leaves under `value`, depth first in field order.
 fn collect_leaves(value: &dyn PartialReflect, prefix: &str, out: &mut Vec<ParamEntry>) {
     if let Some(leaf) = read_leaf(value) {
-        out.push(ParamEntry { path: prefix.to_string(), value: leaf, choices: choices(value).unwrap_or_default() });
+        let (choices, whole) = (choices(value).unwrap_or_default(), value.try_downcast_ref::<u32>().is_some());
+        out.push(ParamEntry { path: prefix.to_string(), value: leaf, choices, whole });
         return;
     }
     if let ReflectRef::Struct(fields) = value.reflect_ref() {
@@ -211,7 +216,7 @@ pub fn check_param(world: &mut World, name: &str, value: ParamValue) -> Result<(
             known: params.iter().map(|p| p.path.as_str()).collect::<Vec<_>>().join(", "),
         });
     };
-    fits(&entry.value, &entry.choices, &value).map_err(|expected| ParamError::BadValue {
+    fits(&entry.value, &entry.choices, entry.whole, &value).map_err(|expected| ParamError::BadValue {
         name: name.to_string(),
         value,
         expected,
@@ -219,9 +224,15 @@ pub fn check_param(world: &mut World, name: &str, value: ParamValue) -> Result<(
 }
 
 /// Whether `value` can be given to a parameter holding `current` (whose names are `choices`
-/// when it is a choice); what the parameter takes when it cannot.
-fn fits(current: &ParamValue, choices: &[String], value: &ParamValue) -> Result<(), String> {
+/// when it is a choice, and which takes only whole numbers when `whole`); what the parameter
+/// takes when it cannot.
+fn fits(current: &ParamValue, choices: &[String], whole: bool, value: &ParamValue) -> Result<(), String> {
     match (current, value) {
+        (ParamValue::Number(_), ParamValue::Number(v))
+            if whole && !(v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(v)) =>
+        {
+            Err(format!("a whole number from 0 to {}", u32::MAX))
+        }
         (ParamValue::Number(_), ParamValue::Number(v)) if v.is_finite() && v.abs() <= f32::MAX as f64 => Ok(()),
         (ParamValue::Number(_), ParamValue::Number(_)) => Err("a finite number".into()),
         (ParamValue::Number(_), _) => Err("a number".into()),
@@ -276,13 +287,15 @@ fn set_on_entity(
         let Some(current) = read_leaf(field) else { continue };
         let names = choices(field).unwrap_or_default();
         let bad = |expected: String| ParamError::BadValue { name: name.to_string(), value: value.clone(), expected };
-        fits(&current, &names, value).map_err(bad)?;
+        fits(&current, &names, field.try_downcast_ref::<u32>().is_some(), value).map_err(bad)?;
         match value {
             &ParamValue::Number(v) => {
                 if let Some(target) = field.try_downcast_mut::<f32>() {
                     *target = v as f32;
                 } else if let Some(target) = field.try_downcast_mut::<f64>() {
                     *target = v;
+                } else if let Some(target) = field.try_downcast_mut::<u32>() {
+                    *target = v as u32;
                 }
             }
             &ParamValue::Bool(v) => {
@@ -325,6 +338,7 @@ mod tests {
         offset: Vec3,
         enabled: bool,
         mode: Mode,
+        count: u32,
     }
 
     fn world_with(names: &[&str]) -> (App, Vec<Entity>) {
@@ -346,7 +360,7 @@ mod tests {
     fn lists_leaves_with_their_paths() {
         let (app, entities) = world_with(&["a"]);
         let paths: Vec<String> = list_params(app.world(), entities[0]).into_iter().map(|p| p.path).collect();
-        assert_eq!(paths, ["gain", "offset.x", "offset.y", "offset.z", "enabled", "mode"]);
+        assert_eq!(paths, ["gain", "offset.x", "offset.y", "offset.z", "enabled", "mode", "count"]);
     }
 
     #[test]
@@ -357,8 +371,10 @@ mod tests {
         set_param(app.world_mut(), "b.mode", ParamValue::Choice("very_loud".into())).unwrap();
         let b = app.world().get::<Knobs>(entities[1]).unwrap();
         assert_eq!((b.offset.y, b.enabled, &b.mode), (2.5, true, &Mode::VeryLoud));
+        set_param(app.world_mut(), "b.count", ParamValue::Number(12.0)).unwrap();
         let listed = list_params(app.world(), entities[1]);
-        assert_eq!(listed.last().unwrap().value, ParamValue::Choice("very_loud".into()));
+        assert_eq!(listed[5].value, ParamValue::Choice("very_loud".into()));
+        assert_eq!((listed[6].value.clone(), listed[6].whole), (ParamValue::Number(12.0), true));
         assert_eq!(app.world().get::<Knobs>(entities[0]).unwrap().offset.y, 0.0);
     }
 
@@ -389,5 +405,10 @@ mod tests {
         let error = check_param(world, "a.mode", ParamValue::Choice("loud".into())).unwrap_err().to_string();
         assert!(error.contains("expected one of quiet, very_loud"), "{error}");
         assert!(check_param(world, "a.mode", ParamValue::Choice("quiet".into())).is_ok());
+        for count in [2.5, -1.0, 5e9] {
+            let error = check_param(world, "a.count", ParamValue::Number(count)).unwrap_err().to_string();
+            assert!(error.contains("expected a whole number from 0"), "{error}");
+            assert!(set_param(world, "a.count", ParamValue::Number(count)).is_err());
+        }
     }
 }

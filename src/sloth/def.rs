@@ -2,8 +2,9 @@
 //! (once, while checking) and spawns it.
 
 use super::biceps::Biceps;
-use super::gait;
-use super::locomotion::{Placement, Sloth};
+use super::ccd::CcdSettings;
+use super::gait::{self, DEFAULT_FIXED_STRIDE, StrideMode};
+use super::locomotion::{Placement, Sloth, Tuning};
 use super::rig::Proportions;
 use super::supports::Supports;
 use crate::foundation::values::{Color, Degrees, UnitInterval, checked_number};
@@ -31,6 +32,34 @@ checked_number!(
     Hang(f32),
     "a distance in metres from 0.1 to 0.6",
     |v| (0.1..=0.6).contains(&v)
+);
+
+checked_number!(
+    /// A stride in metres, within the range the study measured.
+    StrideLength(f32),
+    "a stride in metres from 0.21 to 0.83",
+    |v| (0.21..=0.83).contains(&v)
+);
+
+checked_number!(
+    /// The longest stride the gait may take, metres.
+    MaxStep(f32),
+    "a distance in metres from 0.1 to 1",
+    |v| (0.1..=1.0).contains(&v)
+);
+
+checked_number!(
+    /// The distance from its target at which the IK stops, millimetres.
+    IkTolerance(f32),
+    "a distance in millimetres from 0.01 to 10",
+    |v| (0.01..=10.0).contains(&v)
+);
+
+checked_number!(
+    /// The most sweeps the IK takes for one solve.
+    IkSweeps(u32),
+    "a whole number of sweeps from 1 to 256",
+    |v| v.fract() == 0.0 && (1.0..=256.0).contains(&v)
 );
 
 /// Which way along its support a sloth faces when placed.
@@ -98,6 +127,21 @@ pub struct SlothDef {
     /// How far the body hangs below its grips, metres; 0.28 times `scale` by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hang: Option<Hang>,
+    /// How the stride is chosen: `from_speed` (the default) or `fixed` at `stride_m`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stride_mode: Option<StrideMode>,
+    /// The stride of `stride_mode: fixed`, metres; 0.45 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stride_m: Option<StrideLength>,
+    /// The longest stride, metres; half the torso's length and 0.1 m by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_step_m: Option<MaxStep>,
+    /// The distance from its target at which each limb's IK stops, millimetres; 0.5 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_tolerance_mm: Option<IkTolerance>,
+    /// The most sweeps of the IK for one solve; 16 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_sweeps: Option<IkSweeps>,
     /// Fur colour; a greyish brown by default.
     #[serde(default = "fur")]
     pub color: Color,
@@ -168,7 +212,22 @@ impl SlothDef {
         }
     }
 
-    /// Places the sloth among `supports`.
+    /// What is tuned of its walk at `speed` (m/s), as the file says or by default.
+    pub fn tuning(&self, speed: f32) -> Tuning {
+        let defaults = CcdSettings::default();
+        Tuning {
+            speed,
+            stride_mode: self.stride_mode.unwrap_or_default(),
+            fixed_stride: self.stride_m.map_or(DEFAULT_FIXED_STRIDE, |s| s.0),
+            max_step: self.max_step_m.map(|m| m.0),
+            ccd: CcdSettings {
+                tolerance: self.ik_tolerance_mm.map_or(defaults.tolerance, |t| t.0 * 1e-3),
+                max_sweeps: self.ik_sweeps.map_or(defaults.max_sweeps, |s| s.0),
+            },
+        }
+    }
+
+    /// Places the sloth among `supports`, walking at `speed` (m/s) as the file tunes it.
     pub fn place(&self, supports: &Supports, speed: f32) -> Result<Sloth, String> {
         let placement = Placement {
             support: self.resolve(supports)?,
@@ -176,6 +235,8 @@ impl SlothDef {
             facing: if self.facing == Facing::Forward { 1.0 } else { -1.0 },
             around: self.around_deg.0.to_radians(),
         };
-        Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())
+        let mut sloth = Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())?;
+        sloth.tune(self.tuning(speed));
+        Ok(sloth)
     }
 }

@@ -10,6 +10,8 @@
 
 use super::rig::Limb;
 use bevy::math::Vec3;
+use bevy::reflect::Reflect;
+use serde::{Deserialize, Serialize};
 
 /// The slowest and fastest walking speeds the gait accepts, metres per second.
 pub const SPEED_RANGE: (f32, f32) = (0.05, 0.35);
@@ -19,6 +21,20 @@ pub const MIN_STRIDE: f32 = 0.21;
 
 /// Part of a cycle a foot swings: contact lasts twice as long.
 pub const SWING_FRACTION: f32 = 1.0 / 3.0;
+
+/// How the stride is chosen.
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StrideMode {
+    /// Growing with the speed (see [`GaitTiming::at`]).
+    #[default]
+    FromSpeed,
+    /// The same at every speed; the cycle is what makes the speed.
+    Fixed,
+}
+
+/// The stride of [`StrideMode::Fixed`] when none is given, metres.
+pub const DEFAULT_FIXED_STRIDE: f32 = 0.45;
 
 /// A measure of the study's, as mean and standard deviation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,6 +95,15 @@ impl GaitTiming {
     pub fn at(speed: f32, max_stride: f32) -> Self {
         let speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
         let stride = (0.15 + 1.5 * speed).clamp(MIN_STRIDE.min(max_stride), max_stride);
+        let cycle = stride / speed;
+        Self { stride, cycle, swing: cycle * SWING_FRACTION }
+    }
+
+    /// The timing at `speed` with strides of `stride` metres (kept within what the limbs
+    /// comfortably step, `max_stride`).
+    pub fn with_stride(speed: f32, stride: f32, max_stride: f32) -> Self {
+        let speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
+        let stride = stride.clamp(MIN_STRIDE.min(max_stride), max_stride);
         let cycle = stride / speed;
         Self { stride, cycle, swing: cycle * SWING_FRACTION }
     }

@@ -6,7 +6,7 @@
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
 use super::feet::{Foot, GRIP_TOLERANCE, Probe, Step, Swing, in_wood};
-use super::gait::{self, GaitTiming, SWING_FRACTION, SwingArc};
+use super::gait::{self, GaitTiming, SWING_FRACTION, StrideMode, SwingArc};
 use super::moves::Transfer;
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
@@ -31,6 +31,27 @@ pub struct Drive {
     pub change: Option<f32>,
     /// On a trunk, with no `direction`: side-step round it, +1 to the right, -1 to the left.
     pub around: f32,
+}
+
+/// The longest stride the limbs of an animal of `proportions` comfortably take, metres: half
+/// its torso's length and 0.1 m.
+pub fn comfortable_stride(proportions: &Proportions) -> f32 {
+    0.5 * (proportions.torso_length + 0.2)
+}
+
+/// What a person tunes of a sloth's walk while it walks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tuning {
+    /// Mean walking speed, metres per second.
+    pub speed: f32,
+    /// How the stride is chosen.
+    pub stride_mode: StrideMode,
+    /// The stride of [`StrideMode::Fixed`], metres.
+    pub fixed_stride: f32,
+    /// The longest stride, metres; `None` for what the limbs comfortably take.
+    pub max_step: Option<f32>,
+    /// The limbs' IK.
+    pub ccd: CcdSettings,
 }
 
 /// Where a sloth is placed.
@@ -88,6 +109,12 @@ pub struct Sloth {
     pub rigs: [LimbRig; 4],
     /// Mean walking speed asked for, metres per second.
     pub speed: f32,
+    /// How the stride is chosen.
+    pub stride_mode: StrideMode,
+    /// The stride of [`StrideMode::Fixed`], metres.
+    pub fixed_stride: f32,
+    /// The longest stride the gait takes, metres, when set; else from the torso's length.
+    pub max_step: Option<f32>,
     /// The feet, indexed like [`Limb::ALL`].
     pub feet: [Foot; 4],
     /// The body's pose.
@@ -127,14 +154,38 @@ pub struct Sloth {
 }
 
 impl Sloth {
-    /// The longest stride the limbs comfortably take, metres.
+    /// The longest stride the gait takes, metres: [`Sloth::max_step`], or
+    /// [`comfortable_stride`].
     pub fn max_stride(&self) -> f32 {
-        0.5 * (self.proportions.torso_length + 0.2)
+        self.max_step.unwrap_or_else(|| comfortable_stride(&self.proportions))
+    }
+
+    /// What is tuned of its walk.
+    pub fn tuning(&self) -> Tuning {
+        Tuning {
+            speed: self.speed,
+            stride_mode: self.stride_mode,
+            fixed_stride: self.fixed_stride,
+            max_step: self.max_step,
+            ccd: self.ccd,
+        }
+    }
+
+    /// Walks on as `tuning` says from the next step.
+    pub fn tune(&mut self, tuning: Tuning) {
+        self.speed = tuning.speed;
+        self.stride_mode = tuning.stride_mode;
+        self.fixed_stride = tuning.fixed_stride;
+        self.max_step = tuning.max_step;
+        self.ccd = tuning.ccd;
     }
 
     /// The gait at the current speed.
     pub fn timing(&self) -> GaitTiming {
-        GaitTiming::at(self.speed, self.max_stride())
+        match self.stride_mode {
+            StrideMode::FromSpeed => GaitTiming::at(self.speed, self.max_stride()),
+            StrideMode::Fixed => GaitTiming::with_stride(self.speed, self.fixed_stride, self.max_stride()),
+        }
     }
 
     /// A sloth placed as `placement` says, with its feet staggered as in the middle of a
@@ -166,6 +217,9 @@ impl Sloth {
             proportions,
             rigs,
             speed,
+            stride_mode: StrideMode::FromSpeed,
+            fixed_stride: gait::DEFAULT_FIXED_STRIDE,
+            max_step: None,
             feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point };
                 4],
             frame,

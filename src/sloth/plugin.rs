@@ -2,10 +2,12 @@
 //! write-back of its mesh, and its dump.
 
 use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
-use super::def::{SlothDef, Speed, WalkDirection};
+use super::ccd::CcdSettings;
+use super::def::{Hang, IkSweeps, IkTolerance, MaxStep, SlothDef, Speed, StrideLength, WalkDirection};
 use super::gait;
+use super::gait::StrideMode;
 use super::gait_log::{GaitLog, LimbState};
-use super::locomotion::{Drive, Sloth};
+use super::locomotion::{Drive, Sloth, Tuning, comfortable_stride};
 use super::mesh;
 use super::rig::{JOINTS, Limb};
 use super::skin::Skin;
@@ -23,16 +25,62 @@ use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 use std::sync::Arc;
 
-/// A sloth's parameters: `<name>.speed` (m/s), `<name>.autorun`, `<name>.direction`.
+/// A sloth's parameters, tuned while it walks: `<name>.speed` (m/s), `.autorun`, `.direction`,
+/// `.stride_mode`, `.stride_m`, `.max_step_m`, `.ik_tolerance_mm`, `.ik_sweeps`, `.hang_m`.
+/// Each is kept within the range its scene-file field accepts.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Component)]
 pub struct SlothParams {
-    /// Mean walking speed, metres per second (clamped to 0.05-0.35).
+    /// Mean walking speed, metres per second (0.05-0.35).
     pub speed: f32,
     /// Walk without a key held, until no foothold is found.
     pub autorun: bool,
     /// Which way autorun walks.
     pub direction: WalkDirection,
+    /// How the stride is chosen: from the speed, or fixed at `stride_m`.
+    pub stride_mode: StrideMode,
+    /// The fixed stride, metres (0.21-0.83, the animal's range).
+    pub stride_m: f32,
+    /// The longest stride, metres (0.1-1).
+    pub max_step_m: f32,
+    /// Where each limb's IK stops short of its target, millimetres (0.01-10).
+    pub ik_tolerance_mm: f32,
+    /// The most IK sweeps for one solve (1-256).
+    pub ik_sweeps: u32,
+    /// How far the body hangs below its grips, metres (0.1-0.6).
+    pub hang_m: f32,
+}
+
+impl SlothParams {
+    /// The parameters of a sloth placed from `def`.
+    fn of(def: &SlothDef, sloth: &Sloth) -> Self {
+        let tuning = sloth.tuning();
+        Self {
+            speed: def.speed.0,
+            autorun: def.autorun,
+            direction: def.direction,
+            stride_mode: tuning.stride_mode,
+            stride_m: tuning.fixed_stride,
+            max_step_m: sloth.max_stride(),
+            ik_tolerance_mm: tuning.ccd.tolerance * 1e3,
+            ik_sweeps: tuning.ccd.max_sweeps,
+            hang_m: sloth.proportions.hang,
+        }
+    }
+
+    /// The walk these parameters ask for, each kept within its range.
+    fn tuning(&self) -> Tuning {
+        Tuning {
+            speed: self.speed.clamp(gait::SPEED_RANGE.0, gait::SPEED_RANGE.1),
+            stride_mode: self.stride_mode,
+            fixed_stride: self.stride_m.clamp(0.21, 0.83),
+            max_step: Some(self.max_step_m.clamp(0.1, 1.0)),
+            ccd: CcdSettings {
+                tolerance: self.ik_tolerance_mm.clamp(0.01, 10.0) * 1e-3,
+                max_sweeps: self.ik_sweeps.clamp(1, 256),
+            },
+        }
+    }
 }
 
 /// What the keys ask of a sloth until the next fixed step.
@@ -96,7 +144,7 @@ pub(super) fn spawn_sloth(
         Transform::IDENTITY,
         RasterMesh { mesh: Arc::default(), material: Material::colored(Vec3::ONE) },
         SlothSource(def.clone()),
-        SlothParams { speed: def.speed.0, autorun: def.autorun, direction: def.direction },
+        SlothParams::of(def, &sloth),
         SlothInput::default(),
         FocusPoint(sloth.frame.centre),
         SlothGait(GaitLog::new(&limb_states(&sloth))),
@@ -104,13 +152,36 @@ pub(super) fn spawn_sloth(
     ));
 }
 
-/// Brings `def` up to date with the speed, autorun and direction set while it ran (the panel's
-/// and the timelines' parameters).
+/// Brings `def` up to date with the parameters set while it ran (the panel's and the
+/// timelines'); a tuning left as the file had it is left out of the file as it was.
 pub(super) fn save_live(def: &mut SlothDef, entity: EntityRef) {
-    let Some(params) = entity.get::<SlothParams>() else { return };
-    def.speed = Speed(params.speed.clamp(gait::SPEED_RANGE.0, gait::SPEED_RANGE.1));
+    let (Some(params), Some(body)) = (entity.get::<SlothParams>(), entity.get::<SlothBody>()) else { return };
+    let tuning = params.tuning();
+    let filed = def.tuning(tuning.speed);
+    def.speed = Speed(tuning.speed);
     def.autorun = params.autorun;
     def.direction = params.direction;
+    if tuning.stride_mode != filed.stride_mode {
+        def.stride_mode = Some(tuning.stride_mode);
+    }
+    if tuning.fixed_stride != filed.fixed_stride {
+        def.stride_m = Some(StrideLength(tuning.fixed_stride));
+    }
+    // The default longest stride follows the animal's size: written only when changed.
+    let default_max = filed.max_step.unwrap_or_else(|| comfortable_stride(&body.sloth.proportions));
+    if (params.max_step_m - default_max).abs() > 1e-6 {
+        def.max_step_m = Some(MaxStep(params.max_step_m.clamp(0.1, 1.0)));
+    }
+    if tuning.ccd.tolerance != filed.ccd.tolerance {
+        def.ik_tolerance_mm = Some(IkTolerance(tuning.ccd.tolerance * 1e3));
+    }
+    if tuning.ccd.max_sweeps != filed.ccd.max_sweeps {
+        def.ik_sweeps = Some(IkSweeps(tuning.ccd.max_sweeps));
+    }
+    let hang = params.hang_m.clamp(0.1, 0.6);
+    if (hang - def.proportions().hang).abs() > 1e-6 {
+        def.hang = Some(Hang(hang));
+    }
 }
 
 /// Keys of the sloth kind, held or pressed.
@@ -226,7 +297,8 @@ fn walk_sloths(
         };
         let drive = Drive { direction, change: input.change.take(), around: input.around };
         let SlothBody { sloth, supports } = &mut *body;
-        sloth.speed = params.speed;
+        sloth.tune(params.tuning());
+        sloth.proportions.hang = params.hang_m.clamp(0.1, 0.6);
         let footfalls = sloth.footfalls.len();
         sloth.step(dt, drive, supports);
         // Each hand that took hold in this step may shake loose what hangs near it.

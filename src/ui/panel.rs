@@ -392,6 +392,10 @@ fn panel(ui: &mut egui::Ui, data: &PanelData, state: &mut UiState, actions: &mut
             for entry in &data.params {
                 ui.label(&entry.path);
                 let edited = match &entry.value {
+                    &ParamValue::Number(mut v) if entry.whole => {
+                        let drag = egui::DragValue::new(&mut v).speed(0.1).range(0.0..=f64::from(u32::MAX));
+                        ui.add(drag.max_decimals(0)).changed().then_some(ParamValue::Number(v.round()))
+                    }
                     &ParamValue::Number(mut v) => {
                         // A tiny value (a convergence threshold) is shown in exponent form and
                         // dragged in steps of its own size, not rounded to 0 and thrown far.

@@ -65,6 +65,9 @@ fn every_kinds_live_parameters_are_saved_and_read_back() {
         ("sloth.speed", ParamValue::Number(0.2)),
         ("sloth.autorun", ParamValue::Bool(true)),
         ("sloth.direction", ParamValue::Choice("back".into())),
+        ("sloth.stride_mode", ParamValue::Choice("fixed".into())),
+        ("sloth.stride_m", ParamValue::Number(0.5)),
+        ("sloth.ik_sweeps", ParamValue::Number(20.0)),
         ("patch.k", ParamValue::Number(0.8)),
         ("plum.friction", ParamValue::Number(0.9)),
     ] {
@@ -89,6 +92,11 @@ fn every_kinds_live_parameters_are_saved_and_read_back() {
     assert!((number(&sloth["speed"]) - 0.2).abs() < 1e-6, "{sloth:?}");
     assert_eq!(sloth["autorun"], Value::Bool(true));
     assert_eq!(sloth["direction"].as_str(), Some("back"));
+    assert_eq!((sloth["stride_mode"].as_str(), sloth["ik_sweeps"].as_u64()), (Some("fixed"), Some(20)));
+    assert!((number(&sloth["stride_m"]) - 0.5).abs() < 1e-6, "{sloth:?}");
+    for untouched in ["max_step_m", "ik_tolerance_mm", "hang"] {
+        assert!(sloth.get(untouched).is_none(), "{untouched} was not changed, so it is not written: {sloth:?}");
+    }
     assert_eq!(sloth["support"], entry(before, "sloth")["support"], "where it hangs, as written");
     assert!((number(&entry(after, "patch")["k"]) - 0.8).abs() < 1e-6);
     assert!((number(&entry(after, "plum")["friction"]) - 0.9).abs() < 1e-6);

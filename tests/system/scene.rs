@@ -61,6 +61,7 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("sloth_unknown_support.yaml", Some(8), &["entities[1].sloth.support", "no support named `branch`", "oak/bough"]),
     ("sloth_ambiguous_support.yaml", Some(10), &["entities[2].sloth.support", "in 2 trees", "tree/support"]),
     ("sloth_speed.yaml", Some(7), &["speed", "from 0.05 to 0.35", "found 2.5"]),
+    ("sloth_ik_sweeps.yaml", Some(7), &["ik_sweeps", "a whole number of sweeps from 1 to 256", "found 2.5"]),
     ("sloth_too_thick.yaml", Some(6), &["entities[1].sloth.support", "cannot hang", "feet do not reach"]),
     ("sloth_biceps_too_short.yaml", Some(8), &["entities[1].sloth.biceps", "cannot follow the elbow at 0 degrees"]),
     ("binary.yaml", Some(3), &["not UTF-8"]),
