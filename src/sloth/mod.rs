@@ -11,6 +11,7 @@
 //! | [`rig`] | the skeleton in metres: limbs of five hinge joints, limits from the range of motion |
 //! | [`debug`] | the debug view: foothold probes and why each was refused, targets, limb chains, body frame, a transfer's path |
 //! | [`ccd`] | cyclic coordinate descent for one limb, within limits, never NaN |
+//! | [`fabrik`] | FABRIK with the same limits, for the comparison with CCD |
 //! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
 //! | [`gait_log`] | the gait measured: contact, swing, duty factor, stride, footfall order, joint excursions, foot slip |
 //! | [`supports`] | every support of the scene as a path, with nearest-surface queries |
@@ -37,6 +38,7 @@ pub mod body;
 pub mod ccd;
 pub mod debug;
 pub mod def;
+pub mod fabrik;
 pub mod feet;
 pub mod foothold;
 pub mod gait;
