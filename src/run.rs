@@ -79,6 +79,20 @@ pub fn update_until_loaded(app: &mut App, scene: &Path) -> Result<(), RunError> 
     }
 }
 
+/// A headless app of `scene` at `size` pixels, loaded and live, playing `timeline` (read from
+/// the file `from`, named in its errors) once every setting and action in it is checked
+/// against the scene.
+pub fn live_app(scene: &Path, size: UVec2, timeline: Option<(Timeline, &Path)>, log: bool) -> Result<App, RunError> {
+    let mut app =
+        headless_app(scene, size, log).map_err(|error| RunError::Load(format!("{}: {error}", scene.display())))?;
+    update_until_loaded(&mut app, scene)?;
+    if let Some((timeline, from)) = timeline {
+        timeline.check(app.world_mut()).map_err(|error| RunError::Parameter { path: from.to_path_buf(), error })?;
+        app.insert_resource(timeline);
+    }
+    Ok(app)
+}
+
 /// Frames written while a run goes: every `every`-th step's frame into `folder` as
 /// `frame-00001.png`, ... (an augmented-reality scene's composited frames, a video's stills).
 #[derive(Debug, Clone)]
@@ -98,18 +112,11 @@ pub fn run_headless(options: &RunOptions) -> Result<RunOutput, RunError> {
 pub fn run_recorded(options: &RunOptions, recording: Option<&Recording>) -> Result<RunOutput, RunError> {
     // Check the files first, so that errors come out before any app is built.
     entity_kinds().load(&options.scene)?;
-    let timeline = options.timeline.as_deref().map(Timeline::load).transpose()?;
-
-    let mut app = headless_app(&options.scene, options.size, options.log)
-        .map_err(|error| RunError::Load(format!("{}: {error}", options.scene.display())))?;
-    update_until_loaded(&mut app, &options.scene)?;
-
-    if let Some(timeline) = timeline {
-        timeline
-            .check(app.world_mut())
-            .map_err(|error| RunError::Parameter { path: options.timeline.clone().unwrap_or_default(), error })?;
-        app.insert_resource(timeline);
-    }
+    let timeline = match &options.timeline {
+        Some(path) => Some((Timeline::load(path)?, path.as_path())),
+        None => None,
+    };
+    let mut app = live_app(&options.scene, options.size, timeline, options.log)?;
     if let Some(recording) = recording {
         std::fs::create_dir_all(&recording.folder)
             .map_err(|error| RunError::Load(format!("{}: {error}", recording.folder.display())))?;

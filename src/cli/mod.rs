@@ -123,3 +123,11 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
     let valid = 1..=MAX_TARGET_SIZE;
     if valid.contains(&w) && valid.contains(&h) { Ok(UVec2::new(w, h)) } else { Err(error()) }
 }
+
+/// Simulated seconds, from 0 to `max`.
+fn parse_seconds(text: &str, max: f64) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(seconds) if seconds.is_finite() && (0.0..=max).contains(&seconds) => Ok(seconds),
+        _ => Err(format!("expected seconds from 0 to {max}, found `{text}`")),
+    }
+}

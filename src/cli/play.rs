@@ -1,7 +1,7 @@
 //! `canopy play`, `canopy run` and `canopy check`: a scene in a window, headless, or only read
 //! and checked.
 
-use super::parse_size;
+use super::{parse_seconds, parse_size};
 use crate::app::{FIXED_HZ, entity_kinds, window_app};
 use crate::foundation::dump::write_dump;
 use crate::run::{Recording, RunOptions, run_headless, run_recorded};
@@ -51,7 +51,7 @@ pub struct RunArgs {
     #[arg(long, conflicts_with = "seconds")]
     frames: Option<u64>,
     /// Simulated seconds to run (rounded to whole steps).
-    #[arg(long, value_parser = parse_seconds)]
+    #[arg(long, value_parser = |text: &str| parse_seconds(text, 1.0e6))]
     seconds: Option<f64>,
     /// A timeline of scripted key presses and parameter settings (YAML).
     #[arg(long, value_name = "TIMELINE.yaml")]
@@ -79,13 +79,6 @@ pub struct CheckArgs {
     /// The scene files.
     #[arg(required = true)]
     scenes: Vec<PathBuf>,
-}
-
-fn parse_seconds(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(seconds) if seconds.is_finite() && (0.0..=1.0e6).contains(&seconds) => Ok(seconds),
-        _ => Err(format!("expected seconds from 0 to 1000000, found `{text}`")),
-    }
 }
 
 /// `scenes/canopy.yaml` from the working directory, else from the source tree.

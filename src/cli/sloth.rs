@@ -3,10 +3,11 @@
 //! during contact beside the range of motion the study measured (its Table 2), and draws the
 //! footfall diagram to a PNG.
 
-use crate::app::{FIXED_HZ, headless_app};
+use super::parse_seconds;
+use crate::app::FIXED_HZ;
 use crate::controls::timeline::Timeline;
 use crate::foundation::entity::SceneEntity;
-use crate::run::update_until_loaded;
+use crate::run::live_app;
 use crate::sloth::SlothGait;
 use crate::sloth::gait::{Measured, STEADY_STATE};
 use crate::sloth::gait_log::{GaitFigures, GaitLog, LimbFigures};
@@ -25,16 +26,19 @@ pub enum SlothCommand {
     Gait(GaitArgs),
 }
 
+/// The longest walk measured, simulated seconds.
+const MAX_SECONDS: f64 = 3600.0;
+
 /// Arguments of `canopy sloth gait`.
 #[derive(clap::Args, Debug)]
 pub struct GaitArgs {
     /// The scene file.
     scene: PathBuf,
     /// Simulated seconds to walk.
-    #[arg(long, default_value_t = 30.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 30.0, value_parser = |text: &str| parse_seconds(text, MAX_SECONDS))]
     seconds: f64,
     /// Seconds of starting up left out of the figures (steady state only).
-    #[arg(long, default_value_t = 4.0, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = 4.0, value_parser = |text: &str| parse_seconds(text, MAX_SECONDS))]
     skip: f64,
     /// The sloth to measure, by name [default: the first].
     #[arg(long)]
@@ -46,13 +50,6 @@ pub struct GaitArgs {
     /// left fore, left hind, right fore, a bar for each contact, a tick every second.
     #[arg(long, value_name = "OUT.png")]
     plot: Option<PathBuf>,
-}
-
-fn parse_seconds(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(seconds) if seconds.is_finite() && (0.0..=3600.0).contains(&seconds) => Ok(seconds),
-        _ => Err(format!("expected seconds from 0 to 3600, found `{text}`")),
-    }
 }
 
 impl SlothCommand {
@@ -109,13 +106,11 @@ impl GaitArgs {
     /// Walks the scene and returns the sloth's gait log.
     fn walk(&self) -> Result<GaitLog, String> {
         let scene = &self.scene;
-        let timeline = self.input.as_deref().map(Timeline::load).transpose().map_err(|e| e.to_string())?;
-        let mut app = headless_app(scene, UVec2::new(64, 36), true).map_err(|e| format!("{}: {e}", scene.display()))?;
-        update_until_loaded(&mut app, scene).map_err(|e| e.to_string())?;
-        if let Some(timeline) = timeline {
-            timeline.check(app.world_mut()).map_err(|e| e.to_string())?;
-            app.insert_resource(timeline);
-        }
+        let timeline = match &self.input {
+            Some(path) => Some((Timeline::load(path).map_err(|e| e.to_string())?, path.as_path())),
+            None => None,
+        };
+        let mut app = live_app(scene, UVec2::new(64, 36), timeline, true).map_err(|e| e.to_string())?;
         for _ in 0..(self.seconds * FIXED_HZ).round() as u64 {
             app.update();
         }
@@ -219,12 +214,7 @@ fn footfall_diagram(log: &GaitLog, since: f32, until: f32) -> RgbImage {
     let colours = [[150, 70, 40], [40, 110, 160], [200, 120, 60], [60, 160, 200]];
     for limb in Limb::ALL {
         let top = 10 + limb.index() as u32 * DIAGRAM_ROW_PX + 3;
-        for contact in log.contacts(limb) {
-            let start = contact.start.unwrap_or(0.0).max(since);
-            let end = contact.end.unwrap_or(until).min(until);
-            if end <= start {
-                continue;
-            }
+        for (start, end) in log.contact_spans(limb, since, until) {
             let (x0, x1) = (x_of(start) as u32, (x_of(end) as u32).min(width - 1));
             for x in x0..=x1 {
                 for y in top..top + DIAGRAM_ROW_PX - 6 {

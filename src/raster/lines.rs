@@ -75,20 +75,19 @@ fn draw(framebuffer: &mut Framebuffer, clip_from_world: Mat4, segment: &Segment)
         let cut = a.lerp(b, t);
         if a.z < 0.0 { a = cut } else { b = cut }
     }
-    let (w, h) = (framebuffer.width() as f32, framebuffer.height() as f32);
-    let screen = |c: Vec4| {
-        let ndc = c.truncate() / c.w.max(1e-6);
-        Vec3::new((ndc.x + 1.0) * 0.5 * w, (1.0 - ndc.y) * 0.5 * h, ndc.z)
-    };
-    framebuffer.draw_line_depth(screen(a), screen(b), segment.rgba, !segment.on_top);
+    let size = Vec2::new(framebuffer.width() as f32, framebuffer.height() as f32);
+    framebuffer.draw_line_depth(screen(a, size), screen(b, size), segment.rgba, !segment.on_top);
+}
+
+/// A clip-space point in a frame of `size` pixels: pixel coordinates and normalized depth.
+fn screen(clip: Vec4, size: Vec2) -> Vec3 {
+    let ndc = clip.truncate() / clip.w.max(1e-6);
+    Vec3::new((ndc.x + 1.0) * 0.5 * size.x, (1.0 - ndc.y) * 0.5 * size.y, ndc.z)
 }
 
 /// Where `point` lands in a frame of `size` pixels seen by `view`'s camera: pixel coordinates,
 /// or `None` behind the camera.
 pub fn pixel_of(view: &RenderView, size: UVec2, point: Vec3) -> Option<Vec2> {
     let clip = view.camera.view_projection(size.x as f32 / size.y.max(1) as f32) * point.extend(1.0);
-    (clip.z >= 0.0 && clip.w > 0.0).then(|| {
-        let ndc = clip.truncate() / clip.w;
-        Vec2::new((ndc.x + 1.0) * 0.5 * size.x as f32, (1.0 - ndc.y) * 0.5 * size.y as f32)
-    })
+    (clip.z >= 0.0 && clip.w > 0.0).then(|| screen(clip, size.as_vec2()).truncate())
 }

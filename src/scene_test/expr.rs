@@ -35,7 +35,7 @@ static ENV: LazyLock<Arc<Env>> = LazyLock::new(|| {
 
 /// The namespaces of the extensions' functions (`math.abs`, `lists.range`, ...): these names
 /// are not variables.
-const NAMESPACES: &[&str] = &["math", "lists", "strings"];
+pub const NAMESPACES: &[&str] = &["math", "lists", "strings"];
 
 /// A problem with an expression, at a 1-based line and column inside it.
 #[derive(Debug, Clone, PartialEq, Eq)]

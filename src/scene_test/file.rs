@@ -218,10 +218,13 @@ pub fn load(path: &Path) -> Result<Vec<SceneTest>, FileError> {
     Reader { path, text: &text }.tests(raw)
 }
 
+/// The ending that marks a scene test file.
+pub const TEST_FILE_SUFFIX: &str = ".test.yaml";
+
 /// The name a test file gives its tests: its file name without `.test.yaml`.
 pub fn file_stem(path: &Path) -> String {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    name.strip_suffix(".test.yaml").or_else(|| name.strip_suffix(".yaml")).unwrap_or(&name).to_string()
+    name.strip_suffix(TEST_FILE_SUFFIX).or_else(|| name.strip_suffix(".yaml")).unwrap_or(&name).to_string()
 }
 
 /// Reads one file's raw content into tests, locating every problem in `text`.

@@ -3,12 +3,12 @@
 //! failure leaves (the dump, the frame, the golden and their diff) written for a person to
 //! look at.
 
-use crate::app::{FIXED_HZ, entity_kinds, headless_app};
+use crate::app::{FIXED_HZ, entity_kinds};
 use crate::controls::timeline::Timeline;
 use crate::foundation::dump::{dump_state, write_dump};
 use crate::foundation::yaml::FileError;
 use crate::raster::plugin::{RasterTarget, RenderPolicy};
-use crate::run::update_until_loaded;
+use crate::run::{RunError, live_app};
 use crate::scene_test::expr::{Verdict, context};
 use crate::scene_test::file::{DEFAULT_SIZE, Expectation, Input, SceneTest, Screenshot, What, When, located};
 use crate::scene_test::golden::{compare, diff_image};
@@ -17,7 +17,6 @@ use bevy::app::App;
 use cel::Context;
 use image::RgbaImage;
 use serde_json::Value as Json;
-use std::fmt;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -43,19 +42,6 @@ pub enum Status {
     Invalid,
 }
 
-/// One thing that went wrong, where it is written.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Failure {
-    /// The file and, when known, the place in it.
-    pub error: FileError,
-}
-
-impl fmt::Display for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.error.fmt(f)
-    }
-}
-
 /// What running a test found.
 #[derive(Debug, Clone)]
 pub struct Outcome {
@@ -67,8 +53,8 @@ pub struct Outcome {
     pub status: Status,
     /// Wall-clock time, every run together.
     pub wall: Duration,
-    /// What went wrong, in the order found.
-    pub failures: Vec<Failure>,
+    /// What went wrong, where it is written, in the order found.
+    pub failures: Vec<FileError>,
     /// Golden images written by `bless`.
     pub blessed: Vec<PathBuf>,
     /// The folder of the failure's files, when written.
@@ -101,7 +87,7 @@ pub fn run_test(test: &SceneTest, settings: &Settings) -> Outcome {
         Ok(Ok(())) => {}
         Ok(Err(invalid)) => {
             outcome.status = Status::Invalid;
-            outcome.failures.extend(invalid.into_iter().map(|error| Failure { error }));
+            outcome.failures.extend(invalid);
         }
         Err(panic) => {
             let message = panic
@@ -110,9 +96,7 @@ pub fn run_test(test: &SceneTest, settings: &Settings) -> Outcome {
                 .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_else(|| "no message".into());
             outcome.status = Status::Failed;
-            outcome
-                .failures
-                .push(Failure { error: FileError::whole_file(&test.scene, format!("the scene panicked: {message}")) });
+            outcome.failures.push(FileError::whole_file(&test.scene, format!("the scene panicked: {message}")));
         }
     }
     if outcome.status == Status::Passed && !outcome.failures.is_empty() {
@@ -148,7 +132,7 @@ fn run_passes(
             Some(first) => {
                 if let Some(difference) = first_difference(first, &dump, "") {
                     let message = format!("repeat: run {} gave another dump than run 1: {difference}", pass + 1);
-                    outcome.failures.push(Failure { error: FileError::whole_file(&test.file, message) });
+                    outcome.failures.push(FileError::whole_file(&test.file, message));
                     break;
                 }
             }
@@ -182,23 +166,24 @@ impl<'t> Pass<'t> {
             .iter()
             .find_map(|e| if let What::Screenshot(shot) = &e.what { Some(shot.size) } else { None })
             .unwrap_or(DEFAULT_SIZE);
-        let mut app =
-            headless_app(&test.scene, size, false).map_err(|error| vec![FileError::unreadable(&test.scene, error)])?;
-        update_until_loaded(&mut app, &test.scene)
-            .map_err(|error| vec![FileError::whole_file(&test.scene, error.to_string())])?;
-        if let Some(timeline) = timeline {
-            timeline.check(app.world_mut()).map_err(|error| {
-                let message = match &test.input {
-                    Input::File(path) => format!("{}: {error}", path.display()),
-                    _ => error.to_string(),
-                };
-                vec![match test.input_origin {
-                    Some((line, column)) => FileError::at(&test.file, line, column, message),
-                    None => FileError::whole_file(&test.file, message),
-                }]
-            })?;
-            app.insert_resource(timeline);
-        }
+        let from = if let Input::File(path) = &test.input { path } else { &test.file };
+        let mut app = live_app(&test.scene, size, timeline.map(|t| (t, from.as_path())), false).map_err(|error| {
+            vec![match error {
+                // A timeline that does not fit the scene, where the test names or writes it.
+                RunError::Parameter { error, .. } => {
+                    let message = match &test.input {
+                        Input::File(path) => format!("{}: {error}", path.display()),
+                        _ => error.to_string(),
+                    };
+                    match test.input_origin {
+                        Some((line, column)) => FileError::at(&test.file, line, column, message),
+                        None => FileError::whole_file(&test.file, message),
+                    }
+                }
+                RunError::Invalid(error) => error,
+                RunError::Load(message) => FileError::whole_file(&test.scene, message),
+            }]
+        })?;
         let scope = Scope::of(app.world_mut(), None);
         let mut errors = Vec::new();
         let mut reads = Reads::default();
@@ -289,8 +274,8 @@ impl<'t> Pass<'t> {
             if !due(expectation, self.settled[index]) {
                 continue;
             }
-            let fail = |message: String| Failure {
-                error: FileError::at(&self.test.file, expectation.origin.line, expectation.origin.column, message),
+            let fail = |message: String| {
+                FileError::at(&self.test.file, expectation.origin.line, expectation.origin.column, message)
             };
             match &expectation.what {
                 What::That(check) => {

@@ -13,20 +13,16 @@ use crate::foundation::dump::dump_entities;
 use crate::foundation::entity::SceneEntity;
 use crate::foundation::params::{ParamValue, list_params};
 use crate::foundation::schedule::SimClock;
-use crate::scene_test::expr::to_cel;
+use crate::scene_test::expr::{NAMESPACES, to_cel};
 use bevy::prelude::*;
 use cel::Context;
 use serde_json::{Map, Value as Json, json};
 use std::collections::{BTreeMap, BTreeSet};
 
-/// Names an entity cannot be reached by directly: CEL's reserved words and the scope's own.
-const NOT_VARIABLES: &[&str] = &[
-    "time",
-    "frame",
-    "entities",
-    "math",
-    "lists",
-    "strings",
+/// Names an entity cannot be reached by directly: the scope's own, the extensions' namespaces
+/// ([`NAMESPACES`]) and CEL's reserved words.
+const SCOPE_NAMES: &[&str] = &["time", "frame", "entities"];
+const RESERVED_WORDS: &[&str] = &[
     "true",
     "false",
     "null",
@@ -81,14 +77,18 @@ impl Scope {
             }
             by_name.insert(name, Json::Object(fields));
         }
+        let variable = |name: &str| {
+            is_identifier(name) && ![SCOPE_NAMES, NAMESPACES, RESERVED_WORDS].iter().any(|names| names.contains(&name))
+        };
         let mut variables = Map::new();
-        for (name, fields) in &by_name {
-            if is_identifier(name) && !NOT_VARIABLES.contains(&name.as_str()) {
+        if all {
+            // Each entity both by its name and under `entities`.
+            for (name, fields) in by_name.iter().filter(|(name, _)| variable(name)) {
                 variables.insert(name.clone(), fields.clone());
             }
-        }
-        if all {
             variables.insert("entities".into(), Json::Object(by_name));
+        } else {
+            variables.extend(by_name.into_iter().filter(|(name, _)| variable(name)));
         }
         let clock = world.get_resource::<SimClock>().copied().unwrap_or_default();
         variables.insert("time".into(), json!(clock.elapsed.as_secs_f64()));

@@ -2,14 +2,12 @@
 //! name and shard, and run in parallel, each test in an app of its own.
 
 use crate::foundation::yaml::FileError;
-use crate::scene_test::file::{SceneTest, load};
+use crate::scene_test::file::{SceneTest, TEST_FILE_SUFFIX, load};
 use crate::scene_test::runner::{Outcome, Settings, run_test};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// The ending that marks a scene test file.
-pub const TEST_FILE_SUFFIX: &str = ".test.yaml";
 /// The folder searched when none is named, if it exists.
 pub const DEFAULT_FOLDER: &str = "tests/scenes";
 /// Most test files one search takes.

@@ -13,6 +13,17 @@ use bevy::color::Srgba;
 use bevy::prelude::Reflect;
 use serde::{Deserialize, Serialize};
 
+/// How far below its grips a body may hang, metres.
+pub const HANG_RANGE: (f32, f32) = (0.1, 0.6);
+/// The strides the study measured, metres.
+pub const STRIDE_RANGE: (f32, f32) = (0.21, 0.83);
+/// The longest strides a sloth may be given, metres.
+pub const MAX_STEP_RANGE: (f32, f32) = (0.1, 1.0);
+/// The IK's tolerances, millimetres.
+pub const IK_TOLERANCE_RANGE_MM: (f32, f32) = (0.01, 10.0);
+/// The IK's sweeps for one solve.
+pub const IK_SWEEPS_RANGE: (u32, u32) = (1, 256);
+
 checked_number!(
     /// A walking speed in metres per second, within the gait's range.
     Speed(f32),
@@ -31,35 +42,35 @@ checked_number!(
     /// How far below its grips a body hangs, metres.
     Hang(f32),
     "a distance in metres from 0.1 to 0.6",
-    |v| (0.1..=0.6).contains(&v)
+    |v| (HANG_RANGE.0 as f64..=HANG_RANGE.1 as f64).contains(&v)
 );
 
 checked_number!(
     /// A stride in metres, within the range the study measured.
     StrideLength(f32),
     "a stride in metres from 0.21 to 0.83",
-    |v| (0.21..=0.83).contains(&v)
+    |v| (STRIDE_RANGE.0 as f64..=STRIDE_RANGE.1 as f64).contains(&v)
 );
 
 checked_number!(
     /// The longest stride the gait may take, metres.
     MaxStep(f32),
     "a distance in metres from 0.1 to 1",
-    |v| (0.1..=1.0).contains(&v)
+    |v| (MAX_STEP_RANGE.0 as f64..=MAX_STEP_RANGE.1 as f64).contains(&v)
 );
 
 checked_number!(
     /// The distance from its target at which the IK stops, millimetres.
     IkTolerance(f32),
     "a distance in millimetres from 0.01 to 10",
-    |v| (0.01..=10.0).contains(&v)
+    |v| (IK_TOLERANCE_RANGE_MM.0 as f64..=IK_TOLERANCE_RANGE_MM.1 as f64).contains(&v)
 );
 
 checked_number!(
     /// The most sweeps the IK takes for one solve.
     IkSweeps(u32),
     "a whole number of sweeps from 1 to 256",
-    |v| v.fract() == 0.0 && (1.0..=256.0).contains(&v)
+    |v| v.fract() == 0.0 && (IK_SWEEPS_RANGE.0 as f64..=IK_SWEEPS_RANGE.1 as f64).contains(&v)
 );
 
 /// Which way along its support a sloth faces when placed.
@@ -220,6 +231,7 @@ impl SlothDef {
             stride_mode: self.stride_mode.unwrap_or_default(),
             fixed_stride: self.stride_m.map_or(DEFAULT_FIXED_STRIDE, |s| s.0),
             max_step: self.max_step_m.map(|m| m.0),
+            hang: self.proportions().hang,
             ccd: CcdSettings {
                 tolerance: self.ik_tolerance_mm.map_or(defaults.tolerance, |t| t.0 * 1e-3),
                 max_sweeps: self.ik_sweeps.map_or(defaults.max_sweeps, |s| s.0),

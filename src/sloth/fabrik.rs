@@ -31,8 +31,7 @@ pub fn solve(
         let side = frame.right() * rig.limb.side();
         angles[0] = across.dot(side).atan2(across.dot(frame.up)).clamp(rig.min[0], rig.max[0]);
     }
-    let (sin, cos) = angles[0].sin_cos();
-    let reach = frame.up * cos + frame.right() * (rig.limb.side() * sin);
+    let reach = rig.reach(frame, angles[0]);
     // The plane's coordinates: along the reach direction, along the body.
     let goal = Vec2::new(offset.dot(reach), offset.dot(frame.forward));
     let mut bends = [0.0f32; 4];

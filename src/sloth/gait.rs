@@ -94,9 +94,7 @@ impl GaitTiming {
     /// at most `max_stride` metres.
     pub fn at(speed: f32, max_stride: f32) -> Self {
         let speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
-        let stride = (0.15 + 1.5 * speed).clamp(MIN_STRIDE.min(max_stride), max_stride);
-        let cycle = stride / speed;
-        Self { stride, cycle, swing: cycle * SWING_FRACTION }
+        Self::with_stride(speed, 0.15 + 1.5 * speed, max_stride)
     }
 
     /// The timing at `speed` with strides of `stride` metres (kept within what the limbs

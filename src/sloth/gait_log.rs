@@ -140,9 +140,15 @@ impl GaitLog {
         }
     }
 
-    /// The contacts of `limb` kept, oldest first.
-    pub fn contacts(&self, limb: Limb) -> impl Iterator<Item = &Contact> {
-        self.limbs[limb.index()].contacts.iter()
+    /// The contacts of `limb` kept, oldest first, as start and end seconds cut to the span
+    /// from `since` to `until` (one under way ends at `until`, one from placing starts at 0):
+    /// the bars of a footfall diagram.
+    pub fn contact_spans(&self, limb: Limb, since: f32, until: f32) -> impl Iterator<Item = (f32, f32)> + '_ {
+        self.limbs[limb.index()].contacts.iter().filter_map(move |contact| {
+            let start = contact.start.unwrap_or(0.0).max(since);
+            let end = contact.end.unwrap_or(until).min(until);
+            (end > start).then_some((start, end))
+        })
     }
 
     /// The figures of the contacts and swings that began at or after `since`, seconds.

@@ -50,6 +50,8 @@ pub struct Tuning {
     pub fixed_stride: f32,
     /// The longest stride, metres; `None` for what the limbs comfortably take.
     pub max_step: Option<f32>,
+    /// How far the body hangs below its grips, metres.
+    pub hang: f32,
     /// The limbs' IK.
     pub ccd: CcdSettings,
 }
@@ -167,6 +169,7 @@ impl Sloth {
             stride_mode: self.stride_mode,
             fixed_stride: self.fixed_stride,
             max_step: self.max_step,
+            hang: self.proportions.hang,
             ccd: self.ccd,
         }
     }
@@ -177,6 +180,7 @@ impl Sloth {
         self.stride_mode = tuning.stride_mode;
         self.fixed_stride = tuning.fixed_stride;
         self.max_step = tuning.max_step;
+        self.proportions.hang = tuning.hang;
         self.ccd = tuning.ccd;
     }
 

@@ -155,11 +155,7 @@ fn footfall_diagram(ui: &mut egui::Ui, log: &GaitLog, now: f32, cycle: f32) {
         .show(ui, |plot| {
             for limb in Limb::ALL {
                 let row = f64::from(3 - limb.index() as u8);
-                for contact in log.contacts(limb) {
-                    let (start, end) = (contact.start.unwrap_or(0.0).max(since), contact.end.unwrap_or(now));
-                    if end <= since {
-                        continue;
-                    }
+                for (start, end) in log.contact_spans(limb, since, now) {
                     let points = PlotPoints::from(vec![[f64::from(start), row], [f64::from(end), row]]);
                     plot.line(Line::new(limb.key(), points).color(LIMB_COLORS[limb.index()]).width(9.0));
                 }

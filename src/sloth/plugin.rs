@@ -3,7 +3,10 @@
 
 use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::ccd::CcdSettings;
-use super::def::{Hang, IkSweeps, IkTolerance, MaxStep, SlothDef, Speed, StrideLength, WalkDirection};
+use super::def::{
+    HANG_RANGE, Hang, IK_SWEEPS_RANGE, IK_TOLERANCE_RANGE_MM, IkSweeps, IkTolerance, MAX_STEP_RANGE, MaxStep,
+    STRIDE_RANGE, SlothDef, Speed, StrideLength, WalkDirection,
+};
 use super::gait;
 use super::gait::StrideMode;
 use super::gait_log::{GaitLog, LimbState};
@@ -64,7 +67,7 @@ impl SlothParams {
             max_step_m: sloth.max_stride(),
             ik_tolerance_mm: tuning.ccd.tolerance * 1e3,
             ik_sweeps: tuning.ccd.max_sweeps,
-            hang_m: sloth.proportions.hang,
+            hang_m: tuning.hang,
         }
     }
 
@@ -73,11 +76,12 @@ impl SlothParams {
         Tuning {
             speed: self.speed.clamp(gait::SPEED_RANGE.0, gait::SPEED_RANGE.1),
             stride_mode: self.stride_mode,
-            fixed_stride: self.stride_m.clamp(0.21, 0.83),
-            max_step: Some(self.max_step_m.clamp(0.1, 1.0)),
+            fixed_stride: self.stride_m.clamp(STRIDE_RANGE.0, STRIDE_RANGE.1),
+            max_step: Some(self.max_step_m.clamp(MAX_STEP_RANGE.0, MAX_STEP_RANGE.1)),
+            hang: self.hang_m.clamp(HANG_RANGE.0, HANG_RANGE.1),
             ccd: CcdSettings {
-                tolerance: self.ik_tolerance_mm.clamp(0.01, 10.0) * 1e-3,
-                max_sweeps: self.ik_sweeps.clamp(1, 256),
+                tolerance: self.ik_tolerance_mm.clamp(IK_TOLERANCE_RANGE_MM.0, IK_TOLERANCE_RANGE_MM.1) * 1e-3,
+                max_sweeps: self.ik_sweeps.clamp(IK_SWEEPS_RANGE.0, IK_SWEEPS_RANGE.1),
             },
         }
     }
@@ -169,8 +173,8 @@ pub(super) fn save_live(def: &mut SlothDef, entity: EntityRef) {
     }
     // The default longest stride follows the animal's size: written only when changed.
     let default_max = filed.max_step.unwrap_or_else(|| comfortable_stride(&body.sloth.proportions));
-    if (params.max_step_m - default_max).abs() > 1e-6 {
-        def.max_step_m = Some(MaxStep(params.max_step_m.clamp(0.1, 1.0)));
+    if let Some(max_step) = tuning.max_step.filter(|m| (m - default_max).abs() > 1e-6) {
+        def.max_step_m = Some(MaxStep(max_step));
     }
     if tuning.ccd.tolerance != filed.ccd.tolerance {
         def.ik_tolerance_mm = Some(IkTolerance(tuning.ccd.tolerance * 1e3));
@@ -178,9 +182,8 @@ pub(super) fn save_live(def: &mut SlothDef, entity: EntityRef) {
     if tuning.ccd.max_sweeps != filed.ccd.max_sweeps {
         def.ik_sweeps = Some(IkSweeps(tuning.ccd.max_sweeps));
     }
-    let hang = params.hang_m.clamp(0.1, 0.6);
-    if (hang - def.proportions().hang).abs() > 1e-6 {
-        def.hang = Some(Hang(hang));
+    if (tuning.hang - filed.hang).abs() > 1e-6 {
+        def.hang = Some(Hang(tuning.hang));
     }
 }
 
@@ -298,7 +301,6 @@ fn walk_sloths(
         let drive = Drive { direction, change: input.change.take(), around: input.around };
         let SlothBody { sloth, supports } = &mut *body;
         sloth.tune(params.tuning());
-        sloth.proportions.hang = params.hang_m.clamp(0.1, 0.6);
         let footfalls = sloth.footfalls.len();
         sloth.step(dt, drive, supports);
         // Each hand that took hold in this step may shake loose what hangs near it.

@@ -243,7 +243,7 @@ impl LimbRig {
     }
 
     /// The limb plane's reach direction for abduction `abduction` (radians, outwards).
-    fn reach(&self, frame: &BodyFrame, abduction: f32) -> Vec3 {
+    pub fn reach(&self, frame: &BodyFrame, abduction: f32) -> Vec3 {
         let (sin, cos) = abduction.sin_cos();
         frame.up * cos + frame.right() * (self.limb.side() * sin)
     }

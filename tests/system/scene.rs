@@ -34,7 +34,7 @@ fn shipped_scenes_are_valid() {
     for folder in ["scenes", "scenes/sloth", "tests/scenes"] {
         for entry in std::fs::read_dir(root().join(folder)).unwrap() {
             let path = entry.unwrap().path();
-            let scene_test = path.to_string_lossy().ends_with(canopy::scene_test::suite::TEST_FILE_SUFFIX);
+            let scene_test = path.to_string_lossy().ends_with(canopy::scene_test::file::TEST_FILE_SUFFIX);
             if path.extension().is_some_and(|e| e == "yaml") && !scene_test {
                 load(&path).unwrap_or_else(|e| panic!("{e}"));
                 count += 1;
