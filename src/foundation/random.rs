@@ -3,7 +3,7 @@
 //! must follow from their seed alone.
 
 /// SplitMix64: a small, fast, well-mixed stream of 64-bit numbers.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Random(u64);
 
 impl Random {

@@ -15,8 +15,10 @@ use serde::{Deserialize, Serialize};
 
 /// How far below its grips a body may hang, metres.
 pub const HANG_RANGE: (f32, f32) = (0.1, 0.6);
-/// The strides the study measured, metres.
-pub const STRIDE_RANGE: (f32, f32) = (0.21, 0.83);
+/// The strides a sloth may be given: those the study measured, metres.
+pub const STRIDE_RANGE: (f32, f32) = gait::ANIMAL_STRIDES;
+/// The delays between steps a sloth stepping one foot at a time may be given, seconds.
+pub const STEP_DELAY_RANGE: (f32, f32) = (0.0, 1.0);
 /// The longest strides a sloth may be given, metres.
 pub const MAX_STEP_RANGE: (f32, f32) = (0.1, 1.0);
 /// The IK's tolerances, millimetres.
@@ -50,6 +52,13 @@ checked_number!(
     StrideLength(f32),
     "a stride in metres from 0.21 to 0.83",
     |v| (STRIDE_RANGE.0 as f64..=STRIDE_RANGE.1 as f64).contains(&v)
+);
+
+checked_number!(
+    /// Seconds from one foot's touch-down to the next foot's lift-off.
+    StepDelay(f32),
+    "a delay in seconds from 0 to 1",
+    |v| (STEP_DELAY_RANGE.0 as f64..=STEP_DELAY_RANGE.1 as f64).contains(&v)
 );
 
 checked_number!(
@@ -144,6 +153,13 @@ pub struct SlothDef {
     /// The stride of `stride_mode: fixed`, metres; 0.45 by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stride_m: Option<StrideLength>,
+    /// The seed of `stride_mode: random`'s strides; 0 by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stride_seed: Option<u32>,
+    /// Feet step one at a time, each lifting this many seconds after the one before landed
+    /// (the source's 0.2 s); absent, the animal's swings overlap (contact twice the swing).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step_delay_s: Option<StepDelay>,
     /// The longest stride, metres; half the torso's length and 0.1 m by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_step_m: Option<MaxStep>,
@@ -230,6 +246,8 @@ impl SlothDef {
             speed,
             stride_mode: self.stride_mode.unwrap_or_default(),
             fixed_stride: self.stride_m.map_or(DEFAULT_FIXED_STRIDE, |s| s.0),
+            stride_seed: self.stride_seed.unwrap_or_default(),
+            step_delay: self.step_delay_s.map(|d| d.0),
             max_step: self.max_step_m.map(|m| m.0),
             hang: self.proportions().hang,
             ccd: CcdSettings {

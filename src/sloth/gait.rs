@@ -16,8 +16,15 @@ use serde::{Deserialize, Serialize};
 /// The slowest and fastest walking speeds the gait accepts, metres per second.
 pub const SPEED_RANGE: (f32, f32) = (0.05, 0.35);
 
+/// The strides the study measured, shortest and longest, metres.
+pub const ANIMAL_STRIDES: (f32, f32) = (0.21, 0.83);
+
 /// Shortest stride the source measured, metres.
-pub const MIN_STRIDE: f32 = 0.21;
+pub const MIN_STRIDE: f32 = ANIMAL_STRIDES.0;
+
+/// The shortest swing of feet stepping one at a time, seconds: a longer delay between steps
+/// lengthens the cycle rather than hurry the swing further.
+pub const MIN_SEQUENTIAL_SWING: f32 = 0.25;
 
 /// Part of a cycle a foot swings: contact lasts twice as long.
 pub const SWING_FRACTION: f32 = 1.0 / 3.0;
@@ -31,6 +38,9 @@ pub enum StrideMode {
     FromSpeed,
     /// The same at every speed; the cycle is what makes the speed.
     Fixed,
+    /// Drawn anew for every cycle within the animal's [`ANIMAL_STRIDES`] (and the longest
+    /// stride allowed), from a seeded stream: the same seed walks the same strides.
+    Random,
 }
 
 /// The stride of [`StrideMode::Fixed`] when none is given, metres.
@@ -106,9 +116,24 @@ impl GaitTiming {
         Self { stride, cycle, swing: cycle * SWING_FRACTION }
     }
 
+    /// The same strides with the feet stepping one at a time, as the source's animal did:
+    /// each foot lifts `delay` seconds after the one before it touched down. The swing takes
+    /// what is left of a quarter cycle, and no less than [`MIN_SEQUENTIAL_SWING`] (the cycle,
+    /// and with it the speed made, gives way when a long delay leaves too little).
+    pub fn with_step_delay(self, delay: f32) -> Self {
+        let delay = delay.max(0.0);
+        let swing = (0.25 * self.cycle - delay).max(MIN_SEQUENTIAL_SWING);
+        Self { stride: self.stride, cycle: 4.0 * (swing + delay), swing }
+    }
+
     /// Contact time, seconds.
     pub fn contact(&self) -> f32 {
         self.cycle - self.swing
+    }
+
+    /// The part of a cycle a foot swings.
+    pub fn swing_fraction(&self) -> f32 {
+        self.swing / self.cycle
     }
 }
 
@@ -162,6 +187,21 @@ mod tests {
         let (slow, fast) = (GaitTiming::at(0.08, 0.6), GaitTiming::at(0.28, 0.6));
         assert!(fast.stride > slow.stride && fast.cycle < slow.cycle);
         assert_eq!(GaitTiming::at(0.3, 0.3).stride, 0.3);
+    }
+
+    #[test]
+    fn stepping_one_at_a_time_leaves_the_delay_between_touch_down_and_the_next_lift() {
+        let overlapping = GaitTiming::with_stride(0.11, 0.27, 0.3);
+        let sequential = overlapping.with_step_delay(0.2);
+        // Lifts stay a quarter cycle apart; the swing ends `delay` before the next lift.
+        assert!((0.25 * sequential.cycle - sequential.swing - 0.2).abs() < 1e-6);
+        assert_eq!(sequential.cycle, overlapping.cycle);
+        assert!(sequential.swing < overlapping.swing);
+        // Too long a delay for the cycle: the swing keeps its least and the cycle grows.
+        let slow = overlapping.with_step_delay(0.9);
+        assert_eq!(slow.swing, MIN_SEQUENTIAL_SWING);
+        assert!((slow.cycle - 4.0 * (MIN_SEQUENTIAL_SWING + 0.9)).abs() < 1e-6);
+        assert!(slow.cycle > overlapping.cycle);
     }
 
     #[test]

@@ -6,10 +6,11 @@
 use super::body::{self, HEADING_EASE, NearSupports};
 use super::ccd::{self, CcdSettings};
 use super::feet::{Foot, GRIP_TOLERANCE, Probe, Step, Swing, in_wood};
-use super::gait::{self, GaitTiming, SWING_FRACTION, StrideMode, SwingArc};
+use super::gait::{self, ANIMAL_STRIDES, GaitTiming, StrideMode, SwingArc};
 use super::moves::Transfer;
 use super::rig::{BodyFrame, JOINTS, Limb, LimbRig, Proportions, limb_rigs};
 use super::supports::Supports;
+use crate::foundation::random::Random;
 use crate::tree::SupportKind;
 use bevy::math::Vec3;
 
@@ -48,6 +49,11 @@ pub struct Tuning {
     pub stride_mode: StrideMode,
     /// The stride of [`StrideMode::Fixed`], metres.
     pub fixed_stride: f32,
+    /// The seed of [`StrideMode::Random`]'s strides.
+    pub stride_seed: u32,
+    /// Seconds from one foot's touch-down to the next one's lift-off, when the feet step one at
+    /// a time; `None` for the animal's overlapping swings.
+    pub step_delay: Option<f32>,
     /// The longest stride, metres; `None` for what the limbs comfortably take.
     pub max_step: Option<f32>,
     /// How far the body hangs below its grips, metres.
@@ -115,6 +121,15 @@ pub struct Sloth {
     pub stride_mode: StrideMode,
     /// The stride of [`StrideMode::Fixed`], metres.
     pub fixed_stride: f32,
+    /// The seed `strides` was started from.
+    pub stride_seed: u32,
+    /// The stream [`StrideMode::Random`] draws its strides from.
+    strides: Random,
+    /// The stride [`StrideMode::Random`] drew for the current cycle, metres.
+    pub drawn_stride: f32,
+    /// Seconds from one foot's touch-down to the next one's lift-off, when the feet step one at
+    /// a time; `None` for the animal's overlapping swings.
+    pub step_delay: Option<f32>,
     /// The longest stride the gait takes, metres, when set; else from the torso's length.
     pub max_step: Option<f32>,
     /// The feet, indexed like [`Limb::ALL`].
@@ -168,6 +183,8 @@ impl Sloth {
             speed: self.speed,
             stride_mode: self.stride_mode,
             fixed_stride: self.fixed_stride,
+            stride_seed: self.stride_seed,
+            step_delay: self.step_delay,
             max_step: self.max_step,
             hang: self.proportions.hang,
             ccd: self.ccd,
@@ -179,6 +196,12 @@ impl Sloth {
         self.speed = tuning.speed;
         self.stride_mode = tuning.stride_mode;
         self.fixed_stride = tuning.fixed_stride;
+        if tuning.stride_seed != self.stride_seed {
+            self.stride_seed = tuning.stride_seed;
+            self.strides = Random::new(tuning.stride_seed.into());
+            self.draw_stride();
+        }
+        self.step_delay = tuning.step_delay;
         self.max_step = tuning.max_step;
         self.proportions.hang = tuning.hang;
         self.ccd = tuning.ccd;
@@ -186,10 +209,20 @@ impl Sloth {
 
     /// The gait at the current speed.
     pub fn timing(&self) -> GaitTiming {
-        match self.stride_mode {
+        let timing = match self.stride_mode {
             StrideMode::FromSpeed => GaitTiming::at(self.speed, self.max_stride()),
             StrideMode::Fixed => GaitTiming::with_stride(self.speed, self.fixed_stride, self.max_stride()),
+            StrideMode::Random => GaitTiming::with_stride(self.speed, self.drawn_stride, self.max_stride()),
+        };
+        match self.step_delay {
+            Some(delay) => timing.with_step_delay(delay),
+            None => timing,
         }
+    }
+
+    /// Draws the next cycle's stride of [`StrideMode::Random`].
+    fn draw_stride(&mut self) {
+        self.drawn_stride = self.strides.between(ANIMAL_STRIDES.0, ANIMAL_STRIDES.1);
     }
 
     /// A sloth placed as `placement` says, with its feet staggered as in the middle of a
@@ -223,6 +256,10 @@ impl Sloth {
             speed,
             stride_mode: StrideMode::FromSpeed,
             fixed_stride: gait::DEFAULT_FIXED_STRIDE,
+            stride_seed: 0,
+            strides: Random::new(0),
+            drawn_stride: 0.0,
+            step_delay: None,
             max_step: None,
             feet: [Foot { support, s: s0, grip: axis.point, swing: None, angles: [0.0; JOINTS], position: axis.point };
                 4],
@@ -243,6 +280,7 @@ impl Sloth {
             transfer_pending: false,
             near: NearSupports::default(),
         };
+        sloth.draw_stride();
         let stride = sloth.timing().stride;
         // Feet where a steady walk would have them when the right hind is about to lift.
         let stagger = [-0.5, -0.125, 0.25, 0.5];
@@ -342,9 +380,13 @@ impl Sloth {
         let before = self.phase;
         let after = (self.phase + direction * dt / timing.cycle).rem_euclid(1.0);
         self.phase = after;
+        let wrapped = if direction > 0.0 { after < before } else { after > before };
+        if wrapped && self.stride_mode == StrideMode::Random {
+            self.draw_stride();
+        }
         for limb in Limb::ALL {
             let offset = gait::lift_phase(limb);
-            let lift = if direction > 0.0 { offset } else { (offset + SWING_FRACTION).fract() };
+            let lift = if direction > 0.0 { offset } else { (offset + timing.swing_fraction()).fract() };
             // Whether the clock passed `lift` going from `before` to `after` in `direction`.
             let (from, to) = if direction > 0.0 { (before, after) } else { (after, before) };
             let crossed = if from <= to { lift > from && lift <= to } else { lift > from || lift <= to };
@@ -497,5 +539,81 @@ impl Sloth {
     /// Mean speed while moving, metres per second.
     pub fn mean_speed(&self) -> f32 {
         if self.moving_time > 0.0 { self.distance / self.moving_time } else { 0.0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tree::{Shape, SupportSpec, Tree};
+
+    /// A sloth `tuning` walks forward for `seconds` along a level pole like the study's, 40 mm
+    /// thick; `watch` sees it after every 60 Hz step.
+    fn walk(tuning: impl Fn(Tuning) -> Tuning, seconds: f32, mut watch: impl FnMut(&Sloth)) -> Sloth {
+        let pole = Shape::Polyline { points: vec![Vec3::ZERO, Vec3::new(6.0, 0.0, 0.0)], radii: vec![0.02, 0.02] };
+        let tree = Tree::build(&[SupportSpec { name: "pole".into(), shape: pole, kind: None }]).unwrap();
+        let supports = Supports::new([("t", &tree)]);
+        let placement = Placement { support: 0, fraction: 0.1, facing: 1.0, around: 0.0 };
+        let mut sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        sloth.tune(tuning(sloth.tuning()));
+        let forward = Drive { direction: 1.0, ..Drive::default() };
+        for _ in 0..(seconds * 60.0) as usize {
+            sloth.step(1.0 / 60.0, forward, &supports);
+            watch(&sloth);
+        }
+        sloth
+    }
+
+    #[test]
+    fn feet_stepping_one_at_a_time_wait_the_delay_between_steps() {
+        let delay = 0.2;
+        let mut most_swinging = 0;
+        let mut touchdowns = Vec::new();
+        let mut lifts = Vec::new();
+        let mut planted = [true; 4];
+        let sloth = walk(
+            |t| Tuning { step_delay: Some(delay), ..t },
+            12.0,
+            |sloth| {
+                most_swinging = most_swinging.max(sloth.feet.iter().filter(|f| !f.planted()).count());
+                for (was, foot) in planted.iter_mut().zip(&sloth.feet) {
+                    match (*was, foot.planted()) {
+                        (true, false) => lifts.push(sloth.time),
+                        (false, true) => touchdowns.push(sloth.time),
+                        _ => {}
+                    }
+                    *was = foot.planted();
+                }
+            },
+        );
+        assert_eq!(most_swinging, 1, "one foot in the air at a time");
+        assert!(touchdowns.len() >= 12, "{} steps", touchdowns.len());
+        // Each lift follows the touch-down before it by the delay, to a fixed step.
+        for touchdown in &touchdowns {
+            if let Some(next) = lifts.iter().find(|&&lift| lift > *touchdown) {
+                assert!((next - touchdown - delay).abs() <= 1.5 / 60.0, "lift {next} after touch-down {touchdown}");
+            }
+        }
+        assert!(sloth.distance > 0.8, "walked {} m", sloth.distance);
+    }
+
+    #[test]
+    fn random_strides_vary_within_the_animals_range_and_follow_from_the_seed() {
+        let strides = |seed| {
+            let mut drawn = Vec::new();
+            let tuning = |t| Tuning { stride_mode: StrideMode::Random, stride_seed: seed, max_step: Some(0.9), ..t };
+            walk(tuning, 20.0, |sloth| {
+                if drawn.last() != Some(&sloth.drawn_stride) {
+                    drawn.push(sloth.drawn_stride);
+                }
+            });
+            drawn
+        };
+        let first = strides(7);
+        assert!(first.len() >= 3, "{first:?}");
+        assert!(first.iter().all(|s| (ANIMAL_STRIDES.0..ANIMAL_STRIDES.1).contains(s)), "{first:?}");
+        assert!(first.windows(2).all(|pair| pair[0] != pair[1]), "{first:?}");
+        assert_eq!(strides(7), first);
+        assert_ne!(strides(8), first);
     }
 }

@@ -5,7 +5,7 @@ use super::biceps::{BICEPS_LIMBS, Biceps, arm_points};
 use super::ccd::CcdSettings;
 use super::def::{
     HANG_RANGE, Hang, IK_SWEEPS_RANGE, IK_TOLERANCE_RANGE_MM, IkSweeps, IkTolerance, MAX_STEP_RANGE, MaxStep,
-    STRIDE_RANGE, SlothDef, Speed, StrideLength, WalkDirection,
+    STEP_DELAY_RANGE, STRIDE_RANGE, SlothDef, Speed, StepDelay, StrideLength, WalkDirection,
 };
 use super::gait;
 use super::gait::StrideMode;
@@ -29,7 +29,8 @@ use serde_json::{Map, Value, json};
 use std::sync::Arc;
 
 /// A sloth's parameters, tuned while it walks: `<name>.speed` (m/s), `.autorun`, `.direction`,
-/// `.stride_mode`, `.stride_m`, `.max_step_m`, `.ik_tolerance_mm`, `.ik_sweeps`, `.hang_m`.
+/// `.stride_mode`, `.stride_m`, `.stride_seed`, `.one_at_a_time`, `.step_delay_s`, `.max_step_m`,
+/// `.ik_tolerance_mm`, `.ik_sweeps`, `.hang_m`.
 /// Each is kept within the range its scene-file field accepts.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Component)]
@@ -40,10 +41,17 @@ pub struct SlothParams {
     pub autorun: bool,
     /// Which way autorun walks.
     pub direction: WalkDirection,
-    /// How the stride is chosen: from the speed, or fixed at `stride_m`.
+    /// How the stride is chosen: from the speed, fixed at `stride_m`, or at random.
     pub stride_mode: StrideMode,
     /// The fixed stride, metres (0.21-0.83, the animal's range).
     pub stride_m: f32,
+    /// The seed of the random strides.
+    pub stride_seed: u32,
+    /// The feet step one at a time, `step_delay_s` apart, as the source's animal did.
+    pub one_at_a_time: bool,
+    /// Seconds from one foot's touch-down to the next one's lift-off when stepping one at a
+    /// time (0-1).
+    pub step_delay_s: f32,
     /// The longest stride, metres (0.1-1).
     pub max_step_m: f32,
     /// Where each limb's IK stops short of its target, millimetres (0.01-10).
@@ -64,6 +72,9 @@ impl SlothParams {
             direction: def.direction,
             stride_mode: tuning.stride_mode,
             stride_m: tuning.fixed_stride,
+            stride_seed: tuning.stride_seed,
+            one_at_a_time: tuning.step_delay.is_some(),
+            step_delay_s: tuning.step_delay.unwrap_or(SOURCE_STEP_DELAY),
             max_step_m: sloth.max_stride(),
             ik_tolerance_mm: tuning.ccd.tolerance * 1e3,
             ik_sweeps: tuning.ccd.max_sweeps,
@@ -77,6 +88,8 @@ impl SlothParams {
             speed: self.speed.clamp(gait::SPEED_RANGE.0, gait::SPEED_RANGE.1),
             stride_mode: self.stride_mode,
             fixed_stride: self.stride_m.clamp(STRIDE_RANGE.0, STRIDE_RANGE.1),
+            stride_seed: self.stride_seed,
+            step_delay: self.one_at_a_time.then(|| self.step_delay_s.clamp(STEP_DELAY_RANGE.0, STEP_DELAY_RANGE.1)),
             max_step: Some(self.max_step_m.clamp(MAX_STEP_RANGE.0, MAX_STEP_RANGE.1)),
             hang: self.hang_m.clamp(HANG_RANGE.0, HANG_RANGE.1),
             ccd: CcdSettings {
@@ -86,6 +99,10 @@ impl SlothParams {
         }
     }
 }
+
+/// The source's delay between steps, seconds: what `step_delay_s` starts at when the file
+/// leaves the feet's swings overlapping.
+const SOURCE_STEP_DELAY: f32 = 0.2;
 
 /// What the keys ask of a sloth until the next fixed step.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
@@ -170,6 +187,12 @@ pub(super) fn save_live(def: &mut SlothDef, entity: EntityRef) {
     }
     if tuning.fixed_stride != filed.fixed_stride {
         def.stride_m = Some(StrideLength(tuning.fixed_stride));
+    }
+    if tuning.stride_seed != filed.stride_seed {
+        def.stride_seed = Some(tuning.stride_seed);
+    }
+    if tuning.step_delay != filed.step_delay {
+        def.step_delay_s = tuning.step_delay.map(StepDelay);
     }
     // The default longest stride follows the animal's size: written only when changed.
     let default_max = filed.max_step.unwrap_or_else(|| comfortable_stride(&body.sloth.proportions));

@@ -68,6 +68,8 @@ fn every_kinds_live_parameters_are_saved_and_read_back() {
         ("sloth.stride_mode", ParamValue::Choice("fixed".into())),
         ("sloth.stride_m", ParamValue::Number(0.5)),
         ("sloth.ik_sweeps", ParamValue::Number(20.0)),
+        ("sloth.one_at_a_time", ParamValue::Bool(true)),
+        ("sloth.step_delay_s", ParamValue::Number(0.3)),
         ("patch.k", ParamValue::Number(0.8)),
         ("plum.friction", ParamValue::Number(0.9)),
     ] {
@@ -94,7 +96,8 @@ fn every_kinds_live_parameters_are_saved_and_read_back() {
     assert_eq!(sloth["direction"].as_str(), Some("back"));
     assert_eq!((sloth["stride_mode"].as_str(), sloth["ik_sweeps"].as_u64()), (Some("fixed"), Some(20)));
     assert!((number(&sloth["stride_m"]) - 0.5).abs() < 1e-6, "{sloth:?}");
-    for untouched in ["max_step_m", "ik_tolerance_mm", "hang"] {
+    assert!((number(&sloth["step_delay_s"]) - 0.3).abs() < 1e-6, "{sloth:?}");
+    for untouched in ["max_step_m", "ik_tolerance_mm", "hang", "stride_seed"] {
         assert!(sloth.get(untouched).is_none(), "{untouched} was not changed, so it is not written: {sloth:?}");
     }
     assert_eq!(sloth["support"], entry(before, "sloth")["support"], "where it hangs, as written");
