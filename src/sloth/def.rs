@@ -265,8 +265,6 @@ impl SlothDef {
             facing: if self.facing == Facing::Forward { 1.0 } else { -1.0 },
             around: self.around_deg.0.to_radians(),
         };
-        let mut sloth = Sloth::place(supports, placement, self.proportions(), speed).map_err(|e| e.to_string())?;
-        sloth.tune(self.tuning(speed));
-        Ok(sloth)
+        Sloth::place(supports, placement, self.proportions(), self.tuning(speed)).map_err(|e| e.to_string())
     }
 }

@@ -62,6 +62,23 @@ pub struct Tuning {
     pub ccd: CcdSettings,
 }
 
+impl Tuning {
+    /// The animal's own walk at `speed` (m/s) for a body of `proportions`: the stride from the
+    /// speed, overlapping swings, the default IK.
+    pub fn animal(speed: f32, proportions: &Proportions) -> Self {
+        Self {
+            speed,
+            stride_mode: StrideMode::FromSpeed,
+            fixed_stride: gait::DEFAULT_FIXED_STRIDE,
+            stride_seed: 0,
+            step_delay: None,
+            max_step: None,
+            hang: proportions.hang,
+            ccd: CcdSettings::default(),
+        }
+    }
+}
+
 /// Where a sloth is placed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Placement {
@@ -107,6 +124,12 @@ const WOOD_SHIFTS: usize = 15;
 /// Where the gait clock stands with the feet as [`Sloth::place`] staggers them: the right hind
 /// is about to lift.
 const PLACED_PHASE: f32 = 1.0 - 1e-4;
+
+/// How deep among the walks transfer plans try out transfers are still planned: the live sloth
+/// plans its transfer, and the walk on that a plan tries out plans the next one it meets, but
+/// that plan's own tried-out walks stop where a third would begin (nested without end, with
+/// strides longer than the animal's default, plans overflowed the stack).
+pub(super) const PLANNING_DEPTH: u8 = 2;
 
 /// A sloth and everything its locomotion remembers.
 #[derive(Debug, Clone, PartialEq)]
@@ -166,6 +189,10 @@ pub struct Sloth {
     /// Stopped going forward next to a support it may transfer onto, the sloth waits for its
     /// swinging feet to land before planning the transfer.
     transfer_pending: bool,
+    /// How deep among the walks that transfer plans try out this sloth walks: 0 for the live
+    /// one. Below [`PLANNING_DEPTH`] a transfer it waits for is planned; deeper, the walk ends
+    /// where that transfer would begin.
+    pub(super) trial_depth: u8,
     /// The support segments near the body, for its clearance.
     near: NearSupports,
 }
@@ -225,13 +252,13 @@ impl Sloth {
         self.drawn_stride = self.strides.between(ANIMAL_STRIDES.0, ANIMAL_STRIDES.1);
     }
 
-    /// A sloth placed as `placement` says, with its feet staggered as in the middle of a
-    /// diagonal-sequence walk. On a trunk it always faces up.
+    /// A sloth placed as `placement` says, walking as `tuning` says, with its feet staggered
+    /// as in the middle of a diagonal-sequence walk. On a trunk it always faces up.
     pub fn place(
         supports: &Supports,
         placement: Placement,
         proportions: Proportions,
-        speed: f32,
+        tuning: Tuning,
     ) -> Result<Self, PlaceError> {
         let Placement { support, fraction, facing, around } = placement;
         let path = supports.paths.get(support).ok_or_else(|| PlaceError::UnknownSupport(format!("#{support}")))?;
@@ -253,7 +280,7 @@ impl Sloth {
         let mut sloth = Self {
             proportions,
             rigs,
-            speed,
+            speed: tuning.speed,
             stride_mode: StrideMode::FromSpeed,
             fixed_stride: gait::DEFAULT_FIXED_STRIDE,
             stride_seed: 0,
@@ -278,11 +305,16 @@ impl Sloth {
             probes: Default::default(),
             transfer: None,
             transfer_pending: false,
+            trial_depth: 0,
             near: NearSupports::default(),
         };
         sloth.draw_stride();
-        let stride = sloth.timing().stride;
-        // Feet where a steady walk would have them when the right hind is about to lift.
+        sloth.tune(tuning);
+        // Feet where a steady walk at the animal's own stride for the speed would have them when
+        // the right hind is about to lift: any stride the gait then takes walks on from there
+        // (a stagger of a stride near the shortest would leave a leading foot no grip between
+        // its pair and the most it may lead by).
+        let stride = GaitTiming::at(sloth.speed, sloth.max_stride()).stride;
         let stagger = [-0.5, -0.125, 0.25, 0.5];
         for limb in Limb::ALL {
             let rig = &sloth.rigs[limb.index()];
@@ -353,7 +385,7 @@ impl Sloth {
         if self.transfer_pending && direction < 0.0 {
             self.transfer_pending = false;
         }
-        if self.transfer_pending && self.feet.iter().all(Foot::planted) {
+        if self.transfer_pending && self.trial_depth < PLANNING_DEPTH && self.feet.iter().all(Foot::planted) {
             self.transfer_pending = false;
             self.transfer = self.plan_transfer(supports);
             if self.transfer.is_none() {
@@ -554,8 +586,9 @@ mod tests {
         let tree = Tree::build(&[SupportSpec { name: "pole".into(), shape: pole, kind: None }]).unwrap();
         let supports = Supports::new([("t", &tree)]);
         let placement = Placement { support: 0, fraction: 0.1, facing: 1.0, around: 0.0 };
-        let mut sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
-        sloth.tune(tuning(sloth.tuning()));
+        let proportions = Proportions::default();
+        let mut sloth =
+            Sloth::place(&supports, placement, proportions, tuning(Tuning::animal(0.11, &proportions))).unwrap();
         let forward = Drive { direction: 1.0, ..Drive::default() };
         for _ in 0..(seconds * 60.0) as usize {
             sloth.step(1.0 / 60.0, forward, &supports);

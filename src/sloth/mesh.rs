@@ -82,6 +82,7 @@ fn claws(mesh: &mut MeshData, frame: &BodyFrame, limb: Limb, palm: Vec3, grip: V
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sloth::locomotion::Tuning;
     use crate::sloth::rig::Proportions;
     use crate::sloth::supports::Supports;
     use crate::tree::{Shape, SupportSpec, Tree};
@@ -95,7 +96,9 @@ mod tests {
         let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
         let supports = Supports::new([("t", &tree)]);
         let placement = crate::sloth::Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
-        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        let sloth =
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
+                .unwrap();
         let def: crate::sloth::SlothDef = serde_yaml::from_str("support: b").unwrap();
         let skin = Skin::new(&sloth.proportions, &sloth.rigs);
         (sloth, skin, def.biceps().unwrap())

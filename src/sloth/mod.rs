@@ -56,7 +56,7 @@ pub mod transfer;
 
 pub use def::{Facing, SlothDef, WalkDirection};
 pub use kind::SlothKind;
-pub use locomotion::{Drive, PlaceError, Placement, Sloth};
+pub use locomotion::{Drive, PlaceError, Placement, Sloth, Tuning};
 pub use plugin::{
     SlothBody, SlothGait, SlothInput, SlothMuscles, SlothParams, SlothPlugin, SlothSkin, SlothSource, SlothSystems,
 };

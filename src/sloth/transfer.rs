@@ -307,7 +307,8 @@ impl Sloth {
         }
         // Placements whose grips near the junction cannot come clear of the other support's
         // wood are refused by `place`.
-        let placed = Sloth::place(supports, placement, self.proportions, self.speed).ok()?;
+        let mut placed = Sloth::place(supports, placement, self.proportions, self.tuning()).ok()?;
+        placed.trial_depth = self.trial_depth + 1;
         let ending = Ending { target, placed, out };
         reaching.iter().find_map(|&pose| {
             let [lefts, rights] =
@@ -466,7 +467,7 @@ impl Sloth {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sloth::locomotion::{Drive, PlaceError};
+    use crate::sloth::locomotion::{Drive, PLANNING_DEPTH, PlaceError, Tuning};
     use crate::sloth::rig::Proportions;
     use crate::tree::{Shape, SupportSpec, Tree};
 
@@ -543,7 +544,9 @@ mod tests {
         let supports = Supports::new([("t", &tree)]);
         let (trunk, limb) = (supports.find("t/trunk").unwrap(), supports.find("t/limb").unwrap());
         let placement = Placement { support: limb, fraction: 0.6, facing: -1.0, around: 0.0 };
-        let mut sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        let mut sloth =
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
+                .unwrap();
         let mut transferred = false;
         for _ in 0..60 * 20 {
             sloth.step(1.0 / 60.0, Drive { direction: 1.0, ..Drive::default() }, &supports);
@@ -564,6 +567,27 @@ mod tests {
     }
 
     #[test]
+    fn a_walk_tried_out_deep_among_plans_stops_at_the_next_junction_without_planning_there() {
+        let tree = tree(110.0);
+        let supports = Supports::new([("t", &tree)]);
+        let limb = supports.find("t/limb").unwrap();
+        let placement = Placement { support: limb, fraction: 0.6, facing: -1.0, around: 0.0 };
+        let mut sloth =
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
+                .unwrap();
+        sloth.trial_depth = PLANNING_DEPTH;
+        let mut distances = Vec::new();
+        for _ in 0..60 * 20 {
+            sloth.step(1.0 / 60.0, Drive { direction: 1.0, ..Drive::default() }, &supports);
+            assert!(sloth.transfer.is_none(), "no transfer planned");
+            distances.push(sloth.distance);
+        }
+        assert!(sloth.blocked.is_none(), "waiting at the junction, not blocked");
+        assert!(distances[60 * 5] > 0.3, "walked in: {} m", distances[60 * 5]);
+        assert_eq!(distances[60 * 15], sloth.distance, "and stopped there");
+    }
+
+    #[test]
     fn a_sloth_is_not_placed_where_a_foot_finds_no_grip_clear_of_the_other_supports_wood() {
         // A trunk a metre thick: the first metre of the branch growing from it is inside it.
         let tree = junction(vec![1.0, 1.0, 1.0], 90.0, 4.0);
@@ -571,7 +595,7 @@ mod tests {
         let limb = supports.find("t/limb").unwrap();
         let place = |fraction| {
             let placement = Placement { support: limb, fraction, facing: -1.0, around: 0.0 };
-            Sloth::place(&supports, placement, Proportions::default(), 0.11)
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
         };
         assert!(matches!(place(0.02), Err(PlaceError::InWood { .. })), "{:?}", place(0.02).err());
         let placed = place(0.7).expect("clear of the trunk");
@@ -584,7 +608,9 @@ mod tests {
         let tree = Tree::build(&[SupportSpec { name: "b".into(), shape, kind: None }]).unwrap();
         let supports = Supports::new([("t", &tree)]);
         let placement = Placement { support: 0, fraction: 0.5, facing: 1.0, around: 0.0 };
-        let sloth = Sloth::place(&supports, placement, Proportions::default(), 0.11).unwrap();
+        let sloth =
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
+                .unwrap();
         assert!(!sloth.transfer_in_reach(&supports));
         assert!(sloth.plan_transfer(&supports).is_none());
     }

@@ -4,7 +4,7 @@
 //! Run with `cargo bench -p canopy_bench --profile dev --bench sloth`.
 
 use canopy::sloth::rig::Proportions;
-use canopy::sloth::{Drive, Placement, Sloth, Supports};
+use canopy::sloth::{Drive, Placement, Sloth, Supports, Tuning};
 use canopy::tree::{GeneratorSettings, SupportKind, Tree, generate::generate};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
@@ -31,7 +31,9 @@ fn walkers() -> (Supports, Vec<Sloth>) {
         }
         let fraction = 0.25 + 0.1 * (sloths.len() % 3) as f32;
         let placement = Placement { support, fraction, facing: 1.0, around: 0.0 };
-        if let Ok(sloth) = Sloth::place(&supports, placement, Proportions::default(), 0.11) {
+        if let Ok(sloth) =
+            Sloth::place(&supports, placement, Proportions::default(), Tuning::animal(0.11, &Proportions::default()))
+        {
             sloths.push(sloth);
         }
     }
