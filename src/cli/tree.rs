@@ -1,9 +1,14 @@
-//! `canopy tree`: tree scenes written from a seed.
+//! `canopy tree`: tree scenes written from a seed, or from a scanned tree's model.
 
 use super::refuse_to_replace;
 use crate::tree::GeneratorSettings;
-use crate::tree::generate::{generate, scene_text};
+use crate::tree::generate::{generate, scene_text, support_yaml};
+use crate::tree::qsm::build::{ImportOptions, supports};
+use crate::tree::qsm::{self, QsmFormat};
+use crate::tree::{Shape, SupportSpec};
+use bevy::math::Vec3;
 use clap::{Args, Subcommand};
+use std::fmt::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -12,6 +17,41 @@ use std::process::ExitCode;
 pub enum TreeCommand {
     /// Write a scene of seeded, generated trees: an ordinary scene file to play and edit.
     Generate(GenerateArgs),
+    /// Write a scene of a scanned tree's quantitative structure model (TreeQSM's .mat or text
+    /// export, SimpleForest's or aRchi's CSV), its supports written out to play and edit.
+    Import(ImportArgs),
+}
+
+/// `canopy tree import`.
+#[derive(Args, Debug)]
+pub struct ImportArgs {
+    /// The model's file.
+    file: PathBuf,
+    /// Its format (treeqsm-mat, treeqsm-text, simpleforest-csv, archi-csv); found from the
+    /// file when not given.
+    #[arg(long, value_parser = parse_format)]
+    format: Option<QsmFormat>,
+    /// Drop cylinders thinner than this radius in metres, and what grows from them.
+    #[arg(long, default_value_t = 0.0)]
+    min_radius_m: f32,
+    /// Drop a support's points within this many metres of the line through their neighbours.
+    #[arg(long, default_value_t = 0.0)]
+    simplify_m: f32,
+    /// Keep the model's coordinates (turned y up) instead of standing the tree on the origin.
+    #[arg(long)]
+    keep_base: bool,
+    /// The scene file to write.
+    #[arg(long, value_name = "SCENE.yaml")]
+    out: PathBuf,
+    /// Replace `--out` if it exists (otherwise an existing file is never overwritten).
+    #[arg(long)]
+    force: bool,
+}
+
+/// A format's name on the command line: its scene-file name with dashes or underscores.
+fn parse_format(name: &str) -> Result<QsmFormat, String> {
+    serde_yaml::from_str(&name.replace('-', "_"))
+        .map_err(|_| "expected treeqsm-mat, treeqsm-text, simpleforest-csv or archi-csv".to_string())
 }
 
 /// `canopy tree generate`.
@@ -48,6 +88,7 @@ impl TreeCommand {
     pub fn run(self) -> ExitCode {
         match self {
             TreeCommand::Generate(args) => args.generate(),
+            TreeCommand::Import(args) => args.import(),
         }
     }
 }
@@ -83,4 +124,103 @@ impl GenerateArgs {
             }
         }
     }
+}
+
+impl ImportArgs {
+    /// Writes the scene: exit 0 with it written, 1 if it could not be, 2 for a bad model or
+    /// bad settings.
+    fn import(&self) -> ExitCode {
+        let path = self.file.display();
+        let bytes = match std::fs::read(&self.file) {
+            Ok(bytes) => bytes,
+            Err(error) => {
+                eprintln!("{path}: cannot read the file: {error}");
+                return ExitCode::from(2);
+            }
+        };
+        let model = match qsm::read(&bytes, self.format) {
+            Ok(model) => model,
+            Err(error) => {
+                eprintln!("{path}:{error}");
+                return ExitCode::from(2);
+            }
+        };
+        let options =
+            ImportOptions { min_radius_m: self.min_radius_m, simplify_m: self.simplify_m, keep_base: self.keep_base };
+        let imported = match supports(&model, &options) {
+            Ok(imported) => imported,
+            Err(error) => {
+                eprintln!("{path}: {error}");
+                return ExitCode::from(2);
+            }
+        };
+        if let Some(refused) = refuse_to_replace(&self.out, self.force) {
+            return refused;
+        }
+        let text = imported_scene_text(&self.file.display().to_string(), model.format, &imported.supports);
+        match std::fs::write(&self.out, text) {
+            Ok(()) => {
+                println!(
+                    "{}: {} supports from {} of the {} cylinders ({} thinner than {} m dropped, {} in fragments \
+                     connected to nothing)",
+                    self.out.display(),
+                    imported.supports.len(),
+                    imported.cylinders,
+                    model.cylinders.len(),
+                    imported.thin,
+                    self.min_radius_m,
+                    imported.fragments
+                );
+                ExitCode::SUCCESS
+            }
+            Err(error) => {
+                eprintln!("{}: cannot write the scene: {error}", self.out.display());
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+/// A scene holding the tree of `supports`, imported from `file`, with a camera that frames it
+/// and the ground under it.
+fn imported_scene_text(file: &str, format: QsmFormat, supports: &[SupportSpec]) -> String {
+    let points = supports.iter().flat_map(|s| match &s.shape {
+        Shape::Polyline { points, .. } | Shape::Attached { points, .. } => points.as_slice(),
+        Shape::Fork { .. } => &[],
+    });
+    let (low, high) = points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(low, high), p| (low.min(*p), high.max(*p)));
+    let centre = (low + high) * 0.5;
+    let size = (high - low).max_element().max(1.0);
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "# Imported by `canopy tree import` from {file} ({format}).\n\
+         # An ordinary scene: edit it freely (the format is described in docs/scenes.md).\n"
+    );
+    let _ = writeln!(
+        text,
+        "camera:\n  position: [{:.2}, {:.2}, {:.2}]\n  look_at: [{:.2}, {:.2}, {:.2}]\n  fov_deg: 50\n  far: {:.0}\n",
+        centre.x,
+        centre.y,
+        centre.z + size * 1.4,
+        centre.x,
+        centre.y,
+        centre.z,
+        (size * 10.0).max(100.0)
+    );
+    let _ = writeln!(text, "entities:");
+    let _ = writeln!(
+        text,
+        "  - name: ground\n    shape: {{ primitive: plane, size: [{0:.1}, 1, {0:.1}], position: [{1:.2}, {2:.2}, {3:.2}], \
+         color: [0.42, 0.52, 0.33] }}\n",
+        size * 2.0,
+        centre.x,
+        low.y,
+        centre.z
+    );
+    let _ = writeln!(text, "  - name: scan\n    tree:\n      supports:");
+    for support in supports {
+        let _ = writeln!(text, "        - {}", support_yaml(support, 4));
+    }
+    text
 }

@@ -3,10 +3,14 @@
 
 use super::generate::{self, GeneratorSettings, ScatterSettings};
 use super::model::{Shape, SupportKind, SupportSpec, Tree, TreeError};
+use super::qsm::build::ImportOptions;
+use super::qsm::{Qsm, QsmFormat};
 use crate::foundation::values::{Color, Degrees, Length, Point, Radius, UnitInterval};
 use crate::raster::texture::TextureDef;
 use bevy::color::Srgba;
+use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// A `tree` entity in a scene file.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -29,6 +33,9 @@ pub struct TreeDef {
     /// Or: generated from these settings (see `canopy tree generate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub generate: Option<GeneratorSettings>,
+    /// Or: a scanned tree's model (a QSM) read from a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub import: Option<ImportDef>,
     /// Or: trees grown on each chunk of the streamed world named in `ground` as the chunk
     /// streams in at the finest level of detail, and gone with it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -52,6 +59,49 @@ fn default_sides() -> usize {
     12
 }
 
+/// A tree read from a scanned tree's quantitative structure model (see
+/// [`qsm`](super::qsm)).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImportDef {
+    /// The model's file, relative to the scene's folder: TreeQSM's `.mat` or text export,
+    /// SimpleForest's or aRchi's CSV.
+    pub file: String,
+    /// `treeqsm_mat`, `treeqsm_text`, `simpleforest_csv` or `archi_csv`; found from the file
+    /// when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format: Option<QsmFormat>,
+    /// Cylinders thinner than this, metres of radius, are dropped with what grows from them.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_radius_m: f32,
+    /// Points of a support within this many metres of the line through their neighbours are
+    /// dropped.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub simplify_m: f32,
+    /// Keep the model's coordinates (turned y up) instead of standing the tree on the origin.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub keep_base: bool,
+    /// The model, read from `file` when the scene loads.
+    #[serde(skip)]
+    pub model: Option<Arc<Qsm>>,
+}
+
+fn is_zero(value: &f32) -> bool {
+    *value == 0.0
+}
+
+impl ImportDef {
+    /// What to keep and how to place it, or the field at fault and why.
+    pub fn options(&self) -> Result<ImportOptions, String> {
+        for (field, value) in [("min_radius_m", self.min_radius_m), ("simplify_m", self.simplify_m)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(format!("import.{field}: expected metres from 0 to 1, found {value}"));
+            }
+        }
+        Ok(ImportOptions { min_radius_m: self.min_radius_m, simplify_m: self.simplify_m, keep_base: self.keep_base })
+    }
+}
+
 /// Reads `sides`: a whole number from 3 to 64.
 fn sides<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
     let sides = u64::deserialize(deserializer)?;
@@ -62,9 +112,10 @@ fn sides<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::
     }
 }
 
-/// One support in a scene file: a polyline (`points`, `radii`) or a fork from a parent
+/// One support in a scene file: a polyline (`points`, `radii`), a fork from a parent
 /// (`parent`, `at`, `yaw_deg`, `pitch_deg`, `length`, `radius`, optionally `bend_deg` and
-/// `sections`).
+/// `sections`), or a polyline growing out of a parent (`parent`, `points`, `radii`: a scanned
+/// tree's branches, its first point on or in the parent's wood).
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SupportDef {
@@ -80,7 +131,7 @@ pub struct SupportDef {
     /// A radius in metres at each point (a polyline).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radii: Option<Vec<Radius>>,
-    /// The support this one forks from (a fork).
+    /// The support this one forks from (a fork), or grows out of (a polyline).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parent: Option<String>,
     /// Where along the parent it starts, 0 to 1 of its length.
@@ -106,20 +157,24 @@ pub struct SupportDef {
     pub sections: Option<u32>,
 }
 
+/// A field at fault in a support and why.
+type FieldError = (&'static str, String);
+
 /// Fields only forks take.
 const FORK_FIELDS: [&str; 8] = ["parent", "at", "yaw_deg", "pitch_deg", "length", "radius", "bend_deg", "sections"];
 
 impl SupportDef {
     /// The support's description, or the field at fault and why.
-    fn spec(&self) -> Result<SupportSpec, (&'static str, String)> {
+    fn spec(&self) -> Result<SupportSpec, FieldError> {
         let polyline = self.points.is_some() || self.radii.is_some();
         let fork = self.parent.is_some();
         let shape = match (polyline, fork) {
             (true, true) => {
-                return Err((
-                    "parent",
-                    "a support is either a polyline (points, radii) or a fork (parent, ...), not both".into(),
-                ));
+                if let Some(field) = self.fork_field().filter(|&field| field != "parent") {
+                    return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
+                }
+                let (points, radii) = self.polyline()?;
+                Shape::Attached { parent: self.parent.clone().unwrap_or_default(), points, radii }
             }
             (false, false) => {
                 return Err((
@@ -131,12 +186,8 @@ impl SupportDef {
                 if let Some(field) = self.fork_field() {
                     return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
                 }
-                let points = self.points.as_ref().ok_or(("radii", "a polyline needs points too".to_string()))?;
-                let radii = self.radii.as_ref().ok_or(("points", "a polyline needs radii too".to_string()))?;
-                Shape::Polyline {
-                    points: points.iter().map(|p| p.0).collect(),
-                    radii: radii.iter().map(|r| r.0).collect(),
-                }
+                let (points, radii) = self.polyline()?;
+                Shape::Polyline { points, radii }
             }
             (false, true) => {
                 let missing = |field: &'static str| ("parent", format!("a fork needs `{field}`"));
@@ -157,6 +208,13 @@ impl SupportDef {
             }
         };
         Ok(SupportSpec { name: self.name.clone(), shape, kind: self.kind })
+    }
+
+    /// A polyline's points and radii, or the one missing.
+    fn polyline(&self) -> Result<(Vec<Vec3>, Vec<f32>), FieldError> {
+        let points = self.points.as_ref().ok_or(("radii", "a polyline needs points too".to_string()))?;
+        let radii = self.radii.as_ref().ok_or(("points", "a polyline needs radii too".to_string()))?;
+        Ok((points.iter().map(|p| p.0).collect(), radii.iter().map(|r| r.0).collect()))
     }
 
     /// Every optional field and whether it is given, in file-format order.
@@ -191,9 +249,21 @@ impl TreeDef {
     /// The tree this definition describes, or the support and field at fault and why.
     pub fn build(&self) -> Result<Tree, TreeError> {
         let mut specs = self.specs()?;
-        for spec in &mut specs {
-            let lift = self.lifts.iter().find(|(name, _)| *name == spec.name).map_or(0.0, |(_, lift)| *lift);
-            if let Shape::Polyline { points, .. } = &mut spec.shape {
+        if self.lifts.is_empty() {
+            return Tree::build(&specs);
+        }
+        let lift_of = |name: &str| self.lifts.iter().find(|(lifted, _)| lifted == name).map_or(0.0, |(_, lift)| *lift);
+        // An attached polyline rises with the support at the root of its parents.
+        let lifts: Vec<f32> = specs
+            .iter()
+            .map(|spec| match &spec.shape {
+                Shape::Polyline { .. } => lift_of(&spec.name),
+                Shape::Attached { parent, .. } => lift_of(&root_of(&specs, parent)),
+                Shape::Fork { .. } => 0.0,
+            })
+            .collect();
+        for (spec, lift) in specs.iter_mut().zip(lifts) {
+            if let Shape::Polyline { points, .. } | Shape::Attached { points, .. } = &mut spec.shape {
                 points.iter_mut().for_each(|p| p.y += lift);
             }
         }
@@ -213,9 +283,20 @@ impl TreeDef {
             // Its trees grow on the world's chunks as they stream in: the entity has none.
             return Ok(Vec::new());
         }
+        if let Some(import) = &self.import {
+            if self.generate.is_some() || !self.supports.is_empty() {
+                return Err(tree_error("import", "give import alone, without supports or generate".into()));
+            }
+            let options = import.options().map_err(|message| tree_error("import", message))?;
+            let model =
+                import.model.as_ref().ok_or_else(|| tree_error("import", "the model file was not read".into()))?;
+            let imported =
+                super::qsm::build::supports(model, &options).map_err(|message| tree_error("import", message))?;
+            return Ok(imported.supports);
+        }
         match (&self.generate, self.supports.is_empty()) {
             (Some(_), false) => Err(tree_error("generate", "give either supports or generate, not both".into())),
-            (None, true) => Err(tree_error("supports", "a tree needs supports, or generate settings".into())),
+            (None, true) => Err(tree_error("supports", "a tree needs supports, generate settings or an import".into())),
             (Some(settings), true) => {
                 settings.check().map_err(|message| tree_error("generate", message))?;
                 Ok(generate::generate(settings).into_iter().enumerate().flat_map(prefixed).collect())
@@ -230,6 +311,23 @@ impl TreeDef {
                 .collect(),
         }
     }
+}
+
+/// The name of the support at the root of `name`'s parents among `specs` (itself when it has
+/// none; where the parents run out or loop, the last one reached).
+fn root_of(specs: &[SupportSpec], name: &str) -> String {
+    let mut at = name;
+    for _ in 0..specs.len() {
+        let parent = specs.iter().find(|s| s.name == at).and_then(|spec| match &spec.shape {
+            Shape::Attached { parent, .. } | Shape::Fork { parent, .. } => Some(parent.as_str()),
+            Shape::Polyline { .. } => None,
+        });
+        match parent {
+            Some(parent) => at = parent,
+            None => break,
+        }
+    }
+    at.to_string()
 }
 
 /// The supports of generated tree `index`, renamed `t<index + 1>-<name>` so that the supports of

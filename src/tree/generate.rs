@@ -215,22 +215,27 @@ pub fn scene_text(settings: &GeneratorSettings, trees: &[Vec<SupportSpec>]) -> S
     for (index, supports) in trees.iter().enumerate() {
         let _ = writeln!(text, "  - name: tree-{}\n    tree:\n      supports:", index + 1);
         for support in supports {
-            let _ = writeln!(text, "        - {}", support_yaml(support));
+            let _ = writeln!(text, "        - {}", support_yaml(support, 3));
         }
         let _ = writeln!(text);
     }
     text
 }
 
-/// One support as a YAML flow mapping.
-fn support_yaml(support: &SupportSpec) -> String {
-    let number = |v: f32| format!("{}", (v * 1000.0).round() / 1000.0);
+/// One support as a YAML flow mapping, its numbers rounded to `decimals` places.
+pub fn support_yaml(support: &SupportSpec, decimals: i32) -> String {
+    let scale = 10f32.powi(decimals);
+    let number = |v: f32| format!("{}", (v * scale).round() / scale);
+    let polyline = |points: &[Vec3], radii: &[f32]| {
+        let points: Vec<String> =
+            points.iter().map(|p| format!("[{}, {}, {}]", number(p.x), number(p.y), number(p.z))).collect();
+        let radii: Vec<String> = radii.iter().map(|&r| number(r)).collect();
+        format!("points: [{}], radii: [{}]", points.join(", "), radii.join(", "))
+    };
     match &support.shape {
-        Shape::Polyline { points, radii } => {
-            let points: Vec<String> =
-                points.iter().map(|p| format!("[{}, {}, {}]", number(p.x), number(p.y), number(p.z))).collect();
-            let radii: Vec<String> = radii.iter().map(|&r| number(r)).collect();
-            format!("{{ name: {}, points: [{}], radii: [{}] }}", support.name, points.join(", "), radii.join(", "))
+        Shape::Polyline { points, radii } => format!("{{ name: {}, {} }}", support.name, polyline(points, radii)),
+        Shape::Attached { parent, points, radii } => {
+            format!("{{ name: {}, parent: {parent}, {} }}", support.name, polyline(points, radii))
         }
         Shape::Fork { parent, at, yaw_deg, pitch_deg, length, radius, bend_deg, sections } => format!(
             "{{ name: {}, parent: {parent}, at: {}, yaw_deg: {}, pitch_deg: {}, length: {}, radius: [{}, {}], bend_deg: [{}, {}], sections: {sections} }}",

@@ -5,6 +5,7 @@ use super::def::TreeDef;
 use super::model::{Shape, Tree};
 use super::panel;
 use super::plugin::{self, TreePlugin, TreeSource};
+use super::qsm;
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
@@ -25,10 +26,24 @@ impl EntityKind for TreeKind {
     type Plugin = TreePlugin;
 
     fn references(def: &TreeDef) -> Vec<String> {
-        TextureDef::reference(def.texture.as_ref())
+        let mut files = TextureDef::reference(def.texture.as_ref());
+        files.extend(def.import.as_ref().map(|import| import.file.clone()));
+        files
     }
 
+    /// Decodes the bark texture and reads the model of an imported tree; a bad model is an
+    /// error at its own file's line and column.
     fn resolve(def: &mut TreeDef, file: &mut ReferencedFile, cx: &EntityContext) -> Result<(), FileError> {
+        if let Some(import) = def.import.as_mut().filter(|import| import.file == file.file) {
+            let format = import.format;
+            let model = file.decoded(|path, bytes| {
+                qsm::read(bytes, format).map_err(|error| match error.location {
+                    Some((line, column)) => FileError::at(path, line, column, error.message),
+                    None => FileError::whole_file(path, format!("{}: {}", cx.field("import.file"), error.message)),
+                })
+            })?;
+            import.model = Some(model);
+        }
         def.texture.as_mut().map_or(Ok(()), |texture| texture.resolve(file, cx, "texture.file"))
     }
 
@@ -63,6 +78,10 @@ impl EntityKind for TreeKind {
                 "scatter" => {
                     let nth = earlier.iter().filter(|tree| tree.scatter.is_some()).count();
                     entity.locate("scatter", nth, message)
+                }
+                "import" => {
+                    let nth = earlier.iter().filter(|tree| tree.import.is_some()).count();
+                    entity.locate("import", nth, message)
                 }
                 _ => entity.locate("tree", earlier.len(), message),
             });

@@ -12,6 +12,7 @@
 //! | [`mesh`] | the render mesh: tubes with parallel-transported rings and rounded tips |
 //! | [`generate`] | the seeded tree and forest generator |
 //! | [`edit`] | checked edits of a written-out tree |
+//! | [`qsm`] | scanned trees' cylinder models read from TreeQSM, SimpleForest and aRchi files |
 //!
 //! The pure modules are tested (the queries against brute force) and benchmarked without a
 //! world. Where the rules live: a support tilted more than 70 degrees from horizontal is a
@@ -26,6 +27,7 @@ pub mod mesh;
 pub mod model;
 pub mod panel;
 pub mod plugin;
+pub mod qsm;
 
 pub use body::TreeBody;
 pub use def::{SupportDef, TreeDef};

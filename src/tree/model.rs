@@ -68,6 +68,16 @@ pub enum Shape {
         /// Straight sections the branch is made of.
         sections: u32,
     },
+    /// Explicit points and radii of a branch growing out of a parent support (as a scanned
+    /// tree's branches do): its first point lies on or in the parent's wood.
+    Attached {
+        /// The parent support's name.
+        parent: String,
+        /// At least two points, no two consecutive ones coincident, metres.
+        points: Vec<Vec3>,
+        /// One radius per point, metres.
+        radii: Vec<f32>,
+    },
 }
 
 /// One support as described in a scene.
@@ -197,34 +207,33 @@ fn build_support(
     }
     let spec = &specs[index];
     let error = |field, message: String| TreeError { support: Some(index), field, message };
+    // The parent a fork or an attached polyline grows from, built first.
+    let mut parent_of = |parent: &str, built: &mut [Option<Support>]| {
+        let Some(parent_index) = specs.iter().position(|s| s.name == parent) else {
+            let known: Vec<&str> = specs.iter().map(|s| s.name.as_str()).take(24).collect();
+            let message = format!("no support is named \"{parent}\" (supports: {})", known.join(", "));
+            return Err(error("parent", message));
+        };
+        if parent_index == index || path.contains(&parent_index) {
+            let message = format!("\"{}\" forks from itself through its parents", spec.name);
+            return Err(error("parent", message));
+        }
+        path.push(index);
+        build_support(specs, parent_index, built, path)?;
+        path.pop();
+        Ok(parent_index)
+    };
     let (points, radii, parent) = match &spec.shape {
         Shape::Polyline { points, radii } => {
-            if points.len() < 2 {
-                return Err(error("points", format!("expected at least two points, found {}", points.len())));
-            }
-            if radii.len() != points.len() {
-                let message = format!("expected one radius per point ({}), found {}", points.len(), radii.len());
-                return Err(error("radii", message));
-            }
-            if let Some(i) = points.windows(2).position(|p| p[0].distance(p[1]) < COINCIDENT) {
-                let message = format!("points {i} and {} coincide; consecutive points must differ", i + 1);
-                return Err(error("points", message));
-            }
+            check_polyline(points, radii).map_err(|(field, message)| error(field, message))?;
             (points.clone(), radii.clone(), None)
         }
+        Shape::Attached { parent, points, radii } => {
+            check_polyline(points, radii).map_err(|(field, message)| error(field, message))?;
+            (points.clone(), radii.clone(), Some(parent_of(parent, built)?))
+        }
         Shape::Fork { parent, at, yaw_deg, pitch_deg, length, radius, bend_deg, sections } => {
-            let Some(parent_index) = specs.iter().position(|s| &s.name == parent) else {
-                let known: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
-                let message = format!("no support is named \"{parent}\" (supports: {})", known.join(", "));
-                return Err(error("parent", message));
-            };
-            if parent_index == index || path.contains(&parent_index) {
-                let message = format!("\"{}\" forks from itself through its parents", spec.name);
-                return Err(error("parent", message));
-            }
-            path.push(index);
-            build_support(specs, parent_index, built, path)?;
-            path.pop();
+            let parent_index = parent_of(parent, built)?;
             let parent_support = built[parent_index].as_ref().expect("the parent was just built");
             let (start, _, _) = parent_support.at(*at);
             let sections = (*sections).max(1);
@@ -241,6 +250,21 @@ fn build_support(
     };
     let kind = spec.kind.unwrap_or_else(|| SupportKind::of_direction(points[0], points[points.len() - 1]));
     built[index] = Some(Support { name: spec.name.clone(), kind, parent, points, radii });
+    Ok(())
+}
+
+/// Whether `points` and `radii` make a polyline: at least two points, a radius for each, no two
+/// consecutive points coincident; else the field at fault and why.
+fn check_polyline(points: &[Vec3], radii: &[f32]) -> Result<(), (&'static str, String)> {
+    if points.len() < 2 {
+        return Err(("points", format!("expected at least two points, found {}", points.len())));
+    }
+    if radii.len() != points.len() {
+        return Err(("radii", format!("expected one radius per point ({}), found {}", points.len(), radii.len())));
+    }
+    if let Some(i) = points.windows(2).position(|p| p[0].distance(p[1]) < COINCIDENT) {
+        return Err(("points", format!("points {i} and {} coincide; consecutive points must differ", i + 1)));
+    }
     Ok(())
 }
 
