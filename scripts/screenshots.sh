@@ -32,6 +32,10 @@ echo "docs/images/canopy.png"
 # A plum falling from where the sloth's hand took hold.
 cargo run --quiet -- run scenes/sloth_fruit.yaml --seconds 6.5 --size 640x360 --screenshot docs/images/sloth_fruit.png
 echo "docs/images/sloth_fruit.png"
+# The sloth on a bough of the scanned tree, and its footfalls on the study's pole.
+cargo run --quiet -- run scenes/scanned_tree.yaml --seconds 12 --size 640x360 --screenshot docs/images/scanned_tree.png
+cargo run --quiet -- sloth gait scenes/sloth/pole.yaml --seconds 14 --skip 4 --plot docs/images/sloth_footfalls.png
+echo "docs/images/scanned_tree.png docs/images/sloth_footfalls.png"
 
 # The scene on the marker over the sample sequence's frame 50 (shown at step 100), and a marker.
 cargo run --quiet -- run scenes/ar.yaml --frames 100 --size 640x480 --screenshot docs/images/ar.png

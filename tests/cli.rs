@@ -174,6 +174,43 @@ fn generated_forests_are_deterministic_valid_and_never_overwrite() {
 }
 
 #[test]
+fn scanned_tree_models_import_as_scenes_and_bad_ones_are_located() {
+    let folder = tempfile::tempdir().unwrap();
+    let out = |name: &str| folder.path().join(name).to_string_lossy().into_owned();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/qsm/itsme_qsm_tree_v230.mat");
+    let model = model.to_string_lossy();
+    let imported = canopy(&["tree", "import", &model, "--out", &out("scan.yaml")]);
+    assert!(imported.status.success(), "{}", stderr(&imported));
+    let said = String::from_utf8_lossy(&imported.stdout);
+    assert!(said.contains("of the 88 cylinders"), "{said}");
+    // The written scene is an ordinary one: it checks, and its branches grow from their parents.
+    let scene = std::fs::read_to_string(out("scan.yaml")).unwrap();
+    assert!(scene.contains("name: stem") && scene.contains("parent: stem"), "{scene}");
+    assert!(canopy(&["check", &out("scan.yaml")]).status.success());
+
+    // The same model inline, in SimpleForest's CSV, with a parent that is no cylinder.
+    let csv = "ID,parentID,startX,startY,startZ,endX,endY,endZ,radius\n0,-1,0,0,0,0,0,1,0.1\n1,7,0,0,1,0,0,2,0.1\n";
+    std::fs::write(out("bad.csv"), csv).unwrap();
+    let inline = "entities:\n  - name: scan\n    tree:\n      import: { file: bad.csv }\n";
+    std::fs::write(out("inline.yaml"), inline).unwrap();
+    let checked = canopy(&["check", &out("inline.yaml")]);
+    assert!(!checked.status.success());
+    assert!(stderr(&checked).contains("bad.csv:3:3: parentID: no cylinder has the ID 7"), "{}", stderr(&checked));
+    std::fs::write(out("bad.csv"), csv.replace(",7,", ",0,")).unwrap();
+    assert!(canopy(&["check", &out("inline.yaml")]).status.success(), "fixed, it loads");
+
+    // A truncated MATLAB file and a misnamed format are refused with the file named.
+    let bytes = std::fs::read(model.as_ref()).unwrap();
+    std::fs::write(out("cut.mat"), &bytes[..bytes.len() / 2]).unwrap();
+    let cut = canopy(&["tree", "import", &out("cut.mat"), "--out", &out("cut.yaml")]);
+    assert_eq!(cut.status.code(), Some(2));
+    assert!(stderr(&cut).contains("cut.mat"), "{}", stderr(&cut));
+    assert!(!Path::new(&out("cut.yaml")).exists());
+    let misnamed = canopy(&["tree", "import", &model, "--format", "obj", "--out", &out("x.yaml")]);
+    assert_eq!(misnamed.status.code(), Some(2));
+}
+
+#[test]
 fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     use canopy::soft_body::sample;
     use canopy::spatial::mesh_io;
