@@ -75,7 +75,10 @@ pub struct Report {
 }
 
 /// Deforms the region of the mesh at `input` outlined by `marks` with `method` and
-/// `settings`, writes the whole mesh to `output` (OBJ or PLY) and reports.
+/// `settings`, writes the whole mesh to `output` (OBJ or PLY) and reports. Written in the
+/// input's own format, the output is the input with only the moved vertices' positions (and
+/// their normals) changed: the same vertices in the same order, faces, texture coordinates,
+/// groups and materials.
 pub fn run(
     input: &Path,
     marks: &[Mark],
@@ -88,7 +91,7 @@ pub fn run(
     fn located(path: &Path) -> impl Fn(MeshError) -> BatchError + '_ {
         move |error| BatchError::Mesh { path: path.display().to_string(), error }
     }
-    let (mesh, read) = mesh_io::read(input).map_err(located(input))?;
+    let (mesh, read, source) = mesh_io::read_source(input).map_err(located(input))?;
     let movable = vec![true; mesh.positions.len()];
     let whole = Surface::new(mesh.positions, mesh.triangles, movable)?;
     let shrunk = shrink(&whole, marks, method, settings).map_err(|error| match error {
@@ -96,8 +99,13 @@ pub fn run(
         ShrinkError::Settings(error) => BatchError::Settings(format!("--k/--eps: {error}")),
     })?;
     let (vertices, triangles) = (whole.positions.len(), whole.triangles.len());
-    let written = TriangleMesh { positions: shrunk.positions, triangles: whole.triangles };
-    mesh_io::write(&written, output).map_err(located(output))?;
+    if mesh_io::Format::of(output).ok() == Some(source.format) {
+        let bytes = source.written_back(&shrunk.positions, &whole.triangles).map_err(located(output))?;
+        std::fs::write(output, bytes).map_err(|error| located(output)(MeshError::Io(error)))?;
+    } else {
+        let written = TriangleMesh { positions: shrunk.positions, triangles: whole.triangles };
+        mesh_io::write(&written, output).map_err(located(output))?;
+    }
     let time_ms = shrunk.report.time_ms;
     Ok(Report { vertices, triangles, mesh: read, shrink: shrunk.report, time_ms })
 }
@@ -159,6 +167,55 @@ mod tests {
             mesh.positions.iter().map(|p| p.to_array().map(f32::to_bits)).collect();
         let moved = written.positions.iter().filter(|p| !before.contains(&p.to_array().map(f32::to_bits))).count();
         assert!(moved > 0 && moved <= 11 * 11, "only the region's inside moved: {moved}");
+    }
+
+    #[test]
+    fn a_mesh_written_back_is_its_file_with_only_the_moved_positions_and_their_normals_changed() {
+        let folder = tempfile::tempdir().unwrap();
+        let belly = sample::belly(25);
+        // An artist's OBJ: a material library, an object, a group, a material, texture
+        // coordinates and normals on every corner, a vertex with a colour after its position.
+        let mut text = String::from("# a belly\nmtllib belly.mtl\no belly\n");
+        for (i, p) in belly.positions.iter().enumerate() {
+            let colour = if i == 0 { " 0.5 0.4 0.3" } else { "" };
+            text.push_str(&format!("v {} {} {}{colour}\n", p.x, p.y, p.z));
+        }
+        for p in &belly.positions {
+            text.push_str(&format!("vt {} {}\nvn 0 1 0\n", p.x, p.z));
+        }
+        text.push_str("g skin\nusemtl fur\ns 1\n");
+        for t in &belly.triangles {
+            let [a, b, c] = t.map(|v| v + 1);
+            text.push_str(&format!("f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\n"));
+        }
+        let input = folder.path().join("belly.obj");
+        std::fs::write(&input, &text).unwrap();
+        let corners = [(6, 6), (18, 6), (18, 18), (6, 18)].map(|(i, j)| Mark::Vertex(j * 25 + i));
+        let deform = |method: Method, k: f32, name: &str| {
+            let output = folder.path().join(name);
+            let settings = Settings { k, eps: 1e-5, max_iterations: 2000 };
+            run(&input, &corners, method, settings, &output).unwrap();
+            std::fs::read_to_string(output).unwrap()
+        };
+        // Edges kept at their length (k = 1): the file back, byte for byte.
+        assert_eq!(deform(Method::EdgeLengths, 1.0, "same.obj"), text);
+        // Shrunk: line for line the same file but for the region's positions and normals.
+        let shrunk = deform(Method::Area(Variant::Projection), 0.95, "shrunk.obj");
+        let (before, after): (Vec<&str>, Vec<&str>) = (text.lines().collect(), shrunk.lines().collect());
+        assert_eq!(before.len(), after.len());
+        let changed: Vec<(&str, &str)> =
+            before.iter().zip(&after).filter(|(a, b)| a != b).map(|(a, b)| (*a, *b)).collect();
+        let moved = changed.iter().filter(|(a, _)| a.starts_with("v ")).count();
+        let turned = changed.iter().filter(|(a, _)| a.starts_with("vn ")).count();
+        assert!(changed.iter().all(|(a, _)| a.starts_with("v ") || a.starts_with("vn ")), "{changed:?}");
+        assert!(moved > 50 && moved <= 11 * 11, "the region's inside moved: {moved}");
+        assert_eq!(turned, moved, "the normal of each moved corner is recomputed");
+        // The vertices keep their order: the file's vertex k is still vertex k.
+        let (read_back, _) = mesh_io::read(&folder.path().join("shrunk.obj")).unwrap();
+        assert_eq!(read_back.positions.len(), belly.positions.len());
+        let outside = belly.positions[0];
+        assert_eq!(read_back.positions[0], outside);
+        assert!(after[3].ends_with(" 0.5 0.4 0.3"), "the colour after a position is kept: {}", after[3]);
     }
 
     #[test]

@@ -17,8 +17,8 @@ use super::xpbd::{Attachment, Body};
 use crate::foundation::kind::BuildContext;
 use crate::foundation::values::{Color, FolderFile, Point, PositiveMetres, Size, UnitInterval, checked_number};
 use crate::foundation::yaml::FileError;
-use crate::soft_body::def::{MeshFile, SampleDef};
-use crate::spatial::mesh_io::{MeshReport, TriangleMesh};
+use crate::soft_body::def::{DecodedMesh, MeshFile, SampleDef};
+use crate::spatial::mesh_io::MeshReport;
 use crate::tree::TreeKind;
 use bevy::color::Srgba;
 use bevy::math::Vec3;
@@ -151,7 +151,7 @@ pub struct ElasticBodyDef {
     pub color: Color,
     /// The mesh as read from `mesh`, filled in when the scene is resolved.
     #[serde(skip)]
-    pub decoded: Option<Arc<(TriangleMesh, MeshReport)>>,
+    pub decoded: Option<Arc<DecodedMesh>>,
 }
 
 fn default_size() -> Size {

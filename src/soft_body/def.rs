@@ -16,7 +16,7 @@ use super::sample::{SIZES, Shape};
 use crate::foundation::kind::{BuildContext, EntityContext, ReferencedFile};
 use crate::foundation::values::{Color, FileType, FolderFile, Point, checked_number};
 use crate::foundation::yaml::FileError;
-use crate::spatial::mesh_io::{self, MeshReport, TriangleMesh};
+use crate::spatial::mesh_io::{self, MeshReport, Source, TriangleMesh};
 use crate::spatial::surface::Surface;
 use bevy::color::Srgba;
 use bevy::math::Vec3;
@@ -117,7 +117,7 @@ pub struct SoftBodyDef {
     pub max_iterations: IterationCap,
     /// The mesh as read from `mesh`, filled in when the scene is resolved.
     #[serde(skip)]
-    pub decoded: Option<Arc<(TriangleMesh, MeshReport)>>,
+    pub decoded: Option<Arc<(TriangleMesh, MeshReport, Source)>>,
 }
 
 fn origin() -> Point {
@@ -167,6 +167,8 @@ pub struct SoftBodyBuilt {
     pub surface: Surface,
     /// What welding its file found (nothing for a sample).
     pub read: MeshReport,
+    /// The mesh file it was read from, to write models back over (none for a sample).
+    pub file: Option<Arc<DecodedMesh>>,
 }
 
 /// Checks that an entry of kind `key` names a surface by exactly one of `mesh` and `sample`.
@@ -191,22 +193,25 @@ pub fn check_source<F>(
 }
 
 /// Reads and welds the mesh file of an entry's `mesh` field, once for every entry naming it.
-pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<(TriangleMesh, MeshReport)>, FileError> {
+pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<DecodedMesh>, FileError> {
     let located = |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
     let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
-    file.decoded(|_, bytes| mesh_io::parse(bytes, format).map_err(|error| error.to_string())).map_err(located)
+    file.decoded(|_, bytes| mesh_io::parse_source(bytes, format).map_err(|error| error.to_string())).map_err(located)
 }
+
+/// A mesh file read: the welded mesh, what welding found, and the file for writing back.
+pub type DecodedMesh = (TriangleMesh, MeshReport, Source);
 
 /// The surface an entry names, from its mesh as read or its sample, with what welding the
 /// file found (nothing for a sample); an error is located at `mesh`.
 pub fn source_surface(
-    decoded: &Option<Arc<(TriangleMesh, MeshReport)>>,
+    decoded: &Option<Arc<DecodedMesh>>,
     sample: Option<SampleDef>,
     cx: &BuildContext,
 ) -> Result<(Surface, MeshReport), FileError> {
     let (surface, read) = match (decoded, sample) {
         (Some(decoded), _) => {
-            let (mesh, read) = &**decoded;
+            let (mesh, read, _) = &**decoded;
             let movable = vec![true; mesh.positions.len()];
             let surface = Surface::new(mesh.positions.clone(), mesh.triangles.clone(), movable)
                 .map_err(|error| cx.entity.field_error("mesh", 0, "mesh", error))?;

@@ -39,7 +39,7 @@ impl EntityKind for SoftBodyKind {
 
     fn build(def: &SoftBodyDef, cx: &BuildContext) -> Result<Arc<SoftBodyBuilt>, FileError> {
         let (surface, read) = source_surface(&def.decoded, def.sample, cx)?;
-        Ok(Arc::new(SoftBodyBuilt { surface, read }))
+        Ok(Arc::new(SoftBodyBuilt { surface, read, file: def.decoded.clone() }))
     }
 
     fn spawn(def: &SoftBodyDef, built: &Arc<SoftBodyBuilt>, entity: &mut EntityWorldMut) {

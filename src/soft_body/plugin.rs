@@ -2,7 +2,7 @@
 //! as parameters, actions and keys that mark, apply and switch models, the write-back of the
 //! surface, its marks and the original beside it, and the dump.
 
-use super::def::{SoftBodyBuilt, SoftBodyDef};
+use super::def::{DecodedMesh, SoftBodyBuilt, SoftBodyDef};
 use super::deform::{Deformer, Method, Settings, Variant};
 use super::draw::{marker_mesh, region_tints, shift_tints, surface_mesh};
 use super::region::{Mark, RegionError};
@@ -90,6 +90,8 @@ pub struct SoftBody {
     pub bench: Workbench,
     /// What welding its mesh file found.
     pub read: MeshReport,
+    /// The mesh file it was read from, which models in its format are written back over.
+    file: Option<Arc<DecodedMesh>>,
     /// The region of the marks on the surface shown, or why there is none.
     pub region: Result<RegionShown, RegionError>,
     /// What the last action said: why it was refused, or where a model was saved.
@@ -109,6 +111,7 @@ impl SoftBody {
             region: Err(RegionError::TooFewMarks(0)),
             bench,
             read: built.read,
+            file: built.file.clone(),
             message: None,
             shrinking: false,
             picking,
@@ -186,13 +189,22 @@ impl SoftBody {
 
     /// Writes surface `which` (0 the original) of the soft body named `entity` as OBJ or PLY
     /// (by `extension`) in `folder` (made if needed), never over an earlier file; returns
-    /// where, or why not.
+    /// where, or why not. In the format of the mesh file it was read from, the file is written
+    /// back with only the moved positions (and their normals) changed.
     pub fn save(&self, folder: &Path, entity: &str, which: usize, extension: &str) -> Result<PathBuf, String> {
         let mesh = self.bench.mesh(which).ok_or_else(|| format!("there is no model {which}"))?;
         std::fs::create_dir_all(folder).map_err(|error| format!("{}: {error}", folder.display()))?;
         let stem = if which == 0 { format!("{entity}-original") } else { format!("{entity}-model{which}") };
         let path = first_free_path(|n| folder.join(format!("{stem}-{n:03}.{extension}")));
-        mesh_io::write(&mesh, &path).map_err(|error| format!("{}: {error}", path.display()))?;
+        let failed = |error: &dyn std::fmt::Display| format!("{}: {error}", path.display());
+        let same_format = |source: &&Arc<DecodedMesh>| mesh_io::Format::of(&path).ok() == Some(source.2.format);
+        match self.file.as_ref().filter(same_format) {
+            Some(file) => {
+                let bytes = file.2.written_back(&mesh.positions, &mesh.triangles).map_err(|e| failed(&e))?;
+                std::fs::write(&path, bytes).map_err(|e| failed(&e))?;
+            }
+            None => mesh_io::write(&mesh, &path).map_err(|e| failed(&e))?,
+        }
         Ok(path)
     }
 }

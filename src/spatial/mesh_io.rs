@@ -1,11 +1,13 @@
-//! Triangle meshes in files: OBJ, PLY (ASCII or binary) and STL read with their crates, OBJ and
-//! PLY written; every mesh read is welded (vertices at the same position become one), so that
-//! a surface from STL, which repeats its vertices per triangle, deforms as one piece. Faces
-//! that collapse and edges shared by more than two faces are counted, not refused.
+//! Triangle meshes in files: OBJ (its vertex and face lines, in file order), PLY (ASCII or
+//! binary) and STL read, OBJ and PLY written; every mesh read is welded (vertices at the same
+//! position become one), so that a surface from STL, which repeats its vertices per triangle,
+//! deforms as one piece. Faces that collapse and edges shared by more than two faces are
+//! counted, not refused. A mesh read from OBJ or PLY can be written back over its own file's
+//! contents with only its positions changed (see [`Source`]).
 
 use bevy::math::Vec3;
 use std::collections::HashMap;
-use std::io::{BufReader, Cursor, Write};
+use std::io::{Cursor, Write};
 use std::path::Path;
 
 /// The most vertices or triangles a mesh file may hold, so that no file can exhaust memory.
@@ -100,16 +102,33 @@ pub struct MeshReport {
 
 /// Reads the mesh at `path`, welded.
 pub fn read(path: &Path) -> Result<(TriangleMesh, MeshReport), MeshError> {
+    read_source(path).map(|(mesh, report, _)| (mesh, report))
+}
+
+/// Reads the mesh at `path`, welded, with what writing it back needs.
+pub fn read_source(path: &Path) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
     let format = Format::of(path)?;
     let size = std::fs::metadata(path)?.len();
     if size > MAX_FILE_BYTES {
         return Err(MeshError::TooLarge { what: "a file of bytes", count: size as usize });
     }
-    parse(&std::fs::read(path)?, format)
+    parse_source(&std::fs::read(path)?, format)
 }
 
 /// The mesh in `bytes` of `format`, welded.
 pub fn parse(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport), MeshError> {
+    parse_in_order(bytes, format).map(|(mesh, report, _)| (mesh, report))
+}
+
+/// The mesh in `bytes` of `format`, welded, with what writing it back needs.
+pub fn parse_source(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
+    let (mesh, report, file_vertices) = parse_in_order(bytes, format)?;
+    Ok((mesh, report, Source { format, bytes: bytes.to_vec(), file_vertices }))
+}
+
+/// The mesh in `bytes` of `format`, welded, and the welded vertex of each of the file's
+/// vertices in file order.
+fn parse_in_order(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport, Vec<u32>), MeshError> {
     let (positions, faces) = match format {
         Format::Obj => parse_obj(bytes)?,
         Format::Ply => parse_ply(bytes)?,
@@ -139,8 +158,8 @@ pub fn parse(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport),
 }
 
 /// `positions` and `triangles` with the vertices at one position merged (bit for bit), the
-/// faces that collapse dropped, and what was found.
-fn weld(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (TriangleMesh, MeshReport) {
+/// faces that collapse dropped, what was found, and the merged vertex of each given one.
+fn weld(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (TriangleMesh, MeshReport, Vec<u32>) {
     let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
     let mut kept = Vec::with_capacity(positions.len());
     let remap: Vec<u32> = positions
@@ -165,24 +184,54 @@ fn weld(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (TriangleMesh, MeshRe
         }
     }
     let non_manifold_edges = uses.values().filter(|&&n| n > 2).count();
-    (TriangleMesh { positions: kept, triangles }, MeshReport { welded, degenerate, non_manifold_edges })
+    (TriangleMesh { positions: kept, triangles }, MeshReport { welded, degenerate, non_manifold_edges }, remap)
 }
 
-/// Positions and faces (split into triangles) of an OBJ file.
+/// Positions in file order and faces (polygons split into fans) of an OBJ file's `v` and `f`
+/// lines; every other line (texture coordinates, normals, groups, materials) is left to the
+/// file, where writing back keeps it.
 fn parse_obj(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let error = |message: String| MeshError::Parse { format: "OBJ", message };
-    // Materials are not read: only the shape is deformed.
-    let (models, _) =
-        tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| error(e.to_string()))?;
+    let text = String::from_utf8_lossy(bytes);
     let (mut positions, mut faces) = (Vec::new(), Vec::new());
-    for model in models {
-        let base = positions.len() as i64;
-        positions.extend(model.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        faces.extend(model.mesh.indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| base + i64::from(t[k]))));
+    for (number, line) in text.lines().enumerate() {
+        let error =
+            |message: String| MeshError::Parse { format: "OBJ", message: format!("line {}: {message}", number + 1) };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => positions.push(obj_position(line).ok_or_else(|| error("expected `v x y z`".into()))?),
+            Some("f") => {
+                let corners = words
+                    .map(|word| {
+                        let index: i64 = word
+                            .split('/')
+                            .next()
+                            .unwrap_or_default()
+                            .parse()
+                            .map_err(|_| error(format!("`{word}` is not a vertex index")))?;
+                        // OBJ counts from 1; negative indices count back from the last vertex so far.
+                        match index {
+                            0 => Err(error("vertex index 0 (OBJ counts from 1)".into())),
+                            i if i > 0 => Ok(i - 1),
+                            i => Ok(positions.len() as i64 + i),
+                        }
+                    })
+                    .collect::<Result<Vec<i64>, MeshError>>()?;
+                faces.extend((1..corners.len().saturating_sub(1)).map(|k| [corners[0], corners[k], corners[k + 1]]));
+            }
+            _ => {}
+        }
+        if positions.len() > MAX_ELEMENTS || faces.len() > MAX_ELEMENTS {
+            return Err(MeshError::TooLarge { what: "an element count", count: positions.len().max(faces.len()) });
+        }
     }
     Ok((positions, faces))
+}
+
+/// The position of an OBJ `v` line (its first three numbers; a weight or a colour may follow).
+fn obj_position(line: &str) -> Option<Vec3> {
+    let mut numbers = line.split_whitespace().skip(1).map(|w| w.parse::<f32>());
+    let mut next = || numbers.next()?.ok();
+    Some(Vec3::new(next()?, next()?, next()?))
 }
 
 /// Positions and faces (fans of triangles) of a PLY file.
@@ -241,6 +290,188 @@ fn parse_stl(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     let positions = mesh.vertices.iter().map(|v| Vec3::from_array(v.0)).collect();
     let faces = mesh.faces.iter().map(|f| f.vertices.map(|v| v as i64)).collect();
     Ok((positions, faces))
+}
+
+/// A mesh file as read, for writing it back changed only where its vertices moved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Source {
+    /// Its format.
+    pub format: Format,
+    /// Its contents.
+    pub bytes: Vec<u8>,
+    /// The welded vertex of each of the file's vertices, in file order.
+    pub file_vertices: Vec<u32>,
+}
+
+impl Source {
+    /// The file's contents with each vertex at `positions` (indexed like the welded mesh read
+    /// from it): every line or value of a vertex that did not move, and everything that is
+    /// not a position, kept as it was; the normals of moved vertices recomputed (OBJ `vn`
+    /// lines used by a moved corner, PLY `nx ny nz`). STL files are read, not written.
+    pub fn written_back(&self, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Vec<u8>, MeshError> {
+        let file_positions: Vec<Vec3> = self.file_vertices.iter().map(|&v| positions[v as usize]).collect();
+        match self.format {
+            Format::Obj => Ok(obj_written_back(&self.bytes, &file_positions)),
+            Format::Ply => ply_written_back(&self.bytes, &file_positions, &self.file_vertices, positions, triangles),
+            Format::Stl => Err(MeshError::Format("an STL file (STL is read, not written)".into())),
+        }
+    }
+}
+
+/// Whether two positions are the same, bit for bit (so that a vertex that did not move keeps
+/// its text).
+fn same(a: Vec3, b: Vec3) -> bool {
+    a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+}
+
+/// An OBJ file's text with the `v` lines of moved vertices rewritten (a weight or colour after
+/// the position kept) and the `vn` normals their corners use recomputed from the faces that use
+/// them; every other byte kept.
+fn obj_written_back(bytes: &[u8], positions: &[Vec3]) -> Vec<u8> {
+    let text = String::from_utf8_lossy(bytes);
+    let lines: Vec<&str> = text.split_inclusive('\n').collect();
+    // The file's vertices, and which of them moved.
+    let mut moved = Vec::with_capacity(positions.len());
+    for line in &lines {
+        if line.split_whitespace().next() == Some("v") {
+            let index = moved.len();
+            moved.push(obj_position(line).is_some_and(|p| positions.get(index).is_some_and(|&q| !same(p, q))));
+        }
+    }
+    // Normals used by a corner of a moved vertex: each the sum of the (area-weighted) normals
+    // of the faces whose corners use it.
+    let (mut vertices, mut normals_seen) = (0i64, 0i64);
+    let mut recomputed: HashMap<usize, Vec3> = HashMap::new();
+    let mut touched: Vec<usize> = Vec::new();
+    for line in &lines {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => vertices += 1,
+            Some("vn") => normals_seen += 1,
+            Some("f") => {
+                let resolve = |i: i64, count: i64| if i > 0 { i - 1 } else { count + i };
+                let corners: Vec<(usize, Option<usize>)> = words
+                    .filter_map(|word| {
+                        let mut parts = word.split('/');
+                        let v = resolve(parts.next()?.parse().ok()?, vertices);
+                        let n = parts.nth(1).and_then(|n| n.parse().ok()).map(|n| resolve(n, normals_seen));
+                        Some((usize::try_from(v).ok()?, n.and_then(|n| usize::try_from(n).ok())))
+                    })
+                    .collect();
+                if corners.iter().any(|&(v, _)| v >= positions.len()) || corners.len() < 3 {
+                    continue;
+                }
+                let corner = |k: usize| positions[corners[k].0];
+                let face_normal: Vec3 = (1..corners.len() - 1)
+                    .map(|k| (corner(k) - corner(0)).cross(corner(k + 1) - corner(0)))
+                    .sum::<Vec3>()
+                    * 0.5;
+                for &(v, n) in &corners {
+                    if let Some(n) = n {
+                        *recomputed.entry(n).or_default() += face_normal;
+                        if moved.get(v) == Some(&true) {
+                            touched.push(n);
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let touched: std::collections::HashSet<usize> = touched.into_iter().collect();
+    let (mut vertex, mut normal) = (0usize, 0usize);
+    let mut out = String::with_capacity(text.len());
+    for line in lines {
+        let body = line.trim_end_matches(['\n', '\r']);
+        let ending = &line[body.len()..];
+        let indent = &body[..body.len() - body.trim_start().len()];
+        let words: Vec<&str> = body.split_whitespace().collect();
+        match words.first() {
+            Some(&"v") => {
+                if moved.get(vertex) == Some(&true) {
+                    let p = positions[vertex];
+                    let rest = words.get(4..).map(|w| w.join(" ")).unwrap_or_default();
+                    let rest = if rest.is_empty() { rest } else { format!(" {rest}") };
+                    out.push_str(&format!("{indent}v {} {} {}{rest}{ending}", p.x, p.y, p.z));
+                } else {
+                    out.push_str(line);
+                }
+                vertex += 1;
+            }
+            Some(&"vn") => {
+                match recomputed.get(&normal).filter(|_| touched.contains(&normal)).map(|n| n.normalize_or_zero()) {
+                    Some(n) if n != Vec3::ZERO => out.push_str(&format!("{indent}vn {} {} {}{ending}", n.x, n.y, n.z)),
+                    _ => out.push_str(line),
+                }
+                normal += 1;
+            }
+            _ => out.push_str(line),
+        }
+    }
+    out.into_bytes()
+}
+
+/// A PLY file with its vertices' `x y z` set to `positions` (file order) where they moved and
+/// their `nx ny nz`, if it has them, recomputed there from the welded mesh's faces; written in
+/// the file's own encoding, every other property and element kept.
+fn ply_written_back(
+    bytes: &[u8],
+    positions: &[Vec3],
+    file_vertices: &[u32],
+    welded: &[Vec3],
+    triangles: &[[u32; 3]],
+) -> Result<Vec<u8>, MeshError> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    use ply_rs_bw::writer::Writer;
+    let error = |message: String| MeshError::Parse { format: "PLY", message };
+    let mut ply =
+        Parser::<DefaultElement>::new().read_ply(&mut Cursor::new(bytes)).map_err(|e| error(e.to_string()))?;
+    let mut normals = vec![Vec3::ZERO; welded.len()];
+    for &[a, b, c] in triangles {
+        let n = (welded[b as usize] - welded[a as usize]).cross(welded[c as usize] - welded[a as usize]);
+        for v in [a, b, c] {
+            normals[v as usize] += n;
+        }
+    }
+    let set = |property: Option<&mut Property>, value: f32| match property {
+        Some(Property::Float(v)) => *v = value,
+        Some(Property::Double(v)) => *v = f64::from(value),
+        _ => {}
+    };
+    let vertices = ply.payload.get_mut("vertex").ok_or_else(|| error("no `vertex` element".into()))?;
+    let mut moved = 0;
+    for (index, vertex) in vertices.iter_mut().enumerate() {
+        let Some(&p) = positions.get(index) else { continue };
+        let number = |name: &str| match vertex.get(name) {
+            Some(Property::Float(v)) => Some(*v),
+            Some(Property::Double(v)) => Some(*v as f32),
+            _ => None,
+        };
+        let was = [number("x"), number("y"), number("z")];
+        if let [Some(x), Some(y), Some(z)] = was
+            && same(Vec3::new(x, y, z), p)
+        {
+            continue;
+        }
+        moved += 1;
+        for (name, value) in [("x", p.x), ("y", p.y), ("z", p.z)] {
+            set(vertex.get_mut(name), value);
+        }
+        if vertex.contains_key("nx") {
+            let n = normals[file_vertices[index] as usize].normalize_or_zero();
+            for (name, value) in [("nx", n.x), ("ny", n.y), ("nz", n.z)] {
+                set(vertex.get_mut(name), value);
+            }
+        }
+    }
+    if moved == 0 {
+        // Nothing moved: the file as it was, byte for byte.
+        return Ok(bytes.to_vec());
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    Writer::<DefaultElement>::new().write_ply(&mut out, &mut ply).map_err(|e| error(e.to_string()))?;
+    Ok(out)
 }
 
 /// Writes `mesh` to `path` as OBJ or ASCII PLY, by its extension.
@@ -355,9 +586,37 @@ endsolid square
         let positions =
             vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), Vec3::Z, Vec3::Y];
         let triangles = vec![[0, 2, 1], [3, 5, 4], [0, 3, 1], [0, 2, 6]];
-        let (mesh, report) = weld(positions, triangles);
+        let (mesh, report, remap) = weld(positions, triangles);
+        assert_eq!(remap, [0, 1, 2, 0, 2, 3, 4]);
         assert_eq!(mesh.positions.len(), 5);
         assert_eq!(report, MeshReport { welded: 2, degenerate: 1, non_manifold_edges: 1 });
+    }
+
+    #[test]
+    fn a_ply_written_back_keeps_its_other_properties_and_unmoved_vertices() {
+        let ply = b"ply\nformat ascii 1.0\ncomment scanned\nelement vertex 4\nproperty float x\nproperty float y\n\
+                    property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty uchar red\n\
+                    element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0 0 1 0 10\n1 0 0 0 1 0 20\n1 0 1 0 1 0 30\n0 0 1 0 1 0 40\n3 0 2 1\n3 0 3 2\n";
+        let (mesh, _, file_vertices) = parse_in_order(ply, Format::Ply).unwrap();
+        let source = Source { format: Format::Ply, bytes: ply.to_vec(), file_vertices };
+        // Unmoved: the file itself.
+        assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), ply.to_vec());
+        // One corner raised: its position and normal change, nothing else.
+        let mut moved = mesh.positions.clone();
+        moved[2].y = 0.5;
+        let bytes = source.written_back(&moved, &mesh.triangles).unwrap();
+        let (read_back, _, _) = parse_in_order(&bytes, Format::Ply).unwrap();
+        assert_eq!(read_back.positions, moved);
+        let text = String::from_utf8(bytes).unwrap();
+        assert!(text.contains("comment scanned") && text.contains("property uchar red"), "{text}");
+        let rows: Vec<&str> = text.lines().skip_while(|l| *l != "end_header").skip(1).collect();
+        assert_eq!(rows[0], "0 0 0 0 1 0 10");
+        assert!(
+            rows[2].starts_with("1 0.5 1 ") && rows[2].ends_with(" 30") && !rows[2].contains(" 0 1 0 "),
+            "{}",
+            rows[2]
+        );
     }
 
     #[test]

@@ -221,6 +221,12 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
     let (read, _) = canopy::spatial::mesh_io::read(&saved).unwrap();
     assert_eq!(read.positions, body.bench.positions(1).unwrap());
     assert!(body.save(folder.path(), "torso", 2, "obj").is_err(), "there is no second model");
+    // Saved in its file's own format, the model is that file with only moved positions changed.
+    let obj = std::fs::read_to_string(body.save(folder.path(), "torso", 1, "obj").unwrap()).unwrap();
+    let original = std::fs::read_to_string(super::common::path("scenes/meshes/torso.obj")).unwrap();
+    assert_eq!(obj.lines().count(), original.lines().count());
+    let changed: Vec<(&str, &str)> = original.lines().zip(obj.lines()).filter(|(a, b)| a != b).collect();
+    assert!(!changed.is_empty() && changed.iter().all(|(a, _)| a.starts_with("v ")), "{:?}", changed.first());
 
     // Backspace takes the last mark back; the action reaches the same state.
     act(world, "torso", &serde_yaml::from_str::<serde_yaml::Value>("undo_mark").unwrap(), true).unwrap();
