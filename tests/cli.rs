@@ -211,6 +211,20 @@ fn scanned_tree_models_import_as_scenes_and_bad_ones_are_located() {
 }
 
 #[test]
+fn a_survey_walks_every_bough_and_says_how_each_walk_ended() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tree.yaml");
+    let surveyed = canopy(&["sloth", "survey", &scene.to_string_lossy()]);
+    assert!(surveyed.status.success(), "{}", stderr(&surveyed));
+    let said = String::from_utf8_lossy(&surveyed.stdout);
+    // The oak's three boughs, each a line, and the tally.
+    assert_eq!(said.lines().filter(|l| l.starts_with("oak/")).count(), 3, "{said}");
+    assert!(said.contains("3 branches: the sloth hangs from 3, walks 3 from end to end"), "{said}");
+    let slow = canopy(&["sloth", "survey", &scene.to_string_lossy(), "--speed", "2"]);
+    assert_eq!(slow.status.code(), Some(1));
+    assert!(stderr(&slow).contains("--speed"), "{}", stderr(&slow));
+}
+
+#[test]
 fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     use canopy::soft_body::sample;
     use canopy::spatial::mesh_io;

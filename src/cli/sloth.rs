@@ -1,14 +1,19 @@
 //! `canopy sloth gait`: walks a scene's sloth headless and prints its gait beside the study's
 //! steady-state figures (contact, swing and stride, its Table 1) and each joint's excursion
 //! during contact beside the range of motion the study measured (its Table 2), and draws the
-//! footfall diagram to a PNG.
+//! footfall diagram to a PNG. `canopy sloth survey`: which of a scene's boughs a sloth walks
+//! from end to end, and why it stops where it stops.
 
 use super::parse_seconds;
 use crate::app::FIXED_HZ;
 use crate::controls::timeline::Timeline;
 use crate::foundation::entity::SceneEntity;
 use crate::run::live_app;
-use crate::sloth::SlothGait;
+use crate::sloth::gait::SPEED_RANGE;
+use crate::sloth::rig::Proportions;
+use crate::sloth::survey::{Outcome, survey};
+use crate::sloth::{SlothGait, Supports};
+use crate::tree::TreeBody;
 use crate::sloth::gait::{Measured, STEADY_STATE};
 use crate::sloth::gait_log::{GaitFigures, GaitLog, LimbFigures};
 use crate::sloth::rig::{FORE_AMPLITUDE_DEG, HIND_AMPLITUDE_DEG, Limb};
@@ -24,6 +29,25 @@ pub enum SlothCommand {
     /// Walk a scene's sloth headless and print its gait beside the study's (the pole of
     /// `scenes/sloth/pole.yaml` is the study's set-up).
     Gait(GaitArgs),
+    /// Place a sloth near the start of each of a scene's branches in turn, walk it forward,
+    /// and report which it walks from end to end and why it stops where it stops.
+    Survey(SurveyArgs),
+}
+
+/// Arguments of `canopy sloth survey`.
+#[derive(clap::Args, Debug)]
+pub struct SurveyArgs {
+    /// The scene file (its trees; any sloth in it is left out).
+    scene: PathBuf,
+    /// Simulated seconds each bough is walked at most.
+    #[arg(long, default_value_t = 120.0, value_parser = |text: &str| parse_seconds(text, MAX_SECONDS))]
+    seconds: f64,
+    /// Branches shorter than this many metres are left out.
+    #[arg(long, default_value_t = 1.0)]
+    min_length: f32,
+    /// Walking speed, metres per second.
+    #[arg(long, default_value_t = 0.11)]
+    speed: f32,
 }
 
 /// The longest walk measured, simulated seconds.
@@ -57,6 +81,13 @@ impl SlothCommand {
     pub fn run(self) -> ExitCode {
         match self {
             SlothCommand::Gait(args) => match args.gait() {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(error) => {
+                    eprintln!("{error}");
+                    ExitCode::from(1)
+                }
+            },
+            SlothCommand::Survey(args) => match args.survey() {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(error) => {
                     eprintln!("{error}");
@@ -130,6 +161,58 @@ impl GaitArgs {
             Some(wanted) => format!("{}: no sloth is named `{wanted}` (sloths: {})", scene.display(), names.join(", ")),
             None => format!("{}: the scene has no sloth", scene.display()),
         })
+    }
+}
+
+impl SurveyArgs {
+    fn survey(&self) -> Result<(), String> {
+        if !(SPEED_RANGE.0..=SPEED_RANGE.1).contains(&self.speed) {
+            return Err(format!("--speed: expected {} to {} m/s, found {}", SPEED_RANGE.0, SPEED_RANGE.1, self.speed));
+        }
+        let mut app = live_app(&self.scene, UVec2::new(16, 16), None, false).map_err(|e| e.to_string())?;
+        let world = app.world_mut();
+        let mut trees: Vec<(usize, String, TreeBody)> = world
+            .query::<(&SceneEntity, &TreeBody)>()
+            .iter(world)
+            .map(|(entity, body)| (entity.index, entity.name.clone(), body.clone()))
+            .collect();
+        trees.sort_by_key(|(index, ..)| *index);
+        if trees.is_empty() {
+            return Err(format!("{}: the scene has no tree", self.scene.display()));
+        }
+        let supports = Supports::new(trees.iter().map(|(_, name, body)| (name.as_str(), &body.tree)));
+        let walks = survey(&supports, Proportions::default(), self.speed, self.min_length, self.seconds as f32);
+        println!(
+            "{}: a sloth at {} m/s on each branch at least {} m long, walked forward for at most {} s\n",
+            self.scene.display(),
+            self.speed,
+            self.min_length,
+            self.seconds
+        );
+        println!("{:<28} {:>8} {:>9}  ending", "branch", "length m", "radius cm");
+        let (mut placed, mut through, mut on) = (0, 0, 0);
+        for walk in &walks {
+            let ending = match &walk.outcome {
+                Outcome::NotPlaced(why) => format!("not placed: {why}"),
+                Outcome::ReachedEnd => "walked to its end".to_string(),
+                Outcome::WentOn(other) => format!("walked on onto {other}"),
+                Outcome::Stopped { at, reasons } => {
+                    let why: Vec<String> = reasons.iter().map(|(reason, n)| format!("{reason} {n}")).collect();
+                    format!("stopped {at:.2} m along; grips refused: {}", why.join(", "))
+                }
+                Outcome::StillWalking { at } => format!("still walking, {at:.2} m along"),
+            };
+            placed += usize::from(!matches!(walk.outcome, Outcome::NotPlaced(_)));
+            through += usize::from(walk.outcome == Outcome::ReachedEnd);
+            on += usize::from(matches!(walk.outcome, Outcome::WentOn(_)));
+            println!("{:<28} {:>8.2} {:>9.1}  {ending}", walk.label, walk.length, walk.radius * 100.0);
+        }
+        println!(
+            "\n{} branches: the sloth hangs from {placed}, walks {through} from end to end, walks on from {on} onto \
+             another support",
+            walks.len()
+        );
+        Ok(())
     }
 }
 

@@ -15,6 +15,7 @@
 //! | [`gait`] | stride and timing from speed, the footfall sequence, swing arcs |
 //! | [`gait_log`] | the gait measured: contact, swing, duty factor, stride, footfall order, joint excursions, foot slip |
 //! | [`supports`] | every support of the scene as a path, with nearest-surface queries |
+//! | [`survey`] | which of a tree's boughs a sloth walks from end to end, and why it stops |
 //! | [`foothold`] | where a lifted foot lands (the source's FindNextStep): the step rules and the leg order |
 //! | [`body`] | the body hanging from its grips, its heading and clearance |
 //! | [`feet`] | how each foot stands or swings, where one lands, whether a grip sinks into wood |
@@ -52,6 +53,7 @@ pub mod plugin;
 pub mod rig;
 pub mod skin;
 pub mod supports;
+pub mod survey;
 pub mod transfer;
 
 pub use def::{Facing, SlothDef, WalkDirection};
