@@ -54,7 +54,13 @@ pub struct BoughWalk {
 
 /// Walks a sloth of `proportions` at `speed` (m/s) along every branch of `supports` at least
 /// `min_length` metres long, for at most `seconds` each.
-pub fn survey(supports: &Supports, proportions: Proportions, speed: f32, min_length: f32, seconds: f32) -> Vec<BoughWalk> {
+pub fn survey(
+    supports: &Supports,
+    proportions: Proportions,
+    speed: f32,
+    min_length: f32,
+    seconds: f32,
+) -> Vec<BoughWalk> {
     (0..supports.paths.len())
         .filter(|&i| supports.paths[i].kind == SupportKind::Branch && supports.paths[i].length() >= min_length)
         .map(|support| walk(supports, support, proportions, speed, seconds))

@@ -170,7 +170,8 @@ impl SupportDef {
         let fork = self.parent.is_some();
         let shape = match (polyline, fork) {
             (true, true) => {
-                if let Some(field) = self.fork_field().filter(|&field| field != "parent") {
+                // An attached polyline names its parent; nothing else of a fork's.
+                if let Some(field) = self.fork_field("parent") {
                     return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
                 }
                 let (points, radii) = self.polyline()?;
@@ -183,7 +184,7 @@ impl SupportDef {
                 ));
             }
             (true, false) => {
-                if let Some(field) = self.fork_field() {
+                if let Some(field) = self.fork_field("") {
                     return Err((field, format!("`{field}` belongs to forks; this support is a polyline")));
                 }
                 let (points, radii) = self.polyline()?;
@@ -234,9 +235,11 @@ impl SupportDef {
         ]
     }
 
-    /// The first fork-only field given, if any.
-    fn fork_field(&self) -> Option<&'static str> {
-        self.given().into_iter().find_map(|(field, given)| (given && FORK_FIELDS.contains(&field)).then_some(field))
+    /// The first fork-only field given other than `allowed`, if any.
+    fn fork_field(&self, allowed: &str) -> Option<&'static str> {
+        self.given()
+            .into_iter()
+            .find_map(|(field, given)| (given && field != allowed && FORK_FIELDS.contains(&field)).then_some(field))
     }
 
     /// Whether this support's mapping holds `field`, for locating errors in the file.

@@ -58,6 +58,8 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("tree_absurd_length.yaml", Some(8), &["supports[1].length", "at most 1000", "found 50000"]),
     ("tree_radii_mismatch.yaml", Some(6), &["supports[0].radii", "one radius per point (3), found 2"]),
     ("tree_generate_and_supports.yaml", Some(4), &["entities[0].tree.generate", "either supports or generate"]),
+    ("tree_attached_with_fork_field.yaml", Some(9), &["supports[1].yaw_deg", "belongs to forks"]),
+    ("tree_import_and_supports.yaml", Some(3), &["entities[0].tree.import", "import alone"]),
     ("sloth_unknown_support.yaml", Some(8), &["entities[1].sloth.support", "no support named `branch`", "oak/bough"]),
     ("sloth_ambiguous_support.yaml", Some(10), &["entities[2].sloth.support", "in 2 trees", "tree/support"]),
     ("sloth_speed.yaml", Some(7), &["speed", "from 0.05 to 0.35", "found 2.5"]),
