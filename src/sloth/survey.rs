@@ -111,7 +111,7 @@ fn reasons(sloth: &Sloth) -> Vec<(&'static str, usize)> {
             }
         }
     }
-    counts.sort_by(|a, b| b.1.cmp(&a.1));
+    counts.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
     counts
 }
 
