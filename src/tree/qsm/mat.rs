@@ -7,7 +7,7 @@
 //! Version 2.0 saves flat variables instead: `Rad`, `Len`, `Sta`, `Axe`, `CPar`, `CExt`.
 //! Whole numbers are often stored as smaller integer types; every numeric type is read.
 
-use super::{QsmError, Row, RowPlace};
+use super::{QsmError, Row, RowPlace, branch_number, one_based};
 use bevy::math::DVec3;
 use matrw::{MatVariable, MatlabType};
 
@@ -118,15 +118,8 @@ fn rows(columns: [(String, &MatVariable); 6], branch: Option<(String, &MatVariab
     (0..count)
         .map(|i| {
             let at = |name: &str, message: String| QsmError::whole(format!("cylinder {} (`{name}`): {message}", i + 1));
-            let index = |value: f64, name: &str, required: bool| -> Result<Option<usize>, QsmError> {
-                if value == 0.0 {
-                    return Ok(None);
-                }
-                if value.fract() != 0.0 || value < 0.0 || (required && value > count as f64) {
-                    return Err(at(name, format!("expected a cylinder number from 0 to {count}, found {value}")));
-                }
-                Ok((value <= count as f64).then(|| value as usize - 1))
-            };
+            let index =
+                |value: f64, name: &str, required: bool| one_based(value, count, required).map_err(|e| at(name, e));
             let row = Row {
                 start: vector(&start_values, i),
                 axis: vector(&axis_values, i),
@@ -134,11 +127,7 @@ fn rows(columns: [(String, &MatVariable); 6], branch: Option<(String, &MatVariab
                 radius: radius_values[i],
                 parent: index(parent_values[i], &parent.0, true)?,
                 extension: index(extension_values[i], &extension.0, false)?,
-                branch: branch_values
-                    .as_ref()
-                    .map(|b| b[i])
-                    .filter(|&b| b >= 1.0 && b.fract() == 0.0 && b <= u32::MAX as f64)
-                    .map(|b| b as u32),
+                branch: branch_values.as_ref().and_then(|b| branch_number(b[i])),
                 place: RowPlace::Index(i + 1),
             };
             row.check().map_err(|(field, message)| at(field, message))?;

@@ -164,6 +164,24 @@ pub fn read(bytes: &[u8], format: Option<QsmFormat>) -> Result<Qsm, QsmError> {
     Qsm::from_rows(rows, format)
 }
 
+/// A 1-based row number of a model of `count` rows, 0 for none, as a 0-based index: `None` for
+/// 0 and, unless `required`, for a number beyond the rows (TreeQSM writes one for a branch's
+/// last extension now and then); an error for anything else.
+pub fn one_based(value: f64, count: usize, required: bool) -> Result<Option<usize>, String> {
+    if value == 0.0 {
+        return Ok(None);
+    }
+    if value.fract() != 0.0 || value < 0.0 || (required && value > count as f64) {
+        return Err(format!("expected a row number from 0 to {count}, found {value}"));
+    }
+    Ok((value <= count as f64).then(|| value as usize - 1))
+}
+
+/// A branch number (from 1), or `None` for anything else.
+pub fn branch_number(value: f64) -> Option<u32> {
+    (value >= 1.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX)).then_some(value as u32)
+}
+
 /// A cylinder as a reader found it, in the file's coordinates, before the model is checked
 /// as a whole.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -12,7 +12,7 @@
 //!
 //! Parents, extensions and branches are 1-based row numbers, 0 for none.
 
-use super::{QsmError, Row, RowPlace};
+use super::{QsmError, Row, RowPlace, branch_number, one_based};
 use bevy::math::DVec3;
 
 /// Where the columns a model needs lie in a row (0-based).
@@ -83,22 +83,11 @@ pub fn read(bytes: &[u8]) -> Result<Vec<Row>, QsmError> {
                 let message = format!("expected {} values, found {}", columns.count, values.len());
                 return Err(QsmError::at(line, 1, message));
             }
-            let index = |column: usize, name: &str, required: bool| -> Result<Option<usize>, QsmError> {
-                let value = values[column];
-                if value == 0.0 {
-                    return Ok(None);
-                }
-                if value.fract() != 0.0 || value < 0.0 || (required && value > count as f64) {
-                    let message = format!(
-                        "column {} ({name}): expected a row number from 0 to {count}, found {value}",
-                        column + 1
-                    );
-                    return Err(QsmError::at(line, 1, message));
-                }
-                Ok((value <= count as f64).then(|| value as usize - 1))
+            let index = |column: usize, name: &str, required: bool| {
+                one_based(values[column], count, required)
+                    .map_err(|message| QsmError::at(line, 1, format!("column {} ({name}): {message}", column + 1)))
             };
             let vector = |at: usize| DVec3::new(values[at], values[at + 1], values[at + 2]);
-            let branch = values[columns.branch];
             let row = Row {
                 start: vector(START),
                 axis: vector(AXIS),
@@ -106,7 +95,7 @@ pub fn read(bytes: &[u8]) -> Result<Vec<Row>, QsmError> {
                 radius: values[RADIUS],
                 parent: index(PARENT, "parent", true)?,
                 extension: index(EXTENSION, "extension", false)?,
-                branch: (branch >= 1.0 && branch.fract() == 0.0 && branch <= u32::MAX as f64).then_some(branch as u32),
+                branch: branch_number(values[columns.branch]),
                 place: RowPlace::Line(line),
             };
             row.check().map_err(|(field, message)| QsmError::at(line, 1, format!("{field}: {message}")))?;
