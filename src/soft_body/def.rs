@@ -3,7 +3,7 @@
 //! ```yaml
 //! - soft_body:
 //!     name: torso
-//!     mesh: meshes/torso.obj        # an .obj, .ply or .stl file; or
+//!     mesh: meshes/torso.obj        # an .obj, .ply, .stl or .glb file; or
 //!     # sample: { shape: torso, size: 80 }
 //!     position: [0, 0.7, 0]
 //!     method: area                  # edge_lengths, edge_sum or area
@@ -23,14 +23,14 @@ use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
-/// Mesh files: OBJ, PLY or STL (`.obj`, `.ply`, `.stl`, in any case).
+/// Mesh files: OBJ, PLY, STL or binary glTF (`.obj`, `.ply`, `.stl`, `.glb`, in any case).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MeshFile;
 
 impl FileType for MeshFile {
-    const EXTENSIONS: &'static [&'static str] = &[".obj", ".ply", ".stl"];
-    const EXPECTING: &'static str = "an .obj, .ply or .stl file in the scene's folder";
-    const FILES: &'static str = "an .obj, .ply or .stl file";
+    const EXTENSIONS: &'static [&'static str] = &[".obj", ".ply", ".stl", ".glb"];
+    const EXPECTING: &'static str = "an .obj, .ply, .stl or .glb file in the scene's folder";
+    const FILES: &'static str = "an .obj, .ply, .stl or .glb file";
 }
 
 checked_number!(
@@ -184,7 +184,7 @@ pub fn check_source<F>(
             key,
             cx.kind_index,
             format!(
-                "{}: expected `mesh: FILE` (an .obj, .ply or .stl file) or `sample: {{ shape: torso }}`",
+                "{}: expected `mesh: FILE` (an .obj, .ply, .stl or .glb file) or `sample: {{ shape: torso }}`",
                 cx.field("mesh")
             ),
         )),
@@ -244,7 +244,7 @@ mod tests {
             ("{sample: {shape: torso, size: 2}}", "a whole number from 3 to 1000"),
             ("{sample: {shape: cube}}", "unknown variant `cube`"),
             ("{mesh: ../body.obj}", "inside the scene's folder"),
-            ("{mesh: body.fbx}", "an .obj, .ply or .stl file"),
+            ("{mesh: body.fbx}", "an .obj, .ply, .stl or .glb file"),
             ("{sample: {shape: torso}, method: bend}", "unknown variant `bend`"),
         ] {
             let error = serde_yaml::from_str::<SoftBodyDef>(text).unwrap_err().to_string();

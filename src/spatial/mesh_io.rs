@@ -25,6 +25,9 @@ pub enum Format {
     Ply,
     /// STL (read only).
     Stl,
+    /// Binary glTF 2.0 (read only): the triangles of every mesh's primitives, in each mesh's own
+    /// coordinates.
+    Glb,
 }
 
 impl Format {
@@ -35,6 +38,7 @@ impl Format {
             Some("obj") => Ok(Self::Obj),
             Some("ply") => Ok(Self::Ply),
             Some("stl") => Ok(Self::Stl),
+            Some("glb") => Ok(Self::Glb),
             _ => Err(MeshError::Format(path.display().to_string())),
         }
     }
@@ -44,7 +48,7 @@ impl Format {
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// Not a format the project reads.
-    #[error("{0}: expected an .obj, .ply or .stl file")]
+    #[error("{0}: expected an .obj, .ply, .stl or .glb file")]
     Format(String),
     /// The file could not be read or written.
     #[error("{0}")]
@@ -133,6 +137,7 @@ fn parse_in_order(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshRep
         Format::Obj => parse_obj(bytes)?,
         Format::Ply => parse_ply(bytes)?,
         Format::Stl => parse_stl(bytes)?,
+        Format::Glb => parse_glb(bytes)?,
     };
     for (what, count) in [("a vertex count", positions.len()), ("a face count", faces.len())] {
         if count > MAX_ELEMENTS {
@@ -283,6 +288,48 @@ fn parse_ply(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     Ok((positions, faces))
 }
 
+/// Positions and faces of a binary glTF file: every triangle primitive of every mesh (its
+/// vertices in file order, mesh after mesh), in the mesh's own coordinates.
+fn parse_glb(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
+    use gltf::buffer::Source as BufferSource;
+    use gltf::mesh::Mode;
+    let error = |message: String| MeshError::Parse { format: "glTF", message };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
+    let blob = gltf.blob.as_deref();
+    // The reader slices buffers as the file declares them; a view past the buffer's end must be
+    // an error, never a panic of the app.
+    let read = std::panic::catch_unwind(|| -> Result<_, MeshError> {
+        let (mut positions, mut faces) = (Vec::new(), Vec::new());
+        for mesh in gltf.meshes() {
+            for primitive in mesh.primitives().filter(|p| p.mode() == Mode::Triangles) {
+                let reader = primitive.reader(|buffer| match buffer.source() {
+                    BufferSource::Bin => blob,
+                    BufferSource::Uri(_) => None,
+                });
+                let read = reader.read_positions().ok_or_else(|| {
+                    error(format!("mesh {}: a primitive without positions in the file's own buffer", mesh.index()))
+                })?;
+                let base = positions.len() as i64;
+                positions.extend(read.map(Vec3::from_array));
+                let count = positions.len() as i64 - base;
+                let corners: Vec<i64> = match reader.read_indices() {
+                    Some(indices) => indices.into_u32().map(|i| base + i64::from(i)).collect(),
+                    None => (base..base + count).collect(),
+                };
+                faces.extend(corners.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+                if positions.len() > MAX_ELEMENTS || faces.len() > MAX_ELEMENTS {
+                    return Err(MeshError::TooLarge {
+                        what: "an element count",
+                        count: positions.len().max(faces.len()),
+                    });
+                }
+            }
+        }
+        Ok((positions, faces))
+    });
+    read.map_err(|_| error("an accessor reaches past its buffer".into()))?
+}
+
 /// Positions and faces of an STL file (ASCII or binary).
 fn parse_stl(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     let mesh = stl_io::read_stl(&mut Cursor::new(bytes))
@@ -313,7 +360,9 @@ impl Source {
         match self.format {
             Format::Obj => Ok(obj_written_back(&self.bytes, &file_positions)),
             Format::Ply => ply_written_back(&self.bytes, &file_positions, &self.file_vertices, positions, triangles),
-            Format::Stl => Err(MeshError::Format("an STL file (STL is read, not written)".into())),
+            Format::Stl | Format::Glb => {
+                Err(MeshError::Format("an STL or glTF file (those are read, not written)".into()))
+            }
         }
     }
 }
@@ -479,7 +528,9 @@ pub fn write(mesh: &TriangleMesh, path: &Path) -> Result<(), MeshError> {
     let bytes = match Format::of(path)? {
         Format::Obj => to_obj(mesh),
         Format::Ply => to_ply(mesh),
-        Format::Stl => return Err(MeshError::Format(format!("{} (STL is read, not written)", path.display()))),
+        Format::Stl | Format::Glb => {
+            return Err(MeshError::Format(format!("{} (STL and glTF are read, not written)", path.display())));
+        }
     };
     let mut file = std::fs::File::create(path)?;
     file.write_all(&bytes)?;
@@ -617,6 +668,51 @@ endsolid square
             "{}",
             rows[2]
         );
+    }
+
+    /// A binary glTF file of `json` (padded) and `bin`.
+    fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+        let mut json = json.as_bytes().to_vec();
+        json.resize(json.len().div_ceil(4) * 4, b' ');
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out
+    }
+
+    /// The unit square's glTF: four positions and six 16-bit indices, `count` positions claimed.
+    fn square_glb(count: usize) -> Vec<u8> {
+        let mut bin: Vec<u8> =
+            square().positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+        bin.extend(square().triangles.iter().flatten().flat_map(|&i| (i as u16).to_le_bytes()));
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":60}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":[0,0,0],"max":[1,0,1]}},
+            {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]}}"#
+        );
+        glb(&json, &bin)
+    }
+
+    #[test]
+    fn a_binary_gltf_mesh_is_read() {
+        let (mesh, report) = parse(&square_glb(4), Format::Glb).unwrap();
+        assert_eq!((mesh.positions.len(), shape(&mesh)), (4, shape(&square())));
+        assert_eq!(report, MeshReport::default());
+        // More positions claimed than the buffer holds, or a file cut short: errors.
+        assert!(parse(&square_glb(400), Format::Glb).is_err());
+        let whole = square_glb(4);
+        assert!(parse(&whole[..whole.len() - 20], Format::Glb).is_err());
+        assert!(matches!(Format::of(Path::new("a.glb")), Ok(Format::Glb)));
     }
 
     #[test]
