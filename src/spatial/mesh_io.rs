@@ -25,8 +25,8 @@ pub enum Format {
     Ply,
     /// STL (read only).
     Stl,
-    /// Binary glTF 2.0 (read only): the triangles of every mesh's primitives, in each mesh's own
-    /// coordinates.
+    /// Binary glTF 2.0: the triangles of every mesh's primitives, in each mesh's own
+    /// coordinates (written back over its own file only).
     Glb,
 }
 
@@ -330,6 +330,83 @@ fn parse_glb(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     read.map_err(|_| error("an accessor reaches past its buffer".into()))?
 }
 
+/// A binary glTF file with its position accessors' values set to `positions` (in the order
+/// [`parse_glb`] reads them) where they moved, in place in its binary chunk; where that moves a
+/// position accessor's bounds, its `min` and `max` in the JSON chunk too (which is then written
+/// anew). Everything else is kept.
+fn glb_written_back(bytes: &[u8], positions: &[Vec3]) -> Result<Vec<u8>, MeshError> {
+    use gltf::accessor::{DataType, Dimensions};
+    use gltf::mesh::Mode;
+    let error = |message: String| MeshError::Parse { format: "glTF", message };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
+    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize);
+    let json_length = word(12).ok_or_else(|| error("no JSON chunk".into()))?;
+    let bin_start = 12 + 8 + json_length + 8;
+    let mut out = bytes.to_vec();
+    let mut next = 0;
+    // Each position accessor's new bounds, by accessor index.
+    let mut bounds: std::collections::BTreeMap<usize, (Vec3, Vec3)> = std::collections::BTreeMap::new();
+    for mesh in gltf.meshes() {
+        for primitive in mesh.primitives().filter(|p| p.mode() == Mode::Triangles) {
+            let accessor = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| error("a primitive without positions".into()))?;
+            let view = accessor.view().ok_or_else(|| error("sparse positions are not written back".into()))?;
+            if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
+                return Err(error("positions that are not three 32-bit floats".into()));
+            }
+            let stride = view.stride().unwrap_or(12);
+            let first = bin_start + view.offset() + accessor.offset();
+            let (mut low, mut high) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for k in 0..accessor.count() {
+                let p = *positions.get(next).ok_or_else(|| error("fewer positions than the file holds".into()))?;
+                next += 1;
+                let at = first + k * stride;
+                let slot =
+                    out.get_mut(at..at + 12).ok_or_else(|| error("an accessor reaches past its buffer".into()))?;
+                let was: [f32; 3] =
+                    std::array::from_fn(|c| f32::from_le_bytes(slot[4 * c..4 * c + 4].try_into().unwrap_or_default()));
+                if !same(Vec3::from_array(was), p) {
+                    for (c, value) in p.to_array().into_iter().enumerate() {
+                        slot[4 * c..4 * c + 4].copy_from_slice(&value.to_le_bytes());
+                    }
+                }
+                (low, high) = (low.min(p), high.max(p));
+            }
+            bounds.insert(accessor.index(), (low, high));
+        }
+    }
+    let mut root = gltf.document.into_json();
+    let mut changed = false;
+    // Bounds as numbers, whether the file wrote them as integers or not.
+    let numbers = |value: &Option<gltf::json::Value>| -> Option<Vec<f64>> {
+        value.as_ref()?.as_array()?.iter().map(gltf::json::Value::as_f64).collect()
+    };
+    for (index, (low, high)) in bounds {
+        let accessor = &mut root.accessors[index];
+        let [min, max] = [low, high].map(|v| v.to_array().map(f64::from).to_vec());
+        if numbers(&accessor.min).as_ref() != Some(&min) || numbers(&accessor.max).as_ref() != Some(&max) {
+            let [min, max] = [min, max].map(|bound| Some(gltf::json::Value::from(bound)));
+            (accessor.min, accessor.max, changed) = (min, max, true);
+        }
+    }
+    if !changed {
+        return Ok(out);
+    }
+    // The JSON chunk anew (padded with spaces to four bytes), the binary chunk as patched.
+    let mut json = root.to_vec().map_err(|e| error(e.to_string()))?;
+    json.resize(json.len().div_ceil(4) * 4, b' ');
+    let rest = &out[12 + 8 + json_length..];
+    let mut rebuilt = Vec::with_capacity(12 + 8 + json.len() + rest.len());
+    rebuilt.extend_from_slice(&out[..8]);
+    rebuilt.extend_from_slice(&((12 + 8 + json.len() + rest.len()) as u32).to_le_bytes());
+    rebuilt.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    rebuilt.extend_from_slice(b"JSON");
+    rebuilt.extend_from_slice(&json);
+    rebuilt.extend_from_slice(rest);
+    Ok(rebuilt)
+}
+
 /// Positions and faces of an STL file (ASCII or binary).
 fn parse_stl(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     let mesh = stl_io::read_stl(&mut Cursor::new(bytes))
@@ -354,15 +431,15 @@ impl Source {
     /// The file's contents with each vertex at `positions` (indexed like the welded mesh read
     /// from it): every line or value of a vertex that did not move, and everything that is
     /// not a position, kept as it was; the normals of moved vertices recomputed (OBJ `vn`
-    /// lines used by a moved corner, PLY `nx ny nz`). STL files are read, not written.
+    /// lines used by a moved corner, PLY `nx ny nz`), a glTF position accessor's bounds kept
+    /// true. STL files are read, not written.
     pub fn written_back(&self, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Vec<u8>, MeshError> {
         let file_positions: Vec<Vec3> = self.file_vertices.iter().map(|&v| positions[v as usize]).collect();
         match self.format {
             Format::Obj => Ok(obj_written_back(&self.bytes, &file_positions)),
             Format::Ply => ply_written_back(&self.bytes, &file_positions, &self.file_vertices, positions, triangles),
-            Format::Stl | Format::Glb => {
-                Err(MeshError::Format("an STL or glTF file (those are read, not written)".into()))
-            }
+            Format::Glb => glb_written_back(&self.bytes, &file_positions),
+            Format::Stl => Err(MeshError::Format("an STL file (STL is read, not written)".into())),
         }
     }
 }
@@ -713,6 +790,30 @@ endsolid square
         let whole = square_glb(4);
         assert!(parse(&whole[..whole.len() - 20], Format::Glb).is_err());
         assert!(matches!(Format::of(Path::new("a.glb")), Ok(Format::Glb)));
+    }
+
+    #[test]
+    fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds() {
+        let file = square_glb(4);
+        let (mesh, _, file_vertices) = parse_in_order(&file, Format::Glb).unwrap();
+        let source = Source { format: Format::Glb, bytes: file.clone(), file_vertices };
+        assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), file, "unmoved: the file itself");
+        // A corner pulled in: its floats change in place, the bounds stay, nothing else moves.
+        let mut inward = mesh.positions.clone();
+        inward[2] = Vec3::new(0.5, 0.0, 1.0);
+        let bytes = source.written_back(&inward, &mesh.triangles).unwrap();
+        assert_eq!(bytes.len(), file.len());
+        let differ: Vec<usize> = (0..file.len()).filter(|&i| bytes[i] != file[i]).collect();
+        assert!(!differ.is_empty() && differ[differ.len() - 1] - differ[0] < 4, "one float's bytes: {differ:?}");
+        assert_eq!(parse(&bytes, Format::Glb).unwrap().0.positions, inward);
+        // A corner raised above the old bounds: the accessor's max follows.
+        let mut raised = mesh.positions.clone();
+        raised[2].y = 0.25;
+        let bytes = source.written_back(&raised, &mesh.triangles).unwrap();
+        let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+        let max = gltf.accessors().next().unwrap().max().unwrap();
+        assert_eq!(max, gltf::json::Value::from(vec![1.0, 0.25, 1.0]));
+        assert_eq!(parse(&bytes, Format::Glb).unwrap().0.positions, raised);
     }
 
     #[test]
