@@ -187,6 +187,25 @@ fn scanned_tree_models_import_as_scenes_and_bad_ones_are_located() {
     let scene = std::fs::read_to_string(out("scan.yaml")).unwrap();
     assert!(scene.contains("name: stem") && scene.contains("parent: stem"), "{scene}");
     assert!(canopy(&["check", &out("scan.yaml")]).status.success());
+    // With a sloth: refused for a small tree with no bough long enough to walk; on the shipped
+    // scan, on autorun on a bough it walks along, and the scene plays.
+    let none = canopy(&["tree", "import", &model, "--sloth", "--out", &out("none.yaml")]);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(stderr(&none).contains("no bough"), "{}", stderr(&none));
+    let scan = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/scans/itsme_tree_v240.mat");
+    let scan = scan.to_string_lossy();
+    let with_sloth =
+        canopy(&["tree", "import", &scan, "--min-radius-m", "0.01", "--sloth", "--out", &out("sloth.yaml")]);
+    assert!(with_sloth.status.success(), "{}", stderr(&with_sloth));
+    let scene = std::fs::read_to_string(out("sloth.yaml")).unwrap();
+    assert!(scene.contains("sloth: { support: scan/") && scene.contains("autorun: true"), "{scene}");
+    let dump = out("sloth.json");
+    assert!(
+        canopy(&["run", &out("sloth.yaml"), "--seconds", "10", "--size", "64x48", "--dump", &dump]).status.success()
+    );
+    let state: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&dump).unwrap()).unwrap();
+    let sloth = state["entities"].as_array().unwrap().iter().find(|e| e["name"] == "sloth").unwrap();
+    assert!(sloth["distance_travelled"].as_f64().unwrap() > 0.5, "{sloth}");
 
     // The same model inline, in SimpleForest's CSV, with a parent that is no cylinder.
     let csv = "ID,parentID,startX,startY,startZ,endX,endY,endZ,radius\n0,-1,0,0,0,0,0,1,0.1\n1,7,0,0,1,0,0,2,0.1\n";

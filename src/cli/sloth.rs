@@ -9,7 +9,7 @@ use crate::app::FIXED_HZ;
 use crate::controls::timeline::Timeline;
 use crate::foundation::entity::SceneEntity;
 use crate::run::live_app;
-use crate::sloth::gait::SPEED_RANGE;
+use crate::sloth::gait::{FREE_SPEED, SPEED_RANGE};
 use crate::sloth::gait::{Measured, STEADY_STATE};
 use crate::sloth::gait_log::{GaitFigures, GaitLog, LimbFigures};
 use crate::sloth::rig::Proportions;
@@ -46,7 +46,7 @@ pub struct SurveyArgs {
     #[arg(long, default_value_t = 1.0)]
     min_length: f32,
     /// Walking speed, metres per second.
-    #[arg(long, default_value_t = 0.11)]
+    #[arg(long, default_value_t = FREE_SPEED)]
     speed: f32,
 }
 

@@ -1,11 +1,15 @@
 //! `canopy tree`: tree scenes written from a seed, or from a scanned tree's model.
 
 use super::refuse_to_replace;
+use crate::sloth::Supports;
+use crate::sloth::gait::FREE_SPEED;
+use crate::sloth::rig::Proportions;
+use crate::sloth::survey::{BoughWalk, Outcome, survey};
 use crate::tree::GeneratorSettings;
 use crate::tree::generate::{generate, scene_text, support_yaml};
 use crate::tree::qsm::build::{ImportOptions, supports};
 use crate::tree::qsm::{self, QsmFormat};
-use crate::tree::{Shape, SupportSpec};
+use crate::tree::{Shape, SupportSpec, Tree};
 use bevy::math::Vec3;
 use clap::{Args, Subcommand};
 use std::fmt::Write;
@@ -40,12 +44,32 @@ pub struct ImportArgs {
     /// Keep the model's coordinates (turned y up) instead of standing the tree on the origin.
     #[arg(long)]
     keep_base: bool,
+    /// Put a sloth on autorun on the longest bough it walks along (found as `canopy sloth
+    /// survey` finds them).
+    #[arg(long)]
+    sloth: bool,
     /// The scene file to write.
     #[arg(long, value_name = "SCENE.yaml")]
     out: PathBuf,
     /// Replace `--out` if it exists (otherwise an existing file is never overwritten).
     #[arg(long)]
     force: bool,
+}
+
+/// The name of an imported tree's entity.
+const TREE_NAME: &str = "scan";
+
+/// The longest bough of `supports` (an imported tree's) that a sloth walks along, and where on
+/// it to place the sloth, 0 to 1 of its length.
+fn walked_bough(supports: &[SupportSpec]) -> Option<(String, f32)> {
+    let tree = Tree::build(supports).ok()?;
+    let paths = Supports::new([(TREE_NAME, &tree)]);
+    let walks = survey(&paths, Proportions::default(), FREE_SPEED, 1.0, 60.0);
+    let walked = |walk: &&BoughWalk| {
+        matches!(walk.outcome, Outcome::ReachedEnd | Outcome::WentOn(_) | Outcome::StillWalking { .. })
+    };
+    let longest = walks.iter().filter(walked).max_by(|a, b| a.length.total_cmp(&b.length))?;
+    Some((longest.label.clone(), longest.fraction))
 }
 
 /// A format's name on the command line: its scene-file name with dashes or underscores.
@@ -141,7 +165,10 @@ impl ImportArgs {
         let model = match qsm::read(&bytes, self.format) {
             Ok(model) => model,
             Err(error) => {
-                eprintln!("{path}:{error}");
+                match error.location {
+                    Some((line, column)) => eprintln!("{path}:{line}:{column}: {}", error.message),
+                    None => eprintln!("{path}: {}", error.message),
+                }
                 return ExitCode::from(2);
             }
         };
@@ -157,7 +184,18 @@ impl ImportArgs {
         if let Some(refused) = refuse_to_replace(&self.out, self.force) {
             return refused;
         }
-        let text = imported_scene_text(&self.file.display().to_string(), model.format, &imported.supports);
+        let sloth = if self.sloth {
+            match walked_bough(&imported.supports) {
+                Some(bough) => Some(bough),
+                None => {
+                    eprintln!("{path}: no bough of the tree that a sloth walks along");
+                    return ExitCode::from(2);
+                }
+            }
+        } else {
+            None
+        };
+        let text = imported_scene_text(&self.file.display().to_string(), model.format, &imported.supports, sloth);
         match std::fs::write(&self.out, text) {
             Ok(()) => {
                 println!(
@@ -181,9 +219,14 @@ impl ImportArgs {
     }
 }
 
-/// A scene holding the tree of `supports`, imported from `file`, with a camera that frames it
-/// and the ground under it.
-fn imported_scene_text(file: &str, format: QsmFormat, supports: &[SupportSpec]) -> String {
+/// A scene holding the tree of `supports`, imported from `file`, with a camera that frames it,
+/// the ground under it, and a sloth on autorun on the support and at the place `sloth` names.
+fn imported_scene_text(
+    file: &str,
+    format: QsmFormat,
+    supports: &[SupportSpec],
+    sloth: Option<(String, f32)>,
+) -> String {
     let points = supports.iter().flat_map(|s| match &s.shape {
         Shape::Polyline { points, .. } | Shape::Attached { points, .. } => points.as_slice(),
         Shape::Fork { .. } => &[],
@@ -209,6 +252,9 @@ fn imported_scene_text(file: &str, format: QsmFormat, supports: &[SupportSpec]) 
         (size * 10.0).max(100.0)
     );
     let _ = writeln!(text, "entities:");
+    if let Some((support, at)) = sloth {
+        let _ = writeln!(text, "  - name: sloth\n    sloth: {{ support: {support}, at: {at:.4}, autorun: true }}\n");
+    }
     let _ = writeln!(
         text,
         "  - name: ground\n    shape: {{ primitive: plane, size: [{0:.1}, 1, {0:.1}], position: [{1:.2}, {2:.2}, {3:.2}], \
@@ -218,7 +264,7 @@ fn imported_scene_text(file: &str, format: QsmFormat, supports: &[SupportSpec]) 
         low.y,
         centre.z
     );
-    let _ = writeln!(text, "  - name: scan\n    tree:\n      supports:");
+    let _ = writeln!(text, "  - name: {TREE_NAME}\n    tree:\n      supports:");
     for support in supports {
         let _ = writeln!(text, "        - {}", support_yaml(support, 4));
     }

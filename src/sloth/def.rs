@@ -188,7 +188,7 @@ fn no_turn() -> Degrees {
 }
 
 fn free_speed() -> Speed {
-    Speed(0.11)
+    Speed(gait::FREE_SPEED)
 }
 
 fn unit_scale() -> Scale {

@@ -46,6 +46,8 @@ pub struct BoughWalk {
     pub label: String,
     /// Its length, metres.
     pub length: f32,
+    /// Where along it the sloth was placed, 0 to 1 of its length.
+    pub fraction: f32,
     /// Its radius where the sloth was placed, metres.
     pub radius: f32,
     /// How the walk ended.
@@ -73,7 +75,7 @@ fn walk(supports: &Supports, support: usize, proportions: Proportions, speed: f3
     let length = path.length();
     let fraction = (START_M / length).min(0.5);
     let radius = path.at(fraction * length).radius;
-    let bough = |outcome| BoughWalk { label: path.label.clone(), length, radius, outcome };
+    let bough = |outcome| BoughWalk { label: path.label.clone(), length, fraction, radius, outcome };
     let placement = Placement { support, fraction, facing: 1.0, around: 0.0 };
     let mut sloth = match Sloth::place(supports, placement, proportions, Tuning::animal(speed, &proportions)) {
         Ok(sloth) => sloth,
