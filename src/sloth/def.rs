@@ -3,7 +3,7 @@
 
 use super::biceps::Biceps;
 use super::ccd::CcdSettings;
-use super::gait::{self, DEFAULT_FIXED_STRIDE, StrideMode};
+use super::gait::{self, StrideMode};
 use super::locomotion::{Placement, Sloth, Tuning};
 use super::rig::Proportions;
 use super::supports::Supports;
@@ -241,19 +241,18 @@ impl SlothDef {
 
     /// What is tuned of its walk at `speed` (m/s), as the file says or by default.
     pub fn tuning(&self, speed: f32) -> Tuning {
-        let defaults = CcdSettings::default();
+        let animal = Tuning::animal(speed, &self.proportions());
         Tuning {
-            speed,
-            stride_mode: self.stride_mode.unwrap_or_default(),
-            fixed_stride: self.stride_m.map_or(DEFAULT_FIXED_STRIDE, |s| s.0),
-            stride_seed: self.stride_seed.unwrap_or_default(),
-            step_delay: self.step_delay_s.map(|d| d.0),
-            max_step: self.max_step_m.map(|m| m.0),
-            hang: self.proportions().hang,
+            stride_mode: self.stride_mode.unwrap_or(animal.stride_mode),
+            fixed_stride: self.stride_m.map_or(animal.fixed_stride, |s| s.0),
+            stride_seed: self.stride_seed.unwrap_or(animal.stride_seed),
+            step_delay: self.step_delay_s.map(|d| d.0).or(animal.step_delay),
+            max_step: self.max_step_m.map(|m| m.0).or(animal.max_step),
             ccd: CcdSettings {
-                tolerance: self.ik_tolerance_mm.map_or(defaults.tolerance, |t| t.0 * 1e-3),
-                max_sweeps: self.ik_sweeps.map_or(defaults.max_sweeps, |s| s.0),
+                tolerance: self.ik_tolerance_mm.map_or(animal.ccd.tolerance, |t| t.0 * 1e-3),
+                max_sweeps: self.ik_sweeps.map_or(animal.ccd.max_sweeps, |s| s.0),
             },
+            ..animal
         }
     }
 

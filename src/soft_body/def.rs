@@ -196,7 +196,8 @@ pub fn check_source<F>(
 pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<DecodedMesh>, FileError> {
     let located = |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
     let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
-    file.decoded(|_, bytes| mesh_io::parse_source(bytes, format).map_err(|error| error.to_string())).map_err(located)
+    file.decoded(|_, bytes| mesh_io::parse_source(bytes.to_vec(), format).map_err(|error| error.to_string()))
+        .map_err(located)
 }
 
 /// A mesh file read: the welded mesh, what welding found, and the file for writing back.

@@ -106,17 +106,24 @@ pub struct MeshReport {
 
 /// Reads the mesh at `path`, welded.
 pub fn read(path: &Path) -> Result<(TriangleMesh, MeshReport), MeshError> {
-    read_source(path).map(|(mesh, report, _)| (mesh, report))
+    let (bytes, format) = read_file(path)?;
+    parse(&bytes, format)
 }
 
 /// Reads the mesh at `path`, welded, with what writing it back needs.
 pub fn read_source(path: &Path) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
+    let (bytes, format) = read_file(path)?;
+    parse_source(bytes, format)
+}
+
+/// The contents of the mesh file at `path` (at most [`MAX_FILE_BYTES`]) and its format.
+fn read_file(path: &Path) -> Result<(Vec<u8>, Format), MeshError> {
     let format = Format::of(path)?;
     let size = std::fs::metadata(path)?.len();
     if size > MAX_FILE_BYTES {
         return Err(MeshError::TooLarge { what: "a file of bytes", count: size as usize });
     }
-    parse_source(&std::fs::read(path)?, format)
+    Ok((std::fs::read(path)?, format))
 }
 
 /// The mesh in `bytes` of `format`, welded.
@@ -124,10 +131,11 @@ pub fn parse(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport),
     parse_in_order(bytes, format).map(|(mesh, report, _)| (mesh, report))
 }
 
-/// The mesh in `bytes` of `format`, welded, with what writing it back needs.
-pub fn parse_source(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
-    let (mesh, report, file_vertices) = parse_in_order(bytes, format)?;
-    Ok((mesh, report, Source { format, bytes: bytes.to_vec(), file_vertices }))
+/// The mesh in `bytes` of `format`, welded, with what writing it back needs (which keeps
+/// `bytes`).
+pub fn parse_source(bytes: Vec<u8>, format: Format) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
+    let (mesh, report, file_vertices) = parse_in_order(&bytes, format)?;
+    Ok((mesh, report, Source { format, bytes, file_vertices }))
 }
 
 /// The mesh in `bytes` of `format`, welded, and the welded vertex of each of the file's

@@ -8,7 +8,7 @@
 //! parent's wood, as the sloth's rules for forks expect. The model's z up becomes y up, and the
 //! tree stands on the origin unless its base is kept.
 
-use super::{Cylinder, Qsm};
+use super::Qsm;
 use crate::tree::{Shape, SupportSpec};
 use bevy::math::Vec3;
 
@@ -68,15 +68,16 @@ pub fn supports(qsm: &Qsm, options: &ImportOptions) -> Result<Imported, String> 
         }
         members
     };
-    let volume = |c: &Cylinder| c.radius * c.radius * c.length;
-    let roots: Vec<usize> = (0..cylinders.len()).filter(|&i| cylinders[i].parent.is_none()).collect();
-    let root = roots
-        .iter()
-        .copied()
-        .max_by(|&a, &b| {
-            let wood = |root| piece(root).iter().map(|&i| volume(&cylinders[i])).sum::<f32>();
-            wood(a).total_cmp(&wood(b))
+    let wood =
+        |members: &[usize]| members.iter().map(|&i| cylinders[i].radius.powi(2) * cylinders[i].length).sum::<f32>();
+    let (root, in_piece, _) = (0..cylinders.len())
+        .filter(|&i| cylinders[i].parent.is_none())
+        .map(|root| {
+            let members = piece(root);
+            let wood = wood(&members);
+            (root, members, wood)
         })
+        .max_by(|a, b| a.2.total_cmp(&b.2))
         .ok_or("the model has no root cylinder")?;
     if !thick(root) {
         return Err(format!(
@@ -84,7 +85,6 @@ pub fn supports(qsm: &Qsm, options: &ImportOptions) -> Result<Imported, String> 
             cylinders[root].radius, options.min_radius_m
         ));
     }
-    let in_piece = piece(root);
     let mut kept = vec![false; cylinders.len()];
     let mut stack = vec![root];
     while let Some(index) = stack.pop() {
@@ -131,8 +131,8 @@ pub fn supports(qsm: &Qsm, options: &ImportOptions) -> Result<Imported, String> 
         while let Some(next) = continuation(*chain.last().expect("a chain has a first cylinder")) {
             chain.push(next);
         }
-        for &index in &chain {
-            let carried_on = continuation(index);
+        for (k, &index) in chain.iter().enumerate() {
+            let carried_on = chain.get(k + 1).copied();
             for &child in children[index].iter().filter(|&&c| kept[c] && Some(c) != carried_on) {
                 pending.push((child, Some((support_index, index))));
             }
@@ -209,7 +209,7 @@ fn simplified(points: &[Vec3], radii: &[f32], tolerance: f32) -> (Vec<Vec3>, Vec
 mod tests {
     use super::*;
     use crate::tree::Tree;
-    use crate::tree::qsm::QsmFormat;
+    use crate::tree::qsm::{Cylinder, QsmFormat};
     use bevy::math::DVec3;
 
     fn cylinder(start: [f32; 3], axis: [f32; 3], length: f32, radius: f32, parent: Option<usize>) -> Cylinder {
