@@ -46,7 +46,7 @@ impl ValueEnum for Shape {
 /// `canopy deform`.
 #[derive(Args, Debug)]
 pub struct DeformArgs {
-    /// The mesh: an .obj, .ply, .stl or .glb file.
+    /// The mesh: an .obj, .ply, .stl, .gltf or .glb file.
     input: PathBuf,
     /// The outline: three or more points on the surface as x:y:z in metres
     /// (`0.1:0.05:0,-0.1:0.05:0,0:0.05:0.1`), or vertex indices of the mesh as read (welded;

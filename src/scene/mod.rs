@@ -90,8 +90,10 @@ impl AssetLoader for SceneLoader {
             let contents = load_context
                 .read_asset_bytes(asset_path)
                 .await
-                .map_err(|error| FileError::unreadable(&referenced, error))?;
-            files.push(ReadFile { file, path: referenced, contents });
+                .map_err(|error| FileError::unreadable(&self.folder.join(&referenced), error))?;
+            // Its path as the user would name it, for messages and for the files it refers to
+            // in turn (a glTF file's buffers and images).
+            files.push(ReadFile { file, path: self.folder.join(&referenced), contents });
         }
         Ok(SceneAsset(Arc::new(kinds.finish(scene, &self.folder.join(&path), &bytes, &files)?)))
     }

@@ -1,10 +1,12 @@
-//! The `shape` entity kind: primitive solids (box, sphere, cylinder, plane) that give scenes
+//! The `shape` entity kind: primitive solids (box, sphere, cylinder, plane) and props drawn
+//! from mesh files (OBJ, PLY, STL, glTF with its materials and textures) that give scenes
 //! real 3D content, optionally spinning at a constant rate.
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`kind`] | [`ShapeKind`]: textures read, shapes spawned and saved |
+//! | [`kind`] | [`ShapeKind`]: textures and meshes read, shapes spawned and saved |
 //! | [`def`] | the `shape:` entry of a scene file |
+//! | [`mesh`] | a mesh file's parts as the rasterizer draws them |
 //! | [`plugin`] | [`ShapePlugin`] and its set [`ShapeSystems`]: parameters, dump, spinning, writing the transform and colour |
 //!
 //! Parameters (`<name>.<parameter>`, all from [`ShapeParams`]): `position.{x,y,z}` (metres),
@@ -16,8 +18,9 @@
 
 pub mod def;
 pub mod kind;
+pub mod mesh;
 pub mod plugin;
 
 pub use def::ShapeDef;
 pub use kind::ShapeKind;
-pub use plugin::{Shape, ShapeParams, ShapePlugin, ShapeSystems};
+pub use plugin::{Shape, ShapePart, ShapeParams, ShapePlugin, ShapeSystems};

@@ -15,9 +15,32 @@ use bevy::math::{EulerRot, Quat};
 use bevy::prelude::*;
 use serde_json::{Map, Value, json};
 
-/// Which primitive a shape entity draws.
-#[derive(Component, Debug, Clone, Copy)]
-pub struct Shape(pub Primitive);
+/// What a shape entity draws.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// A primitive solid, drawn by the entity itself.
+    Primitive(Primitive),
+    /// A mesh file, drawn by the entity's children (one [`ShapePart`] each).
+    Mesh {
+        /// Triangles in all its parts.
+        triangles: usize,
+    },
+}
+
+/// One part of a mesh shape, a child of the shape's entity: its own colour (sRGB channels),
+/// which the shape's colour multiplies.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct ShapePart {
+    /// The part's colour as its file gives it.
+    pub color: Vec3,
+}
+
+impl ShapePart {
+    /// The part's colour multiplied by the shape's `tint`.
+    pub fn tinted(&self, tint: Vec3) -> Vec3 {
+        self.color * tint
+    }
+}
 
 /// The live, editable state of a shape; the single source of its transform and colour.
 #[derive(Component, Reflect, Debug, Clone, PartialEq)]
@@ -41,7 +64,7 @@ impl From<&ShapeDef> for ShapeParams {
             position: def.position.0,
             rotation_deg: def.rotation_deg.0,
             size: def.size.0,
-            color: def.color.0,
+            color: def.color(),
             spin_deg_per_s: def.spin_deg_per_s.0,
         }
     }
@@ -75,7 +98,10 @@ pub(super) fn save_live(def: &mut ShapeDef, entity: EntityRef) {
     def.position = Point::nearest(params.position);
     def.size = Size(params.size.clamp(Vec3::splat(MIN_SIZE), Vec3::splat(MAX_METRES as f32)));
     let [red, green, blue] = [params.color.red, params.color.green, params.color.blue].map(|c| c.clamp(0.0, 1.0));
-    def.color = Color(Srgba::rgb(red, green, blue));
+    let color = Srgba::rgb(red, green, blue);
+    if def.color.is_some() || color != def.default_color() {
+        def.color = Some(Color(color));
+    }
     def.spin_deg_per_s = Angles::nearest(params.spin_deg_per_s);
     if params.spin_deg_per_s == Vec3::ZERO {
         def.rotation_deg = Angles::nearest(params.rotation_deg);
@@ -94,7 +120,10 @@ impl DumpState for ShapeParams {
 
 impl DumpState for Shape {
     fn dump(&self, out: &mut Map<String, Value>) {
-        out.insert("primitive".into(), json!(self.0.key()));
+        match self {
+            Shape::Primitive(primitive) => out.insert("primitive".into(), json!(primitive.key())),
+            Shape::Mesh { triangles } => out.insert("mesh_triangles".into(), json!(triangles)),
+        };
     }
 }
 
@@ -129,18 +158,32 @@ fn spin_shapes(time: Res<Time>, mut shapes: Query<&mut ShapeParams>) {
     }
 }
 
-/// Writes edited or spun shape parameters into the transform and the mesh colour.
-fn write_back_shapes(mut shapes: Query<(&ShapeParams, &mut Transform, &mut RasterMesh), Changed<ShapeParams>>) {
-    for (params, mut transform, mut mesh) in &mut shapes {
+/// Writes edited or spun shape parameters into the transform and the colour of the mesh, or
+/// of a mesh shape's parts.
+fn write_back_shapes(
+    mut shapes: Query<(&ShapeParams, &mut Transform, Option<&mut RasterMesh>, Option<&Children>), Changed<ShapeParams>>,
+    mut parts: Query<(&ShapePart, &mut RasterMesh), Without<ShapeParams>>,
+) {
+    for (params, mut transform, mesh, children) in &mut shapes {
         *transform = params.transform();
-        mesh.material.color = params.color_channels();
+        let tint = params.color_channels();
+        if let Some(mut mesh) = mesh {
+            mesh.material.color = tint;
+        }
+        for child in children.into_iter().flatten() {
+            if let Ok((part, mut mesh)) = parts.get_mut(*child) {
+                mesh.material.color = part.tinted(tint);
+            }
+        }
     }
 }
 
-/// Every shape is a solid where it stands now.
+/// Every primitive shape is a solid where it stands now (a mesh shape is drawn, not solid).
 fn publish_solids(shapes: Query<(Entity, &Shape, &GlobalTransform), Changed<GlobalTransform>>, mut commands: Commands) {
     for (entity, shape, placed) in &shapes {
-        commands.entity(entity).insert(Solid(Collider::shape(shape.0, placed.affine())));
+        if let Shape::Primitive(primitive) = shape {
+            commands.entity(entity).insert(Solid(Collider::shape(*primitive, placed.affine())));
+        }
     }
 }
 

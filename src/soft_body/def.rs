@@ -3,7 +3,7 @@
 //! ```yaml
 //! - soft_body:
 //!     name: torso
-//!     mesh: meshes/torso.obj        # an .obj, .ply, .stl or .glb file; or
+//!     mesh: meshes/torso.obj        # an .obj, .ply, .stl, .gltf or .glb file; or
 //!     # sample: { shape: torso, size: 80 }
 //!     position: [0, 0.7, 0]
 //!     method: area                  # edge_lengths, edge_sum or area
@@ -14,24 +14,14 @@
 use super::deform::{Deformer, Method, Settings, Variant};
 use super::sample::{SIZES, Shape};
 use crate::foundation::kind::{BuildContext, EntityContext, ReferencedFile};
-use crate::foundation::values::{Color, FileType, FolderFile, Point, checked_number};
+use crate::foundation::values::{Color, FolderFile, Point, checked_number};
 use crate::foundation::yaml::FileError;
-use crate::spatial::mesh_io::{self, MeshReport, Source, TriangleMesh};
+use crate::spatial::mesh_io::{self, MeshFile, MeshReport, Source, TriangleMesh};
 use crate::spatial::surface::Surface;
 use bevy::color::Srgba;
 use bevy::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
-
-/// Mesh files: OBJ, PLY, STL or binary glTF (`.obj`, `.ply`, `.stl`, `.glb`, in any case).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct MeshFile;
-
-impl FileType for MeshFile {
-    const EXTENSIONS: &'static [&'static str] = &[".obj", ".ply", ".stl", ".glb"];
-    const EXPECTING: &'static str = "an .obj, .ply, .stl or .glb file in the scene's folder";
-    const FILES: &'static str = "an .obj, .ply, .stl or .glb file";
-}
 
 checked_number!(
     /// A deformer's coefficient: greater than 0 and at most 1.
@@ -184,7 +174,7 @@ pub fn check_source<F>(
             key,
             cx.kind_index,
             format!(
-                "{}: expected `mesh: FILE` (an .obj, .ply, .stl or .glb file) or `sample: {{ shape: torso }}`",
+                "{}: expected `mesh: FILE` (an .obj, .ply, .stl, .gltf or .glb file) or `sample: {{ shape: torso }}`",
                 cx.field("mesh")
             ),
         )),
@@ -196,7 +186,9 @@ pub fn check_source<F>(
 pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<DecodedMesh>, FileError> {
     let located = |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
     let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
-    file.decoded(|_, bytes| mesh_io::parse_source(bytes.to_vec(), format).map_err(|error| error.to_string()))
+    file.decoded(|path, bytes| {
+        mesh_io::parse_source(bytes.to_vec(), format, mesh_io::folder_of(path)).map_err(|error| error.to_string())
+    })
         .map_err(located)
 }
 
@@ -245,7 +237,7 @@ mod tests {
             ("{sample: {shape: torso, size: 2}}", "a whole number from 3 to 1000"),
             ("{sample: {shape: cube}}", "unknown variant `cube`"),
             ("{mesh: ../body.obj}", "inside the scene's folder"),
-            ("{mesh: body.fbx}", "an .obj, .ply, .stl or .glb file"),
+            ("{mesh: body.fbx}", "an .obj, .ply, .stl, .gltf or .glb file"),
             ("{sample: {shape: torso}, method: bend}", "unknown variant `bend`"),
         ] {
             let error = serde_yaml::from_str::<SoftBodyDef>(text).unwrap_err().to_string();

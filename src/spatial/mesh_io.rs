@@ -1,11 +1,15 @@
 //! Triangle meshes in files: OBJ (its vertex and face lines, in file order), PLY (ASCII or
-//! binary) and STL read, OBJ and PLY written; every mesh read is welded (vertices at the same
+//! binary), STL and glTF 2.0 (see [`gltf`]) read, OBJ and PLY written; every mesh read is welded (vertices at the same
 //! position become one), so that a surface from STL, which repeats its vertices per triangle,
 //! deforms as one piece. Faces that collapse and edges shared by more than two faces are
-//! counted, not refused. A mesh read from OBJ or PLY can be written back over its own file's
-//! contents with only its positions changed (see [`Source`]).
+//! counted, not refused. A mesh read from OBJ, PLY or glTF can be written back over its own
+//! file's contents with only its positions changed (see [`Source`]).
 
-use bevy::math::Vec3;
+mod gltf;
+
+use bevy::math::{Vec2, Vec3};
+use crate::foundation::values::FileType;
+use gltf::GltfFile;
 use std::collections::HashMap;
 use std::io::{Cursor, Write};
 use std::path::Path;
@@ -25,8 +29,9 @@ pub enum Format {
     Ply,
     /// STL (read only).
     Stl,
-    /// Binary glTF 2.0: the triangles of every mesh's primitives, in each mesh's own
-    /// coordinates (written back over its own file only).
+    /// glTF 2.0 as text, its buffers in data URIs or in files beside it.
+    Gltf,
+    /// Binary glTF 2.0.
     Glb,
 }
 
@@ -38,17 +43,29 @@ impl Format {
             Some("obj") => Ok(Self::Obj),
             Some("ply") => Ok(Self::Ply),
             Some("stl") => Ok(Self::Stl),
+            Some("gltf") => Ok(Self::Gltf),
             Some("glb") => Ok(Self::Glb),
             _ => Err(MeshError::Format(path.display().to_string())),
         }
     }
 }
 
+/// Mesh files in a scene's folder: OBJ, PLY, STL or glTF (`.obj`, `.ply`, `.stl`, `.gltf`,
+/// `.glb`, in any case).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshFile;
+
+impl FileType for MeshFile {
+    const EXTENSIONS: &'static [&'static str] = &[".obj", ".ply", ".stl", ".gltf", ".glb"];
+    const EXPECTING: &'static str = "an .obj, .ply, .stl, .gltf or .glb file in the scene's folder";
+    const FILES: &'static str = "an .obj, .ply, .stl, .gltf or .glb file";
+}
+
 /// Why a mesh could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// Not a format the project reads.
-    #[error("{0}: expected an .obj, .ply, .stl or .glb file")]
+    #[error("{0}: expected an .obj, .ply, .stl, .gltf or .glb file")]
     Format(String),
     /// The file could not be read or written.
     #[error("{0}")]
@@ -93,6 +110,37 @@ pub struct TriangleMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// One piece of a mesh as drawn: a glTF file's triangle primitive as a node of its scene
+/// places it, or the whole of a mesh from another format.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    /// Vertex positions, metres.
+    pub positions: Vec<Vec3>,
+    /// Unit vertex normals, one per position, or empty where the file has none.
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates of the base colour texture, one per position, or empty.
+    pub uvs: Vec<Vec2>,
+    /// Linear RGB vertex colours, one per position, or empty.
+    pub colors: Vec<Vec3>,
+    /// Index triples into `positions`, wound counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// The material's base colour factor, linear RGB.
+    pub base_color: Vec3,
+    /// The base colour texture: its image (an index into [`Drawing::images`]) and whether
+    /// it is clamped at its edges rather than repeated.
+    pub texture: Option<(usize, bool)>,
+}
+
+/// What drawing a mesh file needs: its parts and the encoded images they use (PNG or JPEG).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Drawing {
+    /// Its pieces, each with its own material.
+    pub parts: Vec<Part>,
+    /// The file's images by index, encoded; `None` for an image no part uses.
+    pub images: Vec<Option<Vec<u8>>>,
+}
+
+
 /// What reading a mesh found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct MeshReport {
@@ -107,13 +155,18 @@ pub struct MeshReport {
 /// Reads the mesh at `path`, welded.
 pub fn read(path: &Path) -> Result<(TriangleMesh, MeshReport), MeshError> {
     let (bytes, format) = read_file(path)?;
-    parse(&bytes, format)
+    parse(&bytes, format, folder_of(path))
 }
 
 /// Reads the mesh at `path`, welded, with what writing it back needs.
 pub fn read_source(path: &Path) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
     let (bytes, format) = read_file(path)?;
-    parse_source(bytes, format)
+    parse_source(bytes, format, folder_of(path))
+}
+
+/// The folder a file's relative references are found in.
+pub fn folder_of(path: &Path) -> &Path {
+    path.parent().unwrap_or(Path::new("."))
 }
 
 /// The contents of the mesh file at `path` (at most [`MAX_FILE_BYTES`]) and its format.
@@ -126,26 +179,56 @@ fn read_file(path: &Path) -> Result<(Vec<u8>, Format), MeshError> {
     Ok((std::fs::read(path)?, format))
 }
 
-/// The mesh in `bytes` of `format`, welded.
-pub fn parse(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport), MeshError> {
-    parse_in_order(bytes, format).map(|(mesh, report, _)| (mesh, report))
+/// The mesh in `bytes` of `format`, welded; a glTF file's references are found in `folder`.
+pub fn parse(bytes: &[u8], format: Format, folder: &Path) -> Result<(TriangleMesh, MeshReport), MeshError> {
+    parse_in_order(bytes, format, folder).map(|(mesh, report, _)| (mesh, report))
 }
 
 /// The mesh in `bytes` of `format`, welded, with what writing it back needs (which keeps
-/// `bytes`).
-pub fn parse_source(bytes: Vec<u8>, format: Format) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
-    let (mesh, report, file_vertices) = parse_in_order(&bytes, format)?;
-    Ok((mesh, report, Source { format, bytes, file_vertices }))
+/// `bytes`); a glTF file's references are found in `folder`.
+pub fn parse_source(
+    bytes: Vec<u8>,
+    format: Format,
+    folder: &Path,
+) -> Result<(TriangleMesh, MeshReport, Source), MeshError> {
+    let (mesh, report, file_vertices) = parse_in_order(&bytes, format, folder)?;
+    Ok((mesh, report, Source { format, bytes, folder: folder.to_path_buf(), file_vertices }))
+}
+
+/// What drawing the mesh in `bytes` of `format` needs: a glTF file's every primitive as the
+/// nodes of its scene place them, with their materials and images; another format's mesh,
+/// welded, as one white part.
+pub fn drawing(bytes: &[u8], format: Format, folder: &Path) -> Result<Drawing, MeshError> {
+    match format {
+        Format::Gltf | Format::Glb => GltfFile::open(bytes, folder)?.drawing(),
+        Format::Obj | Format::Ply | Format::Stl => {
+            let (mesh, _) = parse(bytes, format, folder)?;
+            let part = Part {
+                positions: mesh.positions,
+                normals: Vec::new(),
+                uvs: Vec::new(),
+                colors: Vec::new(),
+                triangles: mesh.triangles,
+                base_color: Vec3::ONE,
+                texture: None,
+            };
+            Ok(Drawing { parts: vec![part], images: Vec::new() })
+        }
+    }
 }
 
 /// The mesh in `bytes` of `format`, welded, and the welded vertex of each of the file's
 /// vertices in file order.
-fn parse_in_order(bytes: &[u8], format: Format) -> Result<(TriangleMesh, MeshReport, Vec<u32>), MeshError> {
+fn parse_in_order(
+    bytes: &[u8],
+    format: Format,
+    folder: &Path,
+) -> Result<(TriangleMesh, MeshReport, Vec<u32>), MeshError> {
     let (positions, faces) = match format {
         Format::Obj => parse_obj(bytes)?,
         Format::Ply => parse_ply(bytes)?,
         Format::Stl => parse_stl(bytes)?,
-        Format::Glb => parse_glb(bytes)?,
+        Format::Gltf | Format::Glb => GltfFile::open(bytes, folder)?.triangles()?,
     };
     for (what, count) in [("a vertex count", positions.len()), ("a face count", faces.len())] {
         if count > MAX_ELEMENTS {
@@ -296,125 +379,6 @@ fn parse_ply(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     Ok((positions, faces))
 }
 
-/// Positions and faces of a binary glTF file: every triangle primitive of every mesh (its
-/// vertices in file order, mesh after mesh), in the mesh's own coordinates.
-fn parse_glb(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
-    use gltf::buffer::Source as BufferSource;
-    use gltf::mesh::Mode;
-    let error = |message: String| MeshError::Parse { format: "glTF", message };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
-    let blob = gltf.blob.as_deref();
-    // The reader slices buffers as the file declares them; a view past the buffer's end must be
-    // an error, never a panic of the app.
-    let read = std::panic::catch_unwind(|| -> Result<_, MeshError> {
-        let (mut positions, mut faces) = (Vec::new(), Vec::new());
-        for mesh in gltf.meshes() {
-            for primitive in mesh.primitives().filter(|p| p.mode() == Mode::Triangles) {
-                let reader = primitive.reader(|buffer| match buffer.source() {
-                    BufferSource::Bin => blob,
-                    BufferSource::Uri(_) => None,
-                });
-                let read = reader.read_positions().ok_or_else(|| {
-                    error(format!("mesh {}: a primitive without positions in the file's own buffer", mesh.index()))
-                })?;
-                let base = positions.len() as i64;
-                positions.extend(read.map(Vec3::from_array));
-                let count = positions.len() as i64 - base;
-                let corners: Vec<i64> = match reader.read_indices() {
-                    Some(indices) => indices.into_u32().map(|i| base + i64::from(i)).collect(),
-                    None => (base..base + count).collect(),
-                };
-                faces.extend(corners.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-                if positions.len() > MAX_ELEMENTS || faces.len() > MAX_ELEMENTS {
-                    return Err(MeshError::TooLarge {
-                        what: "an element count",
-                        count: positions.len().max(faces.len()),
-                    });
-                }
-            }
-        }
-        Ok((positions, faces))
-    });
-    read.map_err(|_| error("an accessor reaches past its buffer".into()))?
-}
-
-/// A binary glTF file with its position accessors' values set to `positions` (in the order
-/// [`parse_glb`] reads them) where they moved, in place in its binary chunk; where that moves a
-/// position accessor's bounds, its `min` and `max` in the JSON chunk too (which is then written
-/// anew). Everything else is kept.
-fn glb_written_back(bytes: &[u8], positions: &[Vec3]) -> Result<Vec<u8>, MeshError> {
-    use gltf::accessor::{DataType, Dimensions};
-    use gltf::mesh::Mode;
-    let error = |message: String| MeshError::Parse { format: "glTF", message };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
-    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize);
-    let json_length = word(12).ok_or_else(|| error("no JSON chunk".into()))?;
-    let bin_start = 12 + 8 + json_length + 8;
-    let mut out = bytes.to_vec();
-    let mut next = 0;
-    // Each position accessor's new bounds, by accessor index.
-    let mut bounds: std::collections::BTreeMap<usize, (Vec3, Vec3)> = std::collections::BTreeMap::new();
-    for mesh in gltf.meshes() {
-        for primitive in mesh.primitives().filter(|p| p.mode() == Mode::Triangles) {
-            let accessor = primitive
-                .get(&gltf::Semantic::Positions)
-                .ok_or_else(|| error("a primitive without positions".into()))?;
-            let view = accessor.view().ok_or_else(|| error("sparse positions are not written back".into()))?;
-            if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
-                return Err(error("positions that are not three 32-bit floats".into()));
-            }
-            let stride = view.stride().unwrap_or(12);
-            let first = bin_start + view.offset() + accessor.offset();
-            let (mut low, mut high) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-            for k in 0..accessor.count() {
-                let p = *positions.get(next).ok_or_else(|| error("fewer positions than the file holds".into()))?;
-                next += 1;
-                let at = first + k * stride;
-                let slot =
-                    out.get_mut(at..at + 12).ok_or_else(|| error("an accessor reaches past its buffer".into()))?;
-                let was: [f32; 3] =
-                    std::array::from_fn(|c| f32::from_le_bytes(slot[4 * c..4 * c + 4].try_into().unwrap_or_default()));
-                if !same(Vec3::from_array(was), p) {
-                    for (c, value) in p.to_array().into_iter().enumerate() {
-                        slot[4 * c..4 * c + 4].copy_from_slice(&value.to_le_bytes());
-                    }
-                }
-                (low, high) = (low.min(p), high.max(p));
-            }
-            bounds.insert(accessor.index(), (low, high));
-        }
-    }
-    let mut root = gltf.document.into_json();
-    let mut changed = false;
-    // Bounds as numbers, whether the file wrote them as integers or not.
-    let numbers = |value: &Option<gltf::json::Value>| -> Option<Vec<f64>> {
-        value.as_ref()?.as_array()?.iter().map(gltf::json::Value::as_f64).collect()
-    };
-    for (index, (low, high)) in bounds {
-        let accessor = &mut root.accessors[index];
-        let [min, max] = [low, high].map(|v| v.to_array().map(f64::from).to_vec());
-        if numbers(&accessor.min).as_ref() != Some(&min) || numbers(&accessor.max).as_ref() != Some(&max) {
-            let [min, max] = [min, max].map(|bound| Some(gltf::json::Value::from(bound)));
-            (accessor.min, accessor.max, changed) = (min, max, true);
-        }
-    }
-    if !changed {
-        return Ok(out);
-    }
-    // The JSON chunk anew (padded with spaces to four bytes), the binary chunk as patched.
-    let mut json = root.to_vec().map_err(|e| error(e.to_string()))?;
-    json.resize(json.len().div_ceil(4) * 4, b' ');
-    let rest = &out[12 + 8 + json_length..];
-    let mut rebuilt = Vec::with_capacity(12 + 8 + json.len() + rest.len());
-    rebuilt.extend_from_slice(&out[..8]);
-    rebuilt.extend_from_slice(&((12 + 8 + json.len() + rest.len()) as u32).to_le_bytes());
-    rebuilt.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    rebuilt.extend_from_slice(b"JSON");
-    rebuilt.extend_from_slice(&json);
-    rebuilt.extend_from_slice(rest);
-    Ok(rebuilt)
-}
-
 /// Positions and faces of an STL file (ASCII or binary).
 fn parse_stl(bytes: &[u8]) -> Result<(Vec<Vec3>, Vec<[i64; 3]>), MeshError> {
     let mesh = stl_io::read_stl(&mut Cursor::new(bytes))
@@ -431,6 +395,8 @@ pub struct Source {
     pub format: Format,
     /// Its contents.
     pub bytes: Vec<u8>,
+    /// Its folder, where a glTF file's references are found.
+    pub folder: std::path::PathBuf,
     /// The welded vertex of each of the file's vertices, in file order.
     pub file_vertices: Vec<u32>,
 }
@@ -446,7 +412,9 @@ impl Source {
         match self.format {
             Format::Obj => Ok(obj_written_back(&self.bytes, &file_positions)),
             Format::Ply => ply_written_back(&self.bytes, &file_positions, &self.file_vertices, positions, triangles),
-            Format::Glb => glb_written_back(&self.bytes, &file_positions),
+            Format::Gltf | Format::Glb => {
+                GltfFile::open(&self.bytes, &self.folder)?.written_back(&self.bytes, &file_positions)
+            }
             Format::Stl => Err(MeshError::Format("an STL file (STL is read, not written)".into())),
         }
     }
@@ -613,7 +581,7 @@ pub fn write(mesh: &TriangleMesh, path: &Path) -> Result<(), MeshError> {
     let bytes = match Format::of(path)? {
         Format::Obj => to_obj(mesh),
         Format::Ply => to_ply(mesh),
-        Format::Stl | Format::Glb => {
+        Format::Stl | Format::Gltf | Format::Glb => {
             return Err(MeshError::Format(format!("{} (STL and glTF are read, not written)", path.display())));
         }
     };

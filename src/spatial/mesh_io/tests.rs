@@ -57,7 +57,7 @@ facet normal 0 1 0
 endfacet
 endsolid square
 ";
-    let (mesh, _) = parse(stl, Format::Stl).unwrap();
+    let (mesh, _) = parse(stl, Format::Stl, Path::new(".")).unwrap();
     assert_eq!((mesh.positions.len(), mesh.triangles.len()), (4, 2), "two triangles on four shared corners");
 }
 
@@ -80,15 +80,14 @@ fn a_ply_written_back_keeps_its_other_properties_and_unmoved_vertices() {
                 property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty uchar red\n\
                 element face 2\nproperty list uchar int vertex_indices\nend_header\n\
                 0 0 0 0 1 0 10\n1 0 0 0 1 0 20\n1 0 1 0 1 0 30\n0 0 1 0 1 0 40\n3 0 2 1\n3 0 3 2\n";
-    let (mesh, _, file_vertices) = parse_in_order(ply, Format::Ply).unwrap();
-    let source = Source { format: Format::Ply, bytes: ply.to_vec(), file_vertices };
+    let (mesh, _, source) = parse_source(ply.to_vec(), Format::Ply, Path::new(".")).unwrap();
     // Unmoved: the file itself.
     assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), ply.to_vec());
     // One corner raised: its position and normal change, nothing else.
     let mut moved = mesh.positions.clone();
     moved[2].y = 0.5;
     let bytes = source.written_back(&moved, &mesh.triangles).unwrap();
-    let (read_back, _, _) = parse_in_order(&bytes, Format::Ply).unwrap();
+    let (read_back, _, _) = parse_in_order(&bytes, Format::Ply, Path::new(".")).unwrap();
     assert_eq!(read_back.positions, moved);
     let text = String::from_utf8(bytes).unwrap();
     assert!(text.contains("comment scanned") && text.contains("property uchar red"), "{text}");
@@ -131,21 +130,20 @@ fn square_glb(count: usize) -> Vec<u8> {
 
 #[test]
 fn a_binary_gltf_mesh_is_read() {
-    let (mesh, report) = parse(&square_glb(4), Format::Glb).unwrap();
+    let (mesh, report) = parse(&square_glb(4), Format::Glb, Path::new(".")).unwrap();
     assert_eq!((mesh.positions.len(), shape(&mesh)), (4, shape(&square())));
     assert_eq!(report, MeshReport::default());
     // More positions claimed than the buffer holds, or a file cut short: errors.
-    assert!(parse(&square_glb(400), Format::Glb).is_err());
+    assert!(parse(&square_glb(400), Format::Glb, Path::new(".")).is_err());
     let whole = square_glb(4);
-    assert!(parse(&whole[..whole.len() - 20], Format::Glb).is_err());
+    assert!(parse(&whole[..whole.len() - 20], Format::Glb, Path::new(".")).is_err());
     assert!(matches!(Format::of(Path::new("a.glb")), Ok(Format::Glb)));
 }
 
 #[test]
 fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds() {
     let file = square_glb(4);
-    let (mesh, _, file_vertices) = parse_in_order(&file, Format::Glb).unwrap();
-    let source = Source { format: Format::Glb, bytes: file.clone(), file_vertices };
+    let (mesh, _, source) = parse_source(file.clone(), Format::Glb, Path::new(".")).unwrap();
     assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), file, "unmoved: the file itself");
     // A corner pulled in: its floats change in place, the bounds stay, nothing else moves.
     let mut inward = mesh.positions.clone();
@@ -154,27 +152,27 @@ fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds(
     assert_eq!(bytes.len(), file.len());
     let differ: Vec<usize> = (0..file.len()).filter(|&i| bytes[i] != file[i]).collect();
     assert!(!differ.is_empty() && differ[differ.len() - 1] - differ[0] < 4, "one float's bytes: {differ:?}");
-    assert_eq!(parse(&bytes, Format::Glb).unwrap().0.positions, inward);
+    assert_eq!(parse(&bytes, Format::Glb, Path::new(".")).unwrap().0.positions, inward);
     // A corner raised above the old bounds: the accessor's max follows.
     let mut raised = mesh.positions.clone();
     raised[2].y = 0.25;
     let bytes = source.written_back(&raised, &mesh.triangles).unwrap();
-    let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+    let gltf = ::gltf::Gltf::from_slice(&bytes).unwrap();
     let max = gltf.accessors().next().unwrap().max().unwrap();
-    assert_eq!(max, gltf::json::Value::from(vec![1.0, 0.25, 1.0]));
-    assert_eq!(parse(&bytes, Format::Glb).unwrap().0.positions, raised);
+    assert_eq!(max, ::gltf::json::Value::from(vec![1.0, 0.25, 1.0]));
+    assert_eq!(parse(&bytes, Format::Glb, Path::new(".")).unwrap().0.positions, raised);
 }
 
 #[test]
 fn bad_meshes_are_errors_not_panics() {
     let too_far = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
-    assert!(parse(too_far, Format::Obj).is_err(), "a face beyond the vertices");
+    assert!(parse(too_far, Format::Obj, Path::new(".")).is_err(), "a face beyond the vertices");
     let nan = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                 element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n";
-    assert!(matches!(parse(nan, Format::Ply), Err(MeshError::NotFinite(1)) | Err(MeshError::Parse { .. })));
+    assert!(matches!(parse(nan, Format::Ply, Path::new(".")), Err(MeshError::NotFinite(1)) | Err(MeshError::Parse { .. })));
     let out = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                 element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
-    assert!(matches!(parse(out, Format::Ply), Err(MeshError::IndexOutOfRange { face: 0, vertex: 7, count: 3 })));
-    assert!(matches!(parse(b"not a mesh at all", Format::Stl), Err(MeshError::Parse { .. })));
+    assert!(matches!(parse(out, Format::Ply, Path::new(".")), Err(MeshError::IndexOutOfRange { face: 0, vertex: 7, count: 3 })));
+    assert!(matches!(parse(b"not a mesh at all", Format::Stl, Path::new(".")), Err(MeshError::Parse { .. })));
     assert!(matches!(Format::of(Path::new("a.fbx")), Err(MeshError::Format(_))));
 }
