@@ -244,6 +244,35 @@ fn a_survey_walks_every_bough_and_says_how_each_walk_ended() {
 }
 
 #[test]
+fn deform_writes_a_gltf_file_back_standing_alone_in_another_folder() {
+    use bevy::math::Vec3;
+    use canopy::spatial::mesh_io::{self, Format};
+    let input = Path::new("scenes/props/boulder.gltf");
+    let (boulder, _) = mesh_io::read(input).unwrap();
+    // Four vertices around the boulder's top outline its cap.
+    let top = boulder.positions.iter().copied().fold(Vec3::NEG_INFINITY, |a, p| if p.y > a.y { p } else { a });
+    let nearest = |to: Vec3| {
+        let p = *boulder.positions.iter().min_by(|a, b| a.distance(to).total_cmp(&b.distance(to))).unwrap();
+        format!("{}:{}:{}", p.x, p.y, p.z)
+    };
+    let around = [Vec3::X, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Z].map(|d| nearest(top + d * 0.25 - Vec3::Y * 0.05));
+    let folder = tempfile::tempdir().unwrap();
+    let out = folder.path().join("boulder.gltf");
+    let args = ["deform", input.to_str().unwrap(), "--region", &around.join(","), "--k", "0.9", "--out", out.to_str().unwrap()];
+    let output = canopy(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    // Read where it was written, with no boulder.bin or boulder.png beside it.
+    let bytes = std::fs::read(&out).unwrap();
+    let (shrunk, _) = mesh_io::parse(&bytes, Format::Gltf, folder.path()).unwrap();
+    assert_eq!((shrunk.positions.len(), &shrunk.triangles), (boulder.positions.len(), &boulder.triangles));
+    let moved = boulder.positions.iter().zip(&shrunk.positions).filter(|(a, b)| a != b).count();
+    assert!(moved > 0 && moved < boulder.positions.len() / 2, "{moved} vertices moved");
+    let drawn = mesh_io::drawing(&bytes, Format::Gltf, folder.path()).unwrap();
+    let original = mesh_io::drawing(&std::fs::read(input).unwrap(), Format::Gltf, Path::new("scenes/props")).unwrap();
+    assert_eq!(drawn.images, original.images);
+}
+
+#[test]
 fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     use canopy::soft_body::sample;
     use canopy::spatial::mesh_io;

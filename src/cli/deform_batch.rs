@@ -100,7 +100,7 @@ pub fn run(
     })?;
     let (vertices, triangles) = (whole.positions.len(), whole.triangles.len());
     if mesh_io::Format::of(output).ok() == Some(source.format) {
-        let bytes = source.written_back(&shrunk.positions, &whole.triangles).map_err(located(output))?;
+        let bytes = source.written_back(&shrunk.positions, &whole.triangles, output).map_err(located(output))?;
         std::fs::write(output, bytes).map_err(|error| located(output)(MeshError::Io(error)))?;
     } else {
         let written = TriangleMesh { positions: shrunk.positions, triangles: whole.triangles };

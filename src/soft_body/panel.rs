@@ -80,7 +80,7 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
         }
     });
     ui.horizontal(|ui| {
-        for extension in ["obj", "ply"] {
+        for extension in body.save_extensions() {
             let label = format!("Save {}", extension.to_uppercase());
             if ui.button(label).on_hover_text("the surface shown, in meshes/").clicked() {
                 save = Some(extension);

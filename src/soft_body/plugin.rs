@@ -187,10 +187,22 @@ impl SoftBody {
         }
     }
 
-    /// Writes surface `which` (0 the original) of the soft body named `entity` as OBJ or PLY
-    /// (by `extension`) in `folder` (made if needed), never over an earlier file; returns
-    /// where, or why not. In the format of the mesh file it was read from, the file is written
-    /// back with only the moved positions (and their normals) changed.
+    /// The extensions a surface can be saved with: OBJ and PLY, and the glTF file's own
+    /// (`gltf` or `glb`) for a body read from one.
+    pub fn save_extensions(&self) -> Vec<&'static str> {
+        let own = self.file.as_ref().and_then(|file| match file.2.format {
+            mesh_io::Format::Gltf => Some("gltf"),
+            mesh_io::Format::Glb => Some("glb"),
+            _ => None,
+        });
+        ["obj", "ply"].into_iter().chain(own).collect()
+    }
+
+    /// Writes surface `which` (0 the original) of the soft body named `entity` as OBJ, PLY or
+    /// glTF (by `extension`, one of [`Self::save_extensions`]) in `folder` (made if needed),
+    /// never over an earlier file; returns where, or why not. In the format of the mesh file
+    /// it was read from, the file is written back with only the moved positions (and their
+    /// normals, or bounds) changed.
     pub fn save(&self, folder: &Path, entity: &str, which: usize, extension: &str) -> Result<PathBuf, String> {
         let mesh = self.bench.mesh(which).ok_or_else(|| format!("there is no model {which}"))?;
         std::fs::create_dir_all(folder).map_err(|error| format!("{}: {error}", folder.display()))?;
@@ -200,7 +212,7 @@ impl SoftBody {
         let same_format = |source: &&Arc<DecodedMesh>| mesh_io::Format::of(&path).ok() == Some(source.2.format);
         match self.file.as_ref().filter(same_format) {
             Some(file) => {
-                let bytes = file.2.written_back(&mesh.positions, &mesh.triangles).map_err(|e| failed(&e))?;
+                let bytes = file.2.written_back(&mesh.positions, &mesh.triangles, &path).map_err(|e| failed(&e))?;
                 std::fs::write(&path, bytes).map_err(|e| failed(&e))?;
             }
             None => mesh_io::write(&mesh, &path).map_err(|e| failed(&e))?,

@@ -166,7 +166,7 @@ pub fn read_source(path: &Path) -> Result<(TriangleMesh, MeshReport, Source), Me
 
 /// The folder a file's relative references are found in.
 pub fn folder_of(path: &Path) -> &Path {
-    path.parent().unwrap_or(Path::new("."))
+    path.parent().filter(|folder| !folder.as_os_str().is_empty()).unwrap_or(Path::new("."))
 }
 
 /// The contents of the mesh file at `path` (at most [`MAX_FILE_BYTES`]) and its format.
@@ -402,18 +402,21 @@ pub struct Source {
 }
 
 impl Source {
-    /// The file's contents with each vertex at `positions` (indexed like the welded mesh read
-    /// from it): every line or value of a vertex that did not move, and everything that is
-    /// not a position, kept as it was; the normals of moved vertices recomputed (OBJ `vn`
-    /// lines used by a moved corner, PLY `nx ny nz`), a glTF position accessor's bounds kept
-    /// true. STL files are read, not written.
-    pub fn written_back(&self, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Vec<u8>, MeshError> {
+    /// The file's contents, for writing to `to`, with each vertex at `positions` (indexed like
+    /// the welded mesh read from it): every line or value of a vertex that did not move, and
+    /// everything that is not a position, kept as it was; the normals of moved vertices
+    /// recomputed (OBJ `vn` lines used by a moved corner, PLY `nx ny nz`), a glTF position
+    /// accessor's bounds kept true (and a glTF file's buffers and images in files beside it
+    /// taken into it where `to` is in another folder). STL files are read, not written.
+    pub fn written_back(&self, positions: &[Vec3], triangles: &[[u32; 3]], to: &Path) -> Result<Vec<u8>, MeshError> {
         let file_positions: Vec<Vec3> = self.file_vertices.iter().map(|&v| positions[v as usize]).collect();
         match self.format {
             Format::Obj => Ok(obj_written_back(&self.bytes, &file_positions)),
             Format::Ply => ply_written_back(&self.bytes, &file_positions, &self.file_vertices, positions, triangles),
             Format::Gltf | Format::Glb => {
-                GltfFile::open(&self.bytes, &self.folder)?.written_back(&self.bytes, &file_positions)
+                let folder = |path: &Path| std::fs::canonicalize(path).ok();
+                let elsewhere = folder(folder_of(to)).is_none_or(|to| Some(to) != folder(&self.folder));
+                GltfFile::open(&self.bytes, &self.folder)?.written_back(&self.bytes, &file_positions, elsewhere)
             }
             Format::Stl => Err(MeshError::Format("an STL file (STL is read, not written)".into())),
         }

@@ -266,8 +266,10 @@ impl GltfFile {
     /// the moved positions changed. Otherwise its JSON is written anew (its members in
     /// alphabetical order, every value kept) and a changed buffer goes back where it came
     /// from: the binary chunk or a data URI; a buffer in a file beside the text file is written
-    /// into it as a data URI, leaving that file as it was for whatever else uses it.
-    pub(super) fn written_back(&self, bytes: &[u8], positions: &[Vec3]) -> Result<Vec<u8>, MeshError> {
+    /// into it as a data URI, leaving that file as it was for whatever else uses it. With
+    /// `elsewhere` (the result goes to another folder, where the files beside this one are
+    /// not), every buffer and image still in a file beside it goes into it as a data URI too.
+    pub(super) fn written_back(&self, bytes: &[u8], positions: &[Vec3], elsewhere: bool) -> Result<Vec<u8>, MeshError> {
         let placements = self.placements()?;
         let mut buffers = self.buffers.clone();
         let mut changed_buffers = vec![false; buffers.len()];
@@ -310,7 +312,25 @@ impl GltfFile {
                 bounds.push((accessor.index(), low, high));
             }
         }
-        if !changed_buffers.contains(&true) {
+        let beside = |uri: &str| !uri.starts_with("data:");
+        let buffer_uris: Vec<Option<&str>> = self
+            .document
+            .buffers()
+            .map(|buffer| match buffer.source() {
+                gltf::buffer::Source::Uri(uri) if beside(uri) => Some(uri),
+                _ => None,
+            })
+            .collect();
+        let image_uris: Vec<Option<&str>> = self
+            .document
+            .images()
+            .map(|image| match image.source() {
+                gltf::image::Source::Uri { uri, .. } if beside(uri) => Some(uri),
+                _ => None,
+            })
+            .collect();
+        let inline_files = elsewhere && buffer_uris.iter().chain(&image_uris).any(Option::is_some);
+        if !changed_buffers.contains(&true) && !inline_files {
             return Ok(bytes.to_vec());
         }
         let binary = bytes.starts_with(b"glTF");
@@ -332,7 +352,7 @@ impl GltfFile {
         }
         let mut blob = None;
         for (index, buffer) in self.document.buffers().enumerate() {
-            if !changed_buffers[index] {
+            if !changed_buffers[index] && !(inline_files && buffer_uris[index].is_some()) {
                 continue;
             }
             match buffer.source() {
@@ -343,6 +363,20 @@ impl GltfFile {
                     json_changed = true;
                 }
             }
+        }
+        if inline_files {
+            for (index, image) in self.document.images().enumerate() {
+                let Some(uri) = image_uris[index] else { continue };
+                let mut budget = MAX_FILE_BYTES;
+                let data = uri_bytes(uri, &self.folder, &mut budget).map_err(|m| error(format!("image {index}: {m}")))?;
+                let mime = match image.source() {
+                    gltf::image::Source::Uri { mime_type: Some(mime), .. } => mime.to_string(),
+                    _ if data.starts_with(b"\x89PNG") => "image/png".into(),
+                    _ => "image/jpeg".into(),
+                };
+                root["images"][index]["uri"] = format!("data:{mime};base64,{}", data_encoding::BASE64.encode(&data)).into();
+            }
+            json_changed = true;
         }
         let json = match json_changed {
             true => serde_json::to_vec(&root).map_err(|e| error(e.to_string()))?,

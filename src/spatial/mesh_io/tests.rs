@@ -82,11 +82,11 @@ fn a_ply_written_back_keeps_its_other_properties_and_unmoved_vertices() {
                 0 0 0 0 1 0 10\n1 0 0 0 1 0 20\n1 0 1 0 1 0 30\n0 0 1 0 1 0 40\n3 0 2 1\n3 0 3 2\n";
     let (mesh, _, source) = parse_source(ply.to_vec(), Format::Ply, Path::new(".")).unwrap();
     // Unmoved: the file itself.
-    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), ply.to_vec());
+    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles, Path::new("out")).unwrap(), ply.to_vec());
     // One corner raised: its position and normal change, nothing else.
     let mut moved = mesh.positions.clone();
     moved[2].y = 0.5;
-    let bytes = source.written_back(&moved, &mesh.triangles).unwrap();
+    let bytes = source.written_back(&moved, &mesh.triangles, Path::new("out")).unwrap();
     let (read_back, _, _) = parse_in_order(&bytes, Format::Ply, Path::new(".")).unwrap();
     assert_eq!(read_back.positions, moved);
     let text = String::from_utf8(bytes).unwrap();
@@ -144,11 +144,11 @@ fn a_binary_gltf_mesh_is_read() {
 fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds() {
     let file = square_glb(4);
     let (mesh, _, source) = parse_source(file.clone(), Format::Glb, Path::new(".")).unwrap();
-    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), file, "unmoved: the file itself");
+    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles, Path::new("out")).unwrap(), file, "unmoved: the file itself");
     // A corner pulled in: its floats change in place, the bounds stay, nothing else moves.
     let mut inward = mesh.positions.clone();
     inward[2] = Vec3::new(0.5, 0.0, 1.0);
-    let bytes = source.written_back(&inward, &mesh.triangles).unwrap();
+    let bytes = source.written_back(&inward, &mesh.triangles, Path::new("out")).unwrap();
     assert_eq!(bytes.len(), file.len());
     let differ: Vec<usize> = (0..file.len()).filter(|&i| bytes[i] != file[i]).collect();
     assert!(!differ.is_empty() && differ[differ.len() - 1] - differ[0] < 4, "one float's bytes: {differ:?}");
@@ -156,7 +156,7 @@ fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds(
     // A corner raised above the old bounds: the accessor's max follows.
     let mut raised = mesh.positions.clone();
     raised[2].y = 0.25;
-    let bytes = source.written_back(&raised, &mesh.triangles).unwrap();
+    let bytes = source.written_back(&raised, &mesh.triangles, Path::new("out")).unwrap();
     let gltf = ::gltf::Gltf::from_slice(&bytes).unwrap();
     let max = gltf.accessors().next().unwrap().max().unwrap();
     assert_eq!(max, ::gltf::json::Value::from(vec![1.0, 0.25, 1.0]));

@@ -135,10 +135,11 @@ fn drawing_keeps_materials_texture_coordinates_and_mirroring() {
 fn a_text_gltf_written_back_keeps_everything_but_the_moved_positions() {
     let file = square_gltf(&inline(), 92, r#","translation":[0,2,0]"#, r#","extras":{"author":"a user"}"#);
     let (mesh, _, source) = parse_source(file.clone().into_bytes(), Format::Gltf, here()).unwrap();
-    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles).unwrap(), file.as_bytes(), "unmoved: the file");
+    let to = Path::new("moved.gltf");
+    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles, to).unwrap(), file.as_bytes(), "unmoved: the file");
     let mut moved = mesh.positions.clone();
     moved[2] = Vec3::new(1.0, 2.5, 1.0);
-    let bytes = source.written_back(&moved, &mesh.triangles).unwrap();
+    let bytes = source.written_back(&moved, &mesh.triangles, to).unwrap();
     let (read, _) = parse(&bytes, Format::Gltf, here()).unwrap();
     assert_eq!(read.positions, moved);
     let was: serde_json::Value = serde_json::from_str(&file).unwrap();
@@ -158,11 +159,23 @@ fn a_buffer_beside_the_file_is_left_as_it_was_and_the_moved_one_goes_inline() {
     std::fs::write(&beside, square_buffer()).unwrap();
     let file = square_gltf("square.bin", 92, "", "");
     let (mesh, _, source) = parse_source(file.into_bytes(), Format::Gltf, folder.path()).unwrap();
+    let inline = |bytes: &[u8]| {
+        let root: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+        root["buffers"][0]["uri"].as_str().unwrap().starts_with("data:application/octet-stream;base64,")
+    };
+    // Beside the file and unmoved: the file as it was, its buffer still beside it.
+    let same_folder = folder.path().join("copy.gltf");
+    let bytes = source.written_back(&mesh.positions, &mesh.triangles, &same_folder).unwrap();
+    assert!(!inline(&bytes));
     let mut moved = mesh.positions.clone();
     moved[0].y = -0.5;
-    let bytes = source.written_back(&moved, &mesh.triangles).unwrap();
+    let bytes = source.written_back(&moved, &mesh.triangles, &same_folder).unwrap();
     assert_eq!(std::fs::read(&beside).unwrap(), square_buffer());
-    let root: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
-    assert!(root["buffers"][0]["uri"].as_str().unwrap().starts_with("data:application/octet-stream;base64,"));
+    assert!(inline(&bytes));
     assert_eq!(parse(&bytes, Format::Gltf, here()).unwrap().0.positions, moved);
+    // Unmoved but written to another folder: the buffer goes inline, so the copy stands alone.
+    let elsewhere = tempfile::tempdir().unwrap();
+    let bytes = source.written_back(&mesh.positions, &mesh.triangles, &elsewhere.path().join("copy.gltf")).unwrap();
+    assert!(inline(&bytes));
+    assert_eq!(parse(&bytes, Format::Gltf, elsewhere.path()).unwrap().0.positions, mesh.positions);
 }
