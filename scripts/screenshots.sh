@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-scenes=(demo biceps tree forest sloth generated_forest terrain world valley)
+scenes=(demo biceps tree forest sloth generated_forest terrain world valley props)
 for name in "${scenes[@]}"; do
     cargo run --quiet -- run "scenes/$name.yaml" --frames 60 --size 640x360 --screenshot "docs/images/$name.png"
     echo "docs/images/$name.png"
