@@ -207,6 +207,31 @@ fn scanned_tree_models_import_as_scenes_and_bad_ones_are_located() {
     let sloth = state["entities"].as_array().unwrap().iter().find(|e| e["name"] == "sloth").unwrap();
     assert!(sloth["distance_travelled"].as_f64().unwrap() > 0.5, "{sloth}");
 
+    // Thin twigs kept to draw: every cylinder of the piece is there, the twigs are supports no
+    // thicker than the least radius, offered to no sloth.
+    let drawn =
+        canopy(&["tree", "import", &scan, "--min-radius-m", "0.01", "--draw-thin", "--out", &out("drawn.yaml")]);
+    assert!(drawn.status.success(), "{}", stderr(&drawn));
+    assert!(String::from_utf8_lossy(&drawn.stdout).contains("thinner than 0.01 m drawn, never gripped"));
+    let scene = std::fs::read_to_string(out("drawn.yaml")).unwrap();
+    assert!(scene.contains("grip_min_radius_m: 0.01"), "{scene}");
+    let dump = out("drawn.json");
+    assert!(canopy(&["run", &out("drawn.yaml"), "--frames", "1", "--size", "64x48", "--dump", &dump]).status.success());
+    let state: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&dump).unwrap()).unwrap();
+    let tree = state["entities"].as_array().unwrap().iter().find(|e| e["name"] == "scan").unwrap();
+    let supports = tree["supports"].as_array().unwrap();
+    let thickest =
+        |s: &serde_json::Value| s["radii"].as_array().unwrap().iter().map(|r| r.as_f64().unwrap()).fold(0.0, f64::max);
+    let (gripped, twigs): (Vec<_>, Vec<_>) = supports.iter().partition(|s| s["gripped"] == true);
+    assert!(twigs.len() > 10 && gripped.len() > 100, "{} twigs, {} gripped", twigs.len(), gripped.len());
+    let least = f64::from(0.01f32);
+    assert!(twigs.iter().all(|s| thickest(s) < least) && gripped.iter().all(|s| thickest(s) >= least));
+    let twig = twigs[0]["name"].as_str().unwrap();
+    let on_twig = scene.replace("entities:\n", &format!("entities:\n  - sloth: {{ support: scan/{twig} }}\n"));
+    std::fs::write(out("on_twig.yaml"), on_twig).unwrap();
+    let refused = canopy(&["check", &out("on_twig.yaml")]);
+    assert!(stderr(&refused).contains(&format!("`scan/{twig}` is drawn but never gripped")), "{}", stderr(&refused));
+
     // The same model inline, in SimpleForest's CSV, with a parent that is no cylinder.
     let csv = "ID,parentID,startX,startY,startZ,endX,endY,endZ,radius\n0,-1,0,0,0,0,0,1,0.1\n1,7,0,0,1,0,0,2,0.1\n";
     std::fs::write(out("bad.csv"), csv).unwrap();
@@ -258,7 +283,16 @@ fn deform_writes_a_gltf_file_back_standing_alone_in_another_folder() {
     let around = [Vec3::X, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Z].map(|d| nearest(top + d * 0.25 - Vec3::Y * 0.05));
     let folder = tempfile::tempdir().unwrap();
     let out = folder.path().join("boulder.gltf");
-    let args = ["deform", input.to_str().unwrap(), "--region", &around.join(","), "--k", "0.9", "--out", out.to_str().unwrap()];
+    let args = [
+        "deform",
+        input.to_str().unwrap(),
+        "--region",
+        &around.join(","),
+        "--k",
+        "0.9",
+        "--out",
+        out.to_str().unwrap(),
+    ];
     let output = canopy(&args);
     assert!(output.status.success(), "{}", stderr(&output));
     // Read where it was written, with no boulder.bin or boulder.png beside it.

@@ -38,6 +38,10 @@ pub struct ImportArgs {
     /// Drop cylinders thinner than this radius in metres, and what grows from them.
     #[arg(long, default_value_t = 0.0)]
     min_radius_m: f32,
+    /// Keep the cylinders thinner than `--min-radius-m` instead, as supports drawn but never
+    /// gripped (the tree's `grip_min_radius_m`).
+    #[arg(long)]
+    draw_thin: bool,
     /// Drop a support's points within this many metres of the line through their neighbours.
     #[arg(long, default_value_t = 0.0)]
     simplify_m: f32,
@@ -61,8 +65,8 @@ const TREE_NAME: &str = "scan";
 
 /// The longest bough of `supports` (an imported tree's) that a sloth walks along, and where on
 /// it to place the sloth, 0 to 1 of its length.
-fn walked_bough(supports: &[SupportSpec]) -> Option<(String, f32)> {
-    let tree = Tree::build(supports).ok()?;
+fn walked_bough(supports: &[SupportSpec], grip_min_radius_m: f32) -> Option<(String, f32)> {
+    let tree = Tree { grip_min_radius_m, ..Tree::build(supports).ok()? };
     let paths = Supports::new([(TREE_NAME, &tree)]);
     let walks = survey(&paths, Proportions::default(), FREE_SPEED, 1.0, 60.0);
     let walked = |walk: &&BoughWalk| {
@@ -172,8 +176,13 @@ impl ImportArgs {
                 return ExitCode::from(2);
             }
         };
-        let options =
-            ImportOptions { min_radius_m: self.min_radius_m, simplify_m: self.simplify_m, keep_base: self.keep_base };
+        let options = ImportOptions {
+            min_radius_m: self.min_radius_m,
+            draw_thin: self.draw_thin,
+            simplify_m: self.simplify_m,
+            keep_base: self.keep_base,
+        };
+        let grip_min_radius_m = if self.draw_thin { self.min_radius_m } else { 0.0 };
         let imported = match supports(&model, &options) {
             Ok(imported) => imported,
             Err(error) => {
@@ -185,7 +194,7 @@ impl ImportArgs {
             return refused;
         }
         let sloth = if self.sloth {
-            match walked_bough(&imported.supports) {
+            match walked_bough(&imported.supports, grip_min_radius_m) {
                 Some(bough) => Some(bough),
                 None => {
                     eprintln!("{path}: no bough of the tree that a sloth walks along");
@@ -195,11 +204,12 @@ impl ImportArgs {
         } else {
             None
         };
-        let text = imported_scene_text(&self.file.display().to_string(), model.format, &imported.supports, sloth);
+        let file = self.file.display().to_string();
+        let text = imported_scene_text(&file, model.format, &imported.supports, grip_min_radius_m, sloth);
         match std::fs::write(&self.out, text) {
             Ok(()) => {
                 println!(
-                    "{}: {} supports from {} of the {} cylinders ({} thinner than {} m dropped, {} in fragments \
+                    "{}: {} supports from {} of the {} cylinders ({} thinner than {} m {}, {} in fragments \
                      connected to nothing)",
                     self.out.display(),
                     imported.supports.len(),
@@ -207,6 +217,7 @@ impl ImportArgs {
                     model.cylinders.len(),
                     imported.thin,
                     self.min_radius_m,
+                    if self.draw_thin { "drawn, never gripped" } else { "dropped" },
                     imported.fragments
                 );
                 ExitCode::SUCCESS
@@ -219,12 +230,14 @@ impl ImportArgs {
     }
 }
 
-/// A scene holding the tree of `supports`, imported from `file`, with a camera that frames it,
-/// the ground under it, and a sloth on autorun on the support and at the place `sloth` names.
+/// A scene holding the tree of `supports` (those thinner than `grip_min_radius_m` never
+/// gripped), imported from `file`, with a camera that frames it, the ground under it, and a
+/// sloth on autorun on the support and at the place `sloth` names.
 fn imported_scene_text(
     file: &str,
     format: QsmFormat,
     supports: &[SupportSpec],
+    grip_min_radius_m: f32,
     sloth: Option<(String, f32)>,
 ) -> String {
     let points = supports.iter().flat_map(|s| match &s.shape {
@@ -264,7 +277,11 @@ fn imported_scene_text(
         low.y,
         centre.z
     );
-    let _ = writeln!(text, "  - name: {TREE_NAME}\n    tree:\n      supports:");
+    let _ = writeln!(text, "  - name: {TREE_NAME}\n    tree:");
+    if grip_min_radius_m > 0.0 {
+        let _ = writeln!(text, "      grip_min_radius_m: {grip_min_radius_m}");
+    }
+    let _ = writeln!(text, "      supports:");
     for support in supports {
         let _ = writeln!(text, "        - {}", support_yaml(support, 4));
     }

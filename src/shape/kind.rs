@@ -3,7 +3,7 @@
 
 use super::def::ShapeDef;
 use super::mesh::MeshParts;
-use super::plugin::{self, Shape, ShapePart, ShapeParams, ShapePlugin};
+use super::plugin::{self, Shape, ShapeParams, ShapePart, ShapePlugin};
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::yaml::FileError;
 use crate::raster::RasterMesh;
@@ -44,7 +44,10 @@ impl EntityKind for ShapeKind {
             (None, None) => Err(cx.locate(
                 ShapeKind::KEY,
                 cx.kind_index,
-                format!("{}: expected `primitive: box` (or sphere, cylinder, plane) or `mesh: FILE`", cx.field("primitive")),
+                format!(
+                    "{}: expected `primitive: box` (or sphere, cylinder, plane) or `mesh: FILE`",
+                    cx.field("primitive")
+                ),
             )),
             (None, Some(_)) if def.texture.is_some() => {
                 Err(cx.field_error("texture", 0, "texture", "a mesh shape takes its textures from its file"))

@@ -24,7 +24,8 @@ impl MeshParts {
     /// The parts of the mesh file `file`, decoded for the first shape that names it; a file
     /// that is no mesh, or an image in it that is none, is an error at the entity's `mesh`.
     pub fn resolve(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<Self>, FileError> {
-        let located = |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
+        let located =
+            |message: String| cx.field_error("mesh", 0, "mesh", format!("{}: {message}", file.path.display()));
         let format = mesh_io::Format::of(file.path).map_err(|error| located(error.to_string()))?;
         file.decoded(|path, bytes| {
             let drawing = mesh_io::drawing(bytes, format, mesh_io::folder_of(path)).map_err(|e| e.to_string())?;
@@ -40,7 +41,9 @@ impl MeshParts {
             .iter()
             .enumerate()
             .map(|(index, bytes)| {
-                bytes.as_deref().map(|bytes| Texture::decode(bytes).map(Arc::new).map_err(|e| format!("image {index}: {e}")))
+                bytes
+                    .as_deref()
+                    .map(|bytes| Texture::decode(bytes).map(Arc::new).map_err(|e| format!("image {index}: {e}")))
                     .transpose()
             })
             .collect::<Result<Vec<_>, String>>()?;

@@ -23,4 +23,4 @@ pub mod plugin;
 
 pub use def::ShapeDef;
 pub use kind::ShapeKind;
-pub use plugin::{Shape, ShapePart, ShapeParams, ShapePlugin, ShapeSystems};
+pub use plugin::{Shape, ShapeParams, ShapePart, ShapePlugin, ShapeSystems};

@@ -158,10 +158,15 @@ fn spin_shapes(time: Res<Time>, mut shapes: Query<&mut ShapeParams>) {
     }
 }
 
+/// What writing a shape's parameters back changes: its transform, and the colour of its mesh or
+/// of its parts.
+type ShapeOutputs =
+    (&'static ShapeParams, &'static mut Transform, Option<&'static mut RasterMesh>, Option<&'static Children>);
+
 /// Writes edited or spun shape parameters into the transform and the colour of the mesh, or
 /// of a mesh shape's parts.
 fn write_back_shapes(
-    mut shapes: Query<(&ShapeParams, &mut Transform, Option<&mut RasterMesh>, Option<&Children>), Changed<ShapeParams>>,
+    mut shapes: Query<ShapeOutputs, Changed<ShapeParams>>,
     mut parts: Query<(&ShapePart, &mut RasterMesh), Without<ShapeParams>>,
 ) {
     for (params, mut transform, mesh, children) in &mut shapes {

@@ -227,6 +227,9 @@ impl SlothDef {
             (0..supports.paths.len()).filter(|&i| supports.paths[i].label.ends_with(&suffix)).collect();
         match matching.as_slice() {
             [index] => Ok(*index),
+            [] if supports.ungripped.iter().any(|label| *label == self.support || label.ends_with(&suffix)) => {
+                Err(format!("`{}` is drawn but never gripped: thinner than its tree's grip_min_radius_m", self.support))
+            }
             [] => {
                 let known: Vec<&str> = supports.paths.iter().map(|p| p.label.as_str()).take(12).collect();
                 Err(format!("no support named `{}`; the scene has: {}", self.support, known.join(", ")))

@@ -131,11 +131,14 @@ impl SupportPath {
     }
 }
 
-/// The supports of a scene.
+/// The supports of a scene that the sloth may grip.
 #[derive(Debug, Clone, Default)]
 pub struct Supports {
-    /// Every support, tree by tree.
+    /// Every support offered to grip, tree by tree.
     pub paths: Vec<SupportPath>,
+    /// The labels of the supports drawn but never gripped (thinner than their tree's
+    /// `grip_min_radius_m`), for messages.
+    pub ungripped: Vec<String>,
     bvh: SegmentBvh,
     /// The path each segment of `bvh` belongs to, and the arc length at its start.
     owners: Vec<(usize, f32, f32)>,
@@ -153,14 +156,28 @@ pub struct SupportHit {
 }
 
 impl Supports {
-    /// Collects the supports of named trees.
+    /// Collects the supports of named trees that may be gripped.
     pub fn new<'a>(trees: impl IntoIterator<Item = (&'a str, &'a Tree)>) -> Self {
         let mut paths: Vec<SupportPath> = Vec::new();
+        let mut ungripped = Vec::new();
         for (name, tree) in trees {
-            let first = paths.len();
-            for support in &tree.supports {
+            // Each support's index among the paths, if it is one.
+            let mut next = paths.len();
+            let index_of: Vec<Option<usize>> = (0..tree.supports.len())
+                .map(|index| {
+                    tree.gripped(index).then(|| {
+                        next += 1;
+                        next - 1
+                    })
+                })
+                .collect();
+            for (index, support) in tree.supports.iter().enumerate() {
                 let label = format!("{name}/{}", support.name);
-                let parent = support.parent.map(|p| first + p);
+                if index_of[index].is_none() {
+                    ungripped.push(label);
+                    continue;
+                }
+                let parent = support.parent.and_then(|p| index_of[p]);
                 paths.push(SupportPath::new(
                     label,
                     support.kind,
@@ -178,7 +195,7 @@ impl Supports {
                 owners.push((index, path.arc[i], path.arc[i + 1] - path.arc[i]));
             }
         }
-        Self { paths, bvh: SegmentBvh::new(segments), owners }
+        Self { paths, ungripped, bvh: SegmentBvh::new(segments), owners }
     }
 
     /// The support labelled `label` (`tree/support`).
@@ -262,5 +279,35 @@ mod tests {
         let (surface, s) = supports.paths[0].nearest(Vec3::new(1.3, 0.0, 0.6));
         assert!((s - hit.s).abs() < 1e-5 && (surface.distance - hit.surface.distance).abs() < 1e-6);
         assert_eq!(supports.clearance(Vec3::new(5.0, 0.0, 0.0), 0.5), 0.5);
+    }
+
+    #[test]
+    fn supports_thinner_than_the_grip_radius_are_left_out_and_parents_follow() {
+        // A twig described first, a trunk, and a bough growing from the trunk.
+        let line = |name: &str, x: f32, radius: f32| SupportSpec {
+            name: name.into(),
+            shape: Shape::Polyline {
+                points: vec![Vec3::new(x, 0.0, 0.0), Vec3::new(x, 1.0, 0.0)],
+                radii: vec![radius; 2],
+            },
+            kind: None,
+        };
+        let bough = SupportSpec {
+            name: "bough".into(),
+            shape: Shape::Attached {
+                parent: "trunk".into(),
+                points: vec![Vec3::new(1.0, 0.5, 0.0), Vec3::new(2.0, 0.6, 0.0)],
+                radii: vec![0.05, 0.04],
+            },
+            kind: None,
+        };
+        let mut tree = Tree::build(&[line("twig", 0.0, 0.004), line("trunk", 1.0, 0.2), bough]).unwrap();
+        tree.grip_min_radius_m = 0.01;
+        let supports = Supports::new([("t", &tree)]);
+        let labels: Vec<&str> = supports.paths.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(labels, ["t/trunk", "t/bough"]);
+        assert_eq!(supports.paths[1].parent, Some(0), "the bough still grows from the trunk");
+        assert_eq!(supports.ungripped, ["t/twig"]);
+        assert!(supports.nearest(Vec3::new(0.0, 0.5, 0.0), 0.5).is_none(), "the twig is not met");
     }
 }

@@ -189,7 +189,7 @@ pub fn read_mesh(file: &mut ReferencedFile, cx: &EntityContext) -> Result<Arc<De
     file.decoded(|path, bytes| {
         mesh_io::parse_source(bytes.to_vec(), format, mesh_io::folder_of(path)).map_err(|error| error.to_string())
     })
-        .map_err(located)
+    .map_err(located)
 }
 
 /// A mesh file read: the welded mesh, what welding found, and the file for writing back.

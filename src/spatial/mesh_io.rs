@@ -7,8 +7,8 @@
 
 mod gltf;
 
-use bevy::math::{Vec2, Vec3};
 use crate::foundation::values::FileType;
+use bevy::math::{Vec2, Vec3};
 use gltf::GltfFile;
 use std::collections::HashMap;
 use std::io::{Cursor, Write};
@@ -139,7 +139,6 @@ pub struct Drawing {
     /// The file's images by index, encoded; `None` for an image no part uses.
     pub images: Vec<Option<Vec<u8>>>,
 }
-
 
 /// What reading a mesh found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]

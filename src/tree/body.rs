@@ -39,10 +39,12 @@ impl DumpState for TreeBody {
             .tree
             .supports
             .iter()
-            .map(|s| {
+            .enumerate()
+            .map(|(index, s)| {
                 json!({
                     "name": s.name,
                     "kind": s.kind.key(),
+                    "gripped": self.tree.gripped(index),
                     "points": s.points.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
                     "radii": s.radii,
                 })

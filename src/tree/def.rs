@@ -45,6 +45,11 @@ pub struct TreeDef {
     /// first point when the scene loads, so that its heights count from the ground.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground: Option<String>,
+    /// Supports whose every radius is below this, metres, are drawn but never gripped: the
+    /// sloth neither walks on them nor meets them (twigs that would bend under it); 0, the
+    /// default, offers every support.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub grip_min_radius_m: f32,
     /// How far each such support was raised, by name: found when the scene is built, and kept
     /// through edits in the window.
     #[serde(skip)]
@@ -71,9 +76,14 @@ pub struct ImportDef {
     /// when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub format: Option<QsmFormat>,
-    /// Cylinders thinner than this, metres of radius, are dropped with what grows from them.
+    /// Cylinders thinner than this, metres of radius, are dropped with what grows from them
+    /// (or drawn, as `thin_twigs` says).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub min_radius_m: f32,
+    /// What becomes of the cylinders thinner than `min_radius_m`: `drop` (the default), or
+    /// `draw`: supports of their own, drawn but never gripped.
+    #[serde(default, skip_serializing_if = "ThinTwigs::is_drop")]
+    pub thin_twigs: ThinTwigs,
     /// Points of a support within this many metres of the line through their neighbours are
     /// dropped.
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -90,6 +100,23 @@ fn is_zero(value: &f32) -> bool {
     *value == 0.0
 }
 
+/// What an imported tree does with the cylinders thinner than its least radius.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThinTwigs {
+    /// Left out, with everything growing from them.
+    #[default]
+    Drop,
+    /// Drawn, but never gripped.
+    Draw,
+}
+
+impl ThinTwigs {
+    fn is_drop(&self) -> bool {
+        *self == Self::Drop
+    }
+}
+
 impl ImportDef {
     /// What to keep and how to place it, or the field at fault and why.
     pub fn options(&self) -> Result<ImportOptions, String> {
@@ -98,7 +125,21 @@ impl ImportDef {
                 return Err(format!("import.{field}: expected metres from 0 to 1, found {value}"));
             }
         }
-        Ok(ImportOptions { min_radius_m: self.min_radius_m, simplify_m: self.simplify_m, keep_base: self.keep_base })
+        Ok(ImportOptions {
+            min_radius_m: self.min_radius_m,
+            draw_thin: self.thin_twigs == ThinTwigs::Draw,
+            simplify_m: self.simplify_m,
+            keep_base: self.keep_base,
+        })
+    }
+
+    /// The least radius gripped on the imported tree: the least radius kept, where thinner
+    /// twigs are drawn.
+    fn grip_min_radius_m(&self) -> f32 {
+        match self.thin_twigs {
+            ThinTwigs::Draw => self.min_radius_m,
+            ThinTwigs::Drop => 0.0,
+        }
     }
 }
 
@@ -251,6 +292,19 @@ impl SupportDef {
 impl TreeDef {
     /// The tree this definition describes, or the support and field at fault and why.
     pub fn build(&self) -> Result<Tree, TreeError> {
+        if !(0.0..=1.0).contains(&self.grip_min_radius_m) {
+            let message = format!("expected metres from 0 to 1, found {}", self.grip_min_radius_m);
+            return Err(TreeError { support: None, field: "grip_min_radius_m", message });
+        }
+        let grip_min_radius_m =
+            self.import.as_ref().map_or(0.0, ImportDef::grip_min_radius_m).max(self.grip_min_radius_m);
+        let mut tree = self.lifted()?;
+        tree.grip_min_radius_m = grip_min_radius_m;
+        Ok(tree)
+    }
+
+    /// The tree described, each support that forks from no other raised by its lift.
+    fn lifted(&self) -> Result<Tree, TreeError> {
         let mut specs = self.specs()?;
         if self.lifts.is_empty() {
             return Tree::build(&specs);

@@ -83,6 +83,10 @@ impl EntityKind for TreeKind {
                     let nth = earlier.iter().filter(|tree| tree.import.is_some()).count();
                     entity.locate("import", nth, message)
                 }
+                "grip_min_radius_m" => {
+                    let nth = earlier.iter().filter(|tree| tree.grip_min_radius_m != 0.0).count();
+                    entity.locate("grip_min_radius_m", nth, message)
+                }
                 _ => entity.locate("tree", earlier.len(), message),
             });
         };

@@ -168,9 +168,17 @@ pub struct Tree {
     /// How far each support that forks from no other was raised to stand on a terrain, by
     /// name (see the `ground` of a tree in a scene file); empty for a tree on nothing.
     pub lifts: Vec<(String, f32)>,
+    /// Supports whose every radius is below this, metres, are drawn but never gripped.
+    pub grip_min_radius_m: f32,
 }
 
 impl Tree {
+    /// Whether support `index` is offered to grip: some radius of it is at least
+    /// [`Self::grip_min_radius_m`].
+    pub fn gripped(&self, index: usize) -> bool {
+        self.supports[index].radii.iter().any(|&r| r >= self.grip_min_radius_m)
+    }
+
     /// Builds the supports described by `specs`, resolving forks from their parents (which may
     /// be described before or after them).
     pub fn build(specs: &[SupportSpec]) -> Result<Self, TreeError> {
@@ -185,7 +193,7 @@ impl Tree {
             build_support(specs, index, &mut built, &mut Vec::new())?;
         }
         let supports = built.into_iter().map(|s| s.expect("every support was built")).collect();
-        Ok(Self { supports, lifts: Vec::new() })
+        Ok(Self { supports, lifts: Vec::new(), grip_min_radius_m: 0.0 })
     }
 
     /// Every segment of every support, with its support's index.

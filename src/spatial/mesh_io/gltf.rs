@@ -142,7 +142,9 @@ impl GltfFile {
                 let colors = match primitive.get(&gltf::Semantic::Colors(0)) {
                     Some(accessor) => {
                         self.check(&accessor, Some(count))?;
-                        reader.read_colors(0).map_or_else(Vec::new, |read| read.into_rgb_f32().map(Vec3::from_array).collect())
+                        reader
+                            .read_colors(0)
+                            .map_or_else(Vec::new, |read| read.into_rgb_f32().map(Vec3::from_array).collect())
                     }
                     None => Vec::new(),
                 };
@@ -155,9 +157,9 @@ impl GltfFile {
                         error(format!("mesh {}: a base colour texture without its texture coordinates", mesh.index()))
                     })?;
                     self.check(&accessor, Some(count))?;
-                    uvs = reader.read_tex_coords(info.tex_coord()).map_or_else(Vec::new, |read| {
-                        read.into_f32().map(Vec2::from_array).collect()
-                    });
+                    uvs = reader
+                        .read_tex_coords(info.tex_coord())
+                        .map_or_else(Vec::new, |read| read.into_f32().map(Vec2::from_array).collect());
                     let gltf_texture = info.texture();
                     let image = gltf_texture.source();
                     if drawing.images[image.index()].is_none() {
@@ -199,10 +201,12 @@ impl GltfFile {
 
     /// The positions of a primitive as the file holds them.
     fn positions(&self, primitive: &gltf::Primitive) -> Result<Vec<Vec3>, MeshError> {
-        let accessor = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| error("a primitive without positions".into()))?;
+        let accessor =
+            primitive.get(&gltf::Semantic::Positions).ok_or_else(|| error("a primitive without positions".into()))?;
         self.check(&accessor, None)?;
         let reader = primitive.reader(|buffer| self.buffers.get(buffer.index()).map(Vec::as_slice));
-        let positions: Vec<Vec3> = reader.read_positions().map(|read| read.map(Vec3::from_array).collect()).unwrap_or_default();
+        let positions: Vec<Vec3> =
+            reader.read_positions().map(|read| read.map(Vec3::from_array).collect()).unwrap_or_default();
         if positions.len() != accessor.count() {
             return Err(error(format!("accessor {}: positions outside the file's buffers", accessor.index())));
         }
@@ -251,7 +255,10 @@ impl GltfFile {
         let stride = view.stride().unwrap_or(size).max(size);
         let needed = match accessor.count() {
             0 => Some(0),
-            n => (n - 1).checked_mul(stride).and_then(|s| s.checked_add(size)).and_then(|s| s.checked_add(accessor.offset())),
+            n => (n - 1)
+                .checked_mul(stride)
+                .and_then(|s| s.checked_add(size))
+                .and_then(|s| s.checked_add(accessor.offset())),
         };
         if needed.is_none_or(|needed| needed > view.length()) {
             return Err(located("its elements reach past its view"));
@@ -282,9 +289,13 @@ impl GltfFile {
                 return Err(error(format!("mesh {}: its node's transform cannot be undone", mesh.index())));
             }
             for primitive in triangle_primitives(&mesh) {
-                let accessor = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| error("a primitive without positions".into()))?;
+                let accessor = primitive
+                    .get(&gltf::Semantic::Positions)
+                    .ok_or_else(|| error("a primitive without positions".into()))?;
                 self.check(&accessor, None)?;
-                let view = accessor.view().ok_or_else(|| error("positions without a buffer view are not written back".into()))?;
+                let view = accessor
+                    .view()
+                    .ok_or_else(|| error("positions without a buffer view are not written back".into()))?;
                 if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
                     return Err(error("positions that are not three 32-bit floats".into()));
                 }
@@ -352,7 +363,8 @@ impl GltfFile {
         }
         let mut blob = None;
         for (index, buffer) in self.document.buffers().enumerate() {
-            if !changed_buffers[index] && !(inline_files && buffer_uris[index].is_some()) {
+            let inlined = inline_files && buffer_uris[index].is_some();
+            if !changed_buffers[index] && !inlined {
                 continue;
             }
             match buffer.source() {
@@ -368,13 +380,15 @@ impl GltfFile {
             for (index, image) in self.document.images().enumerate() {
                 let Some(uri) = image_uris[index] else { continue };
                 let mut budget = MAX_FILE_BYTES;
-                let data = uri_bytes(uri, &self.folder, &mut budget).map_err(|m| error(format!("image {index}: {m}")))?;
+                let data =
+                    uri_bytes(uri, &self.folder, &mut budget).map_err(|m| error(format!("image {index}: {m}")))?;
                 let mime = match image.source() {
                     gltf::image::Source::Uri { mime_type: Some(mime), .. } => mime.to_string(),
                     _ if data.starts_with(b"\x89PNG") => "image/png".into(),
                     _ => "image/jpeg".into(),
                 };
-                root["images"][index]["uri"] = format!("data:{mime};base64,{}", data_encoding::BASE64.encode(&data)).into();
+                root["images"][index]["uri"] =
+                    format!("data:{mime};base64,{}", data_encoding::BASE64.encode(&data)).into();
             }
             json_changed = true;
         }
@@ -416,7 +430,8 @@ fn uri_bytes(uri: &str, folder: &Path, budget: &mut u64) -> Result<Vec<u8>, Stri
         *budget -= bytes.len() as u64;
         return Ok(bytes);
     }
-    let path = percent_encoding::percent_decode_str(uri).decode_utf8().map_err(|_| format!("\"{uri}\" is not UTF-8"))?;
+    let path =
+        percent_encoding::percent_decode_str(uri).decode_utf8().map_err(|_| format!("\"{uri}\" is not UTF-8"))?;
     if uri.contains(':') || !crate::foundation::values::inside_folder(&path) {
         return Err(format!("\"{uri}\" is not a data URI or a file in the file's folder"));
     }

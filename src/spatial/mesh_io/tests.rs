@@ -144,7 +144,11 @@ fn a_binary_gltf_mesh_is_read() {
 fn a_binary_gltf_written_back_changes_only_the_moved_positions_and_their_bounds() {
     let file = square_glb(4);
     let (mesh, _, source) = parse_source(file.clone(), Format::Glb, Path::new(".")).unwrap();
-    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles, Path::new("out")).unwrap(), file, "unmoved: the file itself");
+    assert_eq!(
+        source.written_back(&mesh.positions, &mesh.triangles, Path::new("out")).unwrap(),
+        file,
+        "unmoved: the file itself"
+    );
     // A corner pulled in: its floats change in place, the bounds stay, nothing else moves.
     let mut inward = mesh.positions.clone();
     inward[2] = Vec3::new(0.5, 0.0, 1.0);
@@ -169,10 +173,16 @@ fn bad_meshes_are_errors_not_panics() {
     assert!(parse(too_far, Format::Obj, Path::new(".")).is_err(), "a face beyond the vertices");
     let nan = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                 element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n";
-    assert!(matches!(parse(nan, Format::Ply, Path::new(".")), Err(MeshError::NotFinite(1)) | Err(MeshError::Parse { .. })));
+    assert!(matches!(
+        parse(nan, Format::Ply, Path::new(".")),
+        Err(MeshError::NotFinite(1)) | Err(MeshError::Parse { .. })
+    ));
     let out = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                 element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
-    assert!(matches!(parse(out, Format::Ply, Path::new(".")), Err(MeshError::IndexOutOfRange { face: 0, vertex: 7, count: 3 })));
+    assert!(matches!(
+        parse(out, Format::Ply, Path::new(".")),
+        Err(MeshError::IndexOutOfRange { face: 0, vertex: 7, count: 3 })
+    ));
     assert!(matches!(parse(b"not a mesh at all", Format::Stl, Path::new(".")), Err(MeshError::Parse { .. })));
     assert!(matches!(Format::of(Path::new("a.fbx")), Err(MeshError::Format(_))));
 }

@@ -16,8 +16,12 @@ use bevy::math::Vec3;
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ImportOptions {
     /// Cylinders thinner than this, metres of radius, are dropped with everything growing from
-    /// them; 0 keeps every twig.
+    /// them (or, with `draw_thin`, made supports of their own); 0 keeps every twig.
     pub min_radius_m: f32,
+    /// Keep the cylinders thinner than `min_radius_m`, each run of them a support of its own
+    /// that no support thicker than `min_radius_m` carries on into, so that the tree can draw
+    /// them without offering them to grip.
+    pub draw_thin: bool,
     /// Points of a support within this distance of the line through their neighbours are
     /// dropped, metres; 0 keeps every cylinder's joint.
     pub simplify_m: f32,
@@ -36,7 +40,8 @@ pub struct Imported {
     pub supports: Vec<SupportSpec>,
     /// Cylinders kept.
     pub cylinders: usize,
-    /// Cylinders dropped as thinner than the least radius kept (with what grows from them).
+    /// Cylinders thinner than the least radius (dropped with what grows from them, or kept to
+    /// draw).
     pub thin: usize,
     /// Cylinders dropped as fragments connected to nothing (the other roots' pieces).
     pub fragments: usize,
@@ -89,18 +94,22 @@ pub fn supports(qsm: &Qsm, options: &ImportOptions) -> Result<Imported, String> 
     let mut stack = vec![root];
     while let Some(index) = stack.pop() {
         kept[index] = true;
-        stack.extend(children[index].iter().copied().filter(|&c| thick(c)));
+        stack.extend(children[index].iter().copied().filter(|&c| options.draw_thin || thick(c)));
     }
     let kept_count = kept.iter().filter(|&&k| k).count();
-    let thin = in_piece.len() - kept_count;
+    let thin = match options.draw_thin {
+        true => in_piece.iter().filter(|&&i| !thick(i)).count(),
+        false => in_piece.len() - kept_count,
+    };
     let fragments = cylinders.len() - in_piece.len();
 
-    // The child that carries each cylinder's branch on, among the kept ones.
+    // The child that carries each cylinder's branch on, among the kept ones as thick as it
+    // (a thick run ends where its twig begins).
     let continuation = |index: usize| -> Option<usize> {
         let cylinder = &cylinders[index];
-        let kept_children = children[index].iter().copied().filter(|&c| kept[c]);
+        let kept_children = children[index].iter().copied().filter(|&c| kept[c] && thick(c) == thick(index));
         if let Some(extension) = cylinder.extension {
-            return kept[extension].then_some(extension);
+            return (kept[extension] && thick(extension) == thick(index)).then_some(extension);
         }
         if let Some(branch) = cylinder.branch
             && let Some(same) = kept_children.clone().find(|&c| cylinders[c].branch == Some(branch))
@@ -224,8 +233,8 @@ mod tests {
         }
     }
 
-    /// A stem of three cylinders up z, a bough of two leaving its second sideways, a twig off
-    /// the bough, and a loose fragment.
+    /// A stem of three cylinders up z, a bough of two leaving its second sideways and carried
+    /// on by a thin tip, a twig off the bough, and a loose fragment.
     fn model() -> Qsm {
         let cylinders = vec![
             cylinder([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 1.0, 0.2, None),
@@ -235,6 +244,7 @@ mod tests {
             cylinder([1.13, 0.0, 1.7], [1.0, 0.0, 0.1], 1.0, 0.05, Some(3)),
             cylinder([1.6, 0.0, 1.75], [0.0, 1.0, 0.5], 0.5, 0.004, Some(4)),
             cylinder([5.0, 5.0, 5.0], [0.0, 0.0, 1.0], 0.3, 0.01, None),
+            cylinder([2.12, 0.0, 1.8], [1.0, 0.0, 0.1], 0.4, 0.003, Some(4)),
         ];
         Qsm { cylinders, origin: DVec3::new(100.0, 200.0, 250.0), format: QsmFormat::TreeqsmText }
     }
@@ -242,7 +252,7 @@ mod tests {
     #[test]
     fn branches_become_supports_attached_where_they_leave_their_parent() {
         let imported = supports(&model(), &ImportOptions::default()).unwrap();
-        assert_eq!((imported.cylinders, imported.thin, imported.fragments), (6, 0, 1));
+        assert_eq!((imported.cylinders, imported.thin, imported.fragments), (7, 0, 1));
         let names: Vec<&str> = imported.supports.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["stem", "b1", "b2"]);
         let Shape::Polyline { points, radii } = &imported.supports[0].shape else { panic!("the stem is a polyline") };
@@ -269,10 +279,23 @@ mod tests {
     fn thin_twigs_are_dropped_and_the_base_can_be_kept() {
         let options = ImportOptions { min_radius_m: 0.005, keep_base: true, ..ImportOptions::default() };
         let imported = supports(&model(), &options).unwrap();
-        assert_eq!((imported.cylinders, imported.thin, imported.supports.len()), (5, 1, 2));
+        assert_eq!((imported.cylinders, imported.thin, imported.supports.len()), (5, 2, 2));
         let Shape::Polyline { points, .. } = &imported.supports[0].shape else { panic!("the stem is a polyline") };
         // The model's origin, y up: x 100, height 250, z -200.
         assert!((points[0] - Vec3::new(100.0, 250.0, -200.0)).length() < 1e-3, "{points:?}");
+        // Kept to draw: the bough ends where its thin tip begins, the tip and the twig are
+        // supports of their own, none of whose radii reaches the least radius.
+        let drawn = ImportOptions { min_radius_m: 0.005, draw_thin: true, ..ImportOptions::default() };
+        let imported = supports(&model(), &drawn).unwrap();
+        assert_eq!((imported.cylinders, imported.thin, imported.supports.len()), (7, 2, 4));
+        let radii = |k: usize| match &imported.supports[k].shape {
+            Shape::Polyline { radii, .. } | Shape::Attached { radii, .. } => radii.clone(),
+            Shape::Fork { .. } => Vec::new(),
+        };
+        assert_eq!(radii(1), [0.06, 0.06, 0.05, 0.05], "the bough, without its tip");
+        for twig in [2, 3] {
+            assert!(radii(twig).iter().all(|&r| r < 0.005), "{:?}", radii(twig));
+        }
         let too_thick = ImportOptions { min_radius_m: 0.5, ..ImportOptions::default() };
         assert!(supports(&model(), &too_thick).unwrap_err().contains("thinner than min_radius_m"));
     }

@@ -86,7 +86,8 @@ fn bad_gltf_files_are_located_errors() {
     let error = parse(file.as_bytes(), Format::Gltf, here()).unwrap_err();
     assert!(matches!(error, MeshError::IndexOutOfRange { face: 0, vertex: 4, count: 4 }), "{error}");
     // A view past its buffer, an accessor past its view, a node that is not there, no JSON.
-    let past_buffer = square_gltf(&inline(), 92, "", "").replace(r#""byteOffset":80,"byteLength":12"#, r#""byteOffset":88,"byteLength":12"#);
+    let past_buffer = square_gltf(&inline(), 92, "", "")
+        .replace(r#""byteOffset":80,"byteLength":12"#, r#""byteOffset":88,"byteLength":12"#);
     let past_view = square_gltf(&inline(), 92, "", "").replace(r#""count":6"#, r#""count":60"#);
     let no_node = square_gltf(&inline(), 92, "", "").replace(r#""nodes":[0]"#, r#""nodes":[7]"#);
     for (file, expected) in [
@@ -114,7 +115,9 @@ fn drawing_keeps_materials_texture_coordinates_and_mirroring() {
     // A base colour texture in a data URI, clamped by its sampler.
     let png = {
         let mut bytes = std::io::Cursor::new(Vec::new());
-        image::RgbImage::from_pixel(2, 2, image::Rgb([200, 10, 10])).write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+        image::RgbImage::from_pixel(2, 2, image::Rgb([200, 10, 10]))
+            .write_to(&mut bytes, image::ImageFormat::Png)
+            .unwrap();
         bytes.into_inner()
     };
     let images = format!(
@@ -136,7 +139,11 @@ fn a_text_gltf_written_back_keeps_everything_but_the_moved_positions() {
     let file = square_gltf(&inline(), 92, r#","translation":[0,2,0]"#, r#","extras":{"author":"a user"}"#);
     let (mesh, _, source) = parse_source(file.clone().into_bytes(), Format::Gltf, here()).unwrap();
     let to = Path::new("moved.gltf");
-    assert_eq!(source.written_back(&mesh.positions, &mesh.triangles, to).unwrap(), file.as_bytes(), "unmoved: the file");
+    assert_eq!(
+        source.written_back(&mesh.positions, &mesh.triangles, to).unwrap(),
+        file.as_bytes(),
+        "unmoved: the file"
+    );
     let mut moved = mesh.positions.clone();
     moved[2] = Vec3::new(1.0, 2.5, 1.0);
     let bytes = source.written_back(&moved, &mesh.triangles, to).unwrap();
