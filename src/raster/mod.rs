@@ -11,6 +11,7 @@
 
 pub use canopy_raster::*;
 
+pub mod levels;
 pub mod lines;
 pub mod plugin;
 pub mod primitives;

@@ -11,6 +11,7 @@
 //! Drawing runs every frame, or only when asked ([`RenderPolicy`]) in headless runs that need
 //! just their last frame.
 
+use super::levels::MeshLevels;
 use super::primitives::PrimitiveMeshes;
 use super::{
     Camera, Framebuffer, Instance, Lens, Light, MAX_TARGET_SIZE, Material, MeshData, RenderSettings, RenderStats,
@@ -170,12 +171,20 @@ fn request_screenshots(
     }
 }
 
-fn collect_meshes(meshes: Query<(&RasterMesh, &GlobalTransform)>, mut queue: ResMut<RenderQueue>) {
+/// The frame's instances: every mesh where it stands, at the level of detail its size on
+/// screen asks for.
+fn collect_meshes(
+    meshes: Query<(&RasterMesh, &GlobalTransform, Option<&MeshLevels>)>,
+    view: Res<RenderView>,
+    target: Res<RasterTarget>,
+    mut queue: ResMut<RenderQueue>,
+) {
+    let height = target.size.y.min(MAX_TARGET_SIZE);
     queue.0.clear();
-    queue.0.extend(meshes.iter().map(|(raster, transform)| Instance {
-        mesh: raster.mesh.clone(),
-        model: transform.to_matrix(),
-        material: raster.material.clone(),
+    queue.0.extend(meshes.iter().map(|(raster, transform, levels)| {
+        let model = transform.to_matrix();
+        let mesh = levels.map_or(&raster.mesh, |levels| levels.choose(&raster.mesh, model, &view.camera, height));
+        Instance { mesh: mesh.clone(), model, material: raster.material.clone() }
     }));
 }
 

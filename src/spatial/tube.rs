@@ -22,8 +22,24 @@ struct Ring {
     along: f32,
 }
 
-/// Appends the tube around `points` with `radii`.
+/// Appends the tube around `points` with `radii`, `sides` vertices around each ring.
 pub fn add_tube(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usize) {
+    add_tube_with_tips(mesh, points, radii, sides, TIP_RINGS);
+}
+
+/// Rings of a rounded tip that keep it within `tolerance` of the round one on a tube of
+/// `radius` (the same units): from none (a cone to the pole) to the tips' most.
+pub fn tip_rings(radius: f32, tolerance: f32) -> usize {
+    // Each of a tip's k + 1 pieces spans a quarter turn over k + 1; its sagitta is the error.
+    (0..TIP_RINGS)
+        .find(|&k| radius * (1.0 - (FRAC_PI_2 / 2.0 / (k + 1) as f32).cos()) <= tolerance)
+        .unwrap_or(TIP_RINGS)
+}
+
+/// Appends the tube around `points` with `radii`, `sides` vertices around each ring and
+/// `tip` rings (at most the tips' most) rounding each tip.
+pub fn add_tube_with_tips(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usize, tip: usize) {
+    let tip = tip.min(TIP_RINGS);
     let n = points.len();
     // Tangents: the mean direction of the two segments at inner points.
     let direction = |i: usize| (points[i + 1] - points[i]).normalize_or_zero();
@@ -35,10 +51,10 @@ pub fn add_tube(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usiz
         })
         .collect();
     let mut along = 0.0;
-    let mut rings = Vec::with_capacity(n + 2 * TIP_RINGS + 2);
+    let mut rings = Vec::with_capacity(n + 2 * tip + 2);
     // The start tip, from its pole to the first point's ring.
-    for k in (1..=TIP_RINGS + 1).rev() {
-        let angle = FRAC_PI_2 * k as f32 / (TIP_RINGS + 1) as f32;
+    for k in (1..=tip + 1).rev() {
+        let angle = FRAC_PI_2 * k as f32 / (tip + 1) as f32;
         rings.push(Ring {
             centre: points[0] - tangents[0] * radii[0] * angle.sin(),
             axis: tangents[0],
@@ -53,8 +69,8 @@ pub fn add_tube(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usiz
         }
         rings.push(Ring { centre: points[i], axis: tangents[i], radius: radii[i], lean: 0.0, along });
     }
-    for k in 1..=TIP_RINGS + 1 {
-        let angle = FRAC_PI_2 * k as f32 / (TIP_RINGS + 1) as f32;
+    for k in 1..=tip + 1 {
+        let angle = FRAC_PI_2 * k as f32 / (tip + 1) as f32;
         rings.push(Ring {
             centre: points[n - 1] + tangents[n - 1] * radii[n - 1] * angle.sin(),
             axis: tangents[n - 1],

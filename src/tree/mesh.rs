@@ -1,9 +1,25 @@
-//! The render mesh of a tree: each support a tube around its polyline
-//! ([`add_tube`](crate::spatial::tube::add_tube)).
+//! The render mesh of a tree, each support a tube around its polyline
+//! ([`add_tube`](crate::spatial::tube::add_tube)), and its coarser levels: a support seen a few
+//! pixels thick needs few sides and barely rounded tips, and a twig under a pixel three
+//! sides and pointed ones.
 
 use super::model::Tree;
 use crate::raster::MeshData;
-use crate::spatial::tube::add_tube;
+use crate::raster::levels::MeshLevels;
+use crate::spatial::tube::{add_tube, add_tube_with_tips, tip_rings};
+use bevy::math::Vec3;
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+/// The most pixels a metre may span where each coarser level is drawn, finest first.
+const LEVEL_PIXELS_PER_METRE: [f32; 5] = [1024.0, 256.0, 64.0, 16.0, 4.0];
+
+/// How far a coarser level's surface may lie from the full mesh's where it is drawn, pixels.
+const LEVEL_TOLERANCE_PX: f32 = 0.5;
+
+/// A coarser level is kept only if it has at most this share of the triangles of the level
+/// before it.
+const LEVEL_SAVING: f32 = 0.8;
 
 /// The mesh of every support of `tree`, `sides` vertices around each ring (at least 3).
 pub fn tree_mesh(tree: &Tree, sides: usize) -> MeshData {
@@ -12,6 +28,54 @@ pub fn tree_mesh(tree: &Tree, sides: usize) -> MeshData {
         add_tube(&mut mesh, &support.points, &support.radii, sides.max(3));
     }
     mesh
+}
+
+/// The coarser levels of [`tree_mesh`]`(tree, sides)`: at each of
+/// [`LEVEL_PIXELS_PER_METRE`], every support with as few sides and tip rings as keep its
+/// thickest ring within [`LEVEL_TOLERANCE_PX`] of round; a level that saves too little is
+/// left out.
+pub fn tree_levels(tree: &Tree, sides: usize) -> MeshLevels {
+    let sides = sides.max(3);
+    let mut levels: Vec<(f32, Arc<MeshData>)> = Vec::new();
+    let mut before = tree.supports.iter().map(|s| triangles(s.points.len(), sides, 3)).sum::<usize>();
+    for pixels_per_metre in LEVEL_PIXELS_PER_METRE {
+        let tolerance = LEVEL_TOLERANCE_PX / pixels_per_metre;
+        let mut mesh = MeshData::default();
+        for support in &tree.supports {
+            let radius = support.radii.iter().copied().fold(0.0, f32::max);
+            let tip = tip_rings(radius, tolerance);
+            add_tube_with_tips(&mut mesh, &support.points, &support.radii, sides_within(radius, tolerance, sides), tip);
+        }
+        if (mesh.triangles.len() as f32) <= LEVEL_SAVING * before as f32 {
+            before = mesh.triangles.len();
+            levels.push((pixels_per_metre, Arc::new(mesh)));
+        }
+    }
+    MeshLevels { bounds: bounds(tree), levels }
+}
+
+/// Triangles of a tube of `points`, `sides` around and `tip` rings at each end.
+fn triangles(points: usize, sides: usize, tip: usize) -> usize {
+    2 * sides * (points + 2 * tip + 1)
+}
+
+/// The fewest sides, from 3 to `most`, of a polygon within `tolerance` of a circle of
+/// `radius` (its sagitta, `radius (1 - cos(pi / sides))`, at most the tolerance).
+fn sides_within(radius: f32, tolerance: f32, most: usize) -> usize {
+    if radius <= tolerance {
+        return 3;
+    }
+    ((PI / (1.0 - tolerance / radius).acos()).ceil() as usize).clamp(3, most)
+}
+
+/// A sphere holding every support, tips included: the centre of their box and the farthest
+/// surface from it.
+fn bounds(tree: &Tree) -> (Vec3, f32) {
+    let points = tree.supports.iter().flat_map(|s| s.points.iter().zip(&s.radii));
+    let (low, high) =
+        points.clone().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(low, high), (p, _)| (low.min(*p), high.max(*p)));
+    let centre = (low + high) * 0.5;
+    (centre, points.map(|(p, r)| p.distance(centre) + r).fold(0.0, f32::max))
 }
 
 #[cfg(test)]
@@ -51,6 +115,41 @@ mod tests {
             faces += 1;
         }
         assert!(faces > 100);
+    }
+
+    #[test]
+    fn coarser_levels_keep_the_surface_within_their_tolerance_and_save_triangles() {
+        let tree = bent_tree();
+        let full = tree_mesh(&tree, 12);
+        let levels = tree_levels(&tree, 12);
+        let segments: Vec<_> = tree.segments().map(|(_, s)| s).collect();
+        let mut before = full.triangles.len();
+        assert!(!levels.levels.is_empty());
+        for (pixels_per_metre, mesh) in &levels.levels {
+            assert!((mesh.triangles.len() as f32) <= LEVEL_SAVING * before as f32);
+            before = mesh.triangles.len();
+            // Every vertex on the round surface (flat sides meet it at their corners), and the
+            // middle of every side within the level's tolerance of it.
+            let tolerance = LEVEL_TOLERANCE_PX / pixels_per_metre;
+            let off = |p: Vec3| segments.iter().map(|s| s.closest(p).distance).fold(f32::INFINITY, f32::min);
+            for &[a, b, _] in &mesh.triangles {
+                let [pa, pb] = [a, b].map(|i| mesh.positions[i as usize]);
+                assert!(off(pa).abs() < 0.02, "a vertex {} m off", off(pa));
+                assert!(
+                    off((pa + pb) * 0.5) > -tolerance - 0.02,
+                    "a side {} m inside at {pixels_per_metre} px/m",
+                    -off((pa + pb) * 0.5)
+                );
+            }
+        }
+        // The bounds hold every vertex of the full mesh.
+        let (centre, radius) = levels.bounds;
+        assert!(full.positions.iter().all(|p| p.distance(centre) <= radius + 1e-4));
+        // The thinnest rings keep three sides; a thick one seen large keeps all twelve.
+        assert_eq!(sides_within(0.01, 0.05, 12), 3);
+        assert_eq!(sides_within(0.2, 0.0005, 12), 12);
+        assert_eq!(tip_rings(0.2, 0.1), 0);
+        assert_eq!(tip_rings(0.2, 0.001), 3);
     }
 
     #[test]

@@ -12,6 +12,7 @@ use crate::foundation::messages::SelectEntity;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
 use crate::raster::RasterMesh;
+use crate::raster::levels::MeshLevels;
 use crate::raster::texture::material;
 use crate::spatial::SpatialSystems;
 use crate::spatial::ground::GroundPatch;
@@ -31,6 +32,7 @@ pub(super) fn spawn_tree(entity: &mut EntityWorldMut, def: &TreeDef, tree: Tree)
     entity.insert((
         Transform::IDENTITY,
         RasterMesh { mesh: Arc::default(), material },
+        MeshLevels::default(),
         TreeBody::new(tree),
         TreeSource { def: def.clone(), undo: Vec::new() },
     ));
@@ -153,9 +155,11 @@ fn grow_on_new_ground(
             match Tree::build(&specs) {
                 Ok(tree) => {
                     let mesh = Arc::new(mesh::tree_mesh(&tree, source.def.sides));
+                    let levels = mesh::tree_levels(&tree, source.def.sides);
                     commands.spawn((
                         ChunkTrees { tree },
                         RasterMesh { mesh, material: raster.material.clone() },
+                        levels,
                         ChildOf(patch_entity),
                     ));
                 }
@@ -165,10 +169,11 @@ fn grow_on_new_ground(
     }
 }
 
-/// Meshes trees whose supports were built or edited.
-fn write_back_trees(mut trees: Query<(&TreeBody, &TreeSource, &mut RasterMesh), Changed<TreeBody>>) {
-    for (body, source, mut raster) in &mut trees {
+/// Meshes trees whose supports were built or edited, with their coarser levels.
+fn write_back_trees(mut trees: Query<(&TreeBody, &TreeSource, &mut RasterMesh, &mut MeshLevels), Changed<TreeBody>>) {
+    for (body, source, mut raster, mut levels) in &mut trees {
         raster.mesh = Arc::new(mesh::tree_mesh(&body.tree, source.def.sides));
+        *levels = mesh::tree_levels(&body.tree, source.def.sides);
     }
 }
 

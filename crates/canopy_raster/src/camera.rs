@@ -84,6 +84,15 @@ impl Camera {
             }
         }
     }
+    /// Pixels a unit length spans at unit distance straight ahead (the focal length in
+    /// pixels), in an image `height` pixels high.
+    pub fn focal_px(&self, height: u32) -> f32 {
+        match self.lens {
+            Lens::FieldOfView(fov_y) => 0.5 * height as f32 / (0.5 * fov_y).tan(),
+            Lens::Pinhole(pinhole) => pinhole.focal.y * height as f32,
+        }
+    }
+
     /// The world-to-clip matrix.
     pub fn view_projection(&self, aspect: f32) -> Mat4 {
         self.projection(aspect) * self.view()
@@ -152,6 +161,22 @@ impl Light {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_focal_length_in_pixels_scales_sizes_at_a_distance() {
+        let camera = Camera {
+            eye: Vec3::ZERO,
+            target: Vec3::NEG_Z,
+            lens: Lens::FieldOfView(60f32.to_radians()),
+            near: 0.1,
+            far: 100.0,
+        };
+        let height = 480;
+        // 10 cm up at 10 m: its pixels from the image's centre line.
+        let clip = camera.view_projection(4.0 / 3.0) * Vec4::new(0.0, 0.1, -10.0, 1.0);
+        let pixels = clip.y / clip.w * height as f32 / 2.0;
+        assert!((pixels - camera.focal_px(height) * 0.1 / 10.0).abs() < 1e-3, "{pixels}");
+    }
 
     #[test]
     fn a_pinhole_sees_points_where_its_calibration_puts_them() {
