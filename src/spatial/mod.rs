@@ -12,7 +12,8 @@
 //! | [`segment`] | tapered segments (capsules with two radii): rays, nearest surface points |
 //! | [`surface`] | triangle surfaces: their edges, areas, volumes and facts |
 //! | [`surface_bvh`] | a surface's triangles in a hierarchy, for rays |
-//! | [`mesh_io`] | OBJ, PLY and STL files read into triangle meshes and written back |
+//! | [`mesh_io`] | OBJ, PLY, STL and glTF files read into triangle meshes and written back |
+//! | [`polyline`] | polylines with a radius at each point, simplified within a tolerance |
 //! | [`tube`] | tubes around polylines, for supports, limbs and stems |
 //!
 //! | schedule | set | what runs there |
@@ -25,6 +26,7 @@ pub mod bvh;
 pub mod ground;
 pub mod mesh_io;
 pub mod pick;
+pub mod polyline;
 pub mod segment;
 pub mod solid;
 pub mod surface;

@@ -8,7 +8,7 @@ use bevy::math::{Vec2, Vec3};
 use std::f32::consts::{FRAC_PI_2, TAU};
 
 /// Rings of each rounded tip, not counting the tip point.
-const TIP_RINGS: usize = 3;
+pub const TIP_RINGS: usize = 3;
 
 /// One ring of a tube: its centre, axis direction, radius, and how far its normals lean along
 /// the axis (0 on the side, +-1 at the tips).

@@ -11,9 +11,8 @@ use crate::foundation::entity::SceneEntity;
 use crate::foundation::messages::SelectEntity;
 use crate::foundation::schedule::{ControlSystems, WriteBackSystems};
 use crate::foundation::values::srgb_channels;
-use crate::raster::RasterMesh;
-use crate::raster::levels::MeshLevels;
 use crate::raster::texture::material;
+use crate::raster::{Material, RasterMesh};
 use crate::spatial::SpatialSystems;
 use crate::spatial::ground::GroundPatch;
 use crate::spatial::pick::{Pickable, Picked, Pointer};
@@ -22,20 +21,36 @@ use bevy::ecs::world::EntityWorldMut;
 use bevy::prelude::*;
 use std::sync::Arc;
 
-/// Spawns a tree entity of `def`, whose supports are `tree`; its mesh is written back with
+/// Spawns a tree entity of `def`, whose supports are `tree`; its meshes are written back with
 /// the frame.
 pub(super) fn spawn_tree(entity: &mut EntityWorldMut, def: &TreeDef, tree: Tree) {
-    let material = material(srgb_channels(def.color.0), def.texture.as_ref());
     if let (Some(settings), Some(world)) = (def.scatter, &def.ground) {
         entity.insert(ScatteredTrees { world: world.clone(), settings });
     }
     entity.insert((
         Transform::IDENTITY,
-        RasterMesh { mesh: Arc::default(), material },
-        MeshLevels::default(),
+        Visibility::default(),
         TreeBody::new(tree),
         TreeSource { def: def.clone(), undo: Vec::new() },
     ));
+}
+
+/// The bark a tree of `def` is drawn with.
+fn bark(def: &TreeDef) -> Material {
+    material(srgb_channels(def.color.0), def.texture.as_ref())
+}
+
+/// One cluster of a tree's supports as drawn: a child of the tree's entity (or of a chunk's
+/// trees), its mesh and coarser levels beside it.
+#[derive(Component, Debug, Clone, Copy)]
+pub struct TreeMesh;
+
+/// Spawns the clusters of `tree` as children of `parent`, drawn with `bark`.
+fn spawn_clusters(commands: &mut Commands, parent: Entity, tree: &Tree, sides: usize, bark: &Material) {
+    for cluster in mesh::tree_clusters(tree, sides) {
+        let mesh = RasterMesh { mesh: Arc::new(cluster.mesh), material: bark.clone() };
+        commands.spawn((TreeMesh, mesh, cluster.levels, Transform::IDENTITY, ChildOf(parent)));
+    }
 }
 
 /// A tree's description as edited in the window, and the descriptions before each edit.
@@ -130,7 +145,7 @@ pub struct ChunkTrees {
 fn grow_on_new_ground(
     patches: Query<(Entity, &GroundPatch, &ChildOf), Added<GroundPatch>>,
     grounds: Query<(&Solid, &SceneEntity)>,
-    forests: Query<(&ScatteredTrees, &TreeSource, &RasterMesh)>,
+    forests: Query<(&ScatteredTrees, &TreeSource)>,
     mut commands: Commands,
 ) {
     for (patch_entity, patch, child_of) in &patches {
@@ -138,7 +153,7 @@ fn grow_on_new_ground(
         if patch.level != 0 {
             continue;
         }
-        for (forest, source, raster) in forests.iter().filter(|(forest, ..)| forest.world == world_entity.name) {
+        for (forest, source) in forests.iter().filter(|(forest, ..)| forest.world == world_entity.name) {
             let specs: Vec<SupportSpec> =
                 scatter(&forest.settings, (patch.key.x, patch.key.y), (patch.corner.x, patch.corner.y), patch.side)
                     .into_iter()
@@ -154,14 +169,10 @@ fn grow_on_new_ground(
                     .collect();
             match Tree::build(&specs) {
                 Ok(tree) => {
-                    let mesh = Arc::new(mesh::tree_mesh(&tree, source.def.sides));
-                    let levels = mesh::tree_levels(&tree, source.def.sides);
-                    commands.spawn((
-                        ChunkTrees { tree },
-                        RasterMesh { mesh, material: raster.material.clone() },
-                        levels,
-                        ChildOf(patch_entity),
-                    ));
+                    let trees =
+                        commands.spawn((Transform::IDENTITY, Visibility::default(), ChildOf(patch_entity))).id();
+                    spawn_clusters(&mut commands, trees, &tree, source.def.sides, &bark(&source.def));
+                    commands.entity(trees).insert(ChunkTrees { tree });
                 }
                 Err(error) => warn!("trees of the ground at {}: {}", patch.key, error.message),
             }
@@ -169,11 +180,17 @@ fn grow_on_new_ground(
     }
 }
 
-/// Meshes trees whose supports were built or edited, with their coarser levels.
-fn write_back_trees(mut trees: Query<(&TreeBody, &TreeSource, &mut RasterMesh, &mut MeshLevels), Changed<TreeBody>>) {
-    for (body, source, mut raster, mut levels) in &mut trees {
-        raster.mesh = Arc::new(mesh::tree_mesh(&body.tree, source.def.sides));
-        *levels = mesh::tree_levels(&body.tree, source.def.sides);
+/// Meshes trees whose supports were built or edited: their clusters made anew.
+fn write_back_trees(
+    trees: Query<(Entity, &TreeBody, &TreeSource, Option<&Children>), Changed<TreeBody>>,
+    meshes: Query<(), With<TreeMesh>>,
+    mut commands: Commands,
+) {
+    for (entity, body, source, children) in &trees {
+        for child in children.into_iter().flatten().filter(|&&child| meshes.contains(child)) {
+            commands.entity(*child).despawn();
+        }
+        spawn_clusters(&mut commands, entity, &body.tree, source.def.sides, &bark(&source.def));
     }
 }
 
