@@ -413,6 +413,10 @@ impl Reader<'_> {
                 out.push(self.check(&source, &field("that"), when)?);
             }
             if let Some(golden) = raw.screenshot {
+                if when == When::At(0) {
+                    let message = format!("at: the first frame is drawn after the first step: from {} s on", 1.0 / FIXED_HZ);
+                    return Err(self.error(&field("at"), message));
+                }
                 let shot = self.screenshot(&golden, raw.size, raw.tolerance, at)?;
                 let origin = self.origin(&field("screenshot"));
                 out.push(Expectation { when, what: What::Screenshot(shot), origin });

@@ -74,6 +74,7 @@ fn problems_are_located_at_their_field() {
         ("scene: scene.yaml\nseconds: 5000\nexpect: [{ always: true }]\n", 2, "at most 3600"),
         ("scene: scene.yaml\nseconds: 1\nexpect:\n  - at: 2\n    that: true\n", 4, "after the run ends at 1 s"),
         ("scene: scene.yaml\nseconds: 1\nexpect:\n  - at: 1\n", 4, "`that:` or `screenshot:`"),
+        ("scene: scene.yaml\nseconds: 1\nexpect:\n  - { at: 0, screenshot: a.png }\n", 4, "drawn after the first step"),
         ("scene: scene.yaml\nseconds: 1\nexpect:\n  - always: true\n    before: 1\n", 5, "only an `eventually`"),
         ("scene: scene.yaml\nseconds: 1\nexpect:\n  - { at: 1, always: true }\n", 4, "one of `at:`"),
         ("scene: scene.yaml\nseconds: 1\nexpect:\n  - { at: 1, screenshot: a.jpg }\n", 4, "ending in .png"),
