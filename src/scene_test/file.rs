@@ -414,7 +414,8 @@ impl Reader<'_> {
             }
             if let Some(golden) = raw.screenshot {
                 if when == When::At(0) {
-                    let message = format!("at: the first frame is drawn after the first step: from {} s on", 1.0 / FIXED_HZ);
+                    let message =
+                        format!("at: the first frame is drawn after the first step: from {} s on", 1.0 / FIXED_HZ);
                     return Err(self.error(&field("at"), message));
                 }
                 let shot = self.screenshot(&golden, raw.size, raw.tolerance, at)?;

@@ -297,3 +297,28 @@ fn a_saved_scene_keeps_the_deformer_set_in_the_window() {
     assert_eq!((def.method, def.k.0), (Deformer::EdgeSum, 0.8));
     assert_eq!(def.sample.map(|s| s.size.0), Some(17), "the rest as written");
 }
+
+#[test]
+fn a_body_read_from_a_gltf_file_is_saved_as_that_file_wherever_it_goes() {
+    // The boulder prop as a soft body: its buffer and texture lie beside its file.
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("boulder.yaml");
+    std::fs::create_dir(folder.path().join("props")).unwrap();
+    for file in ["boulder.gltf", "boulder.bin", "boulder.png"] {
+        std::fs::copy(path("scenes/props").join(file), folder.path().join("props").join(file)).unwrap();
+    }
+    std::fs::write(&scene, "entities:\n  - name: boulder\n    soft_body: { mesh: props/boulder.gltf }\n").unwrap();
+    let mut app = small_app(&scene);
+    let (_, body) = torso(app.world_mut());
+    assert_eq!(body.save_extensions(), ["obj", "ply", "gltf"]);
+    let saved = body.save(&folder.path().join("meshes"), "boulder", 0, "gltf").unwrap();
+    // Saved into another folder, it stands alone: what lay beside its file is in it.
+    let bytes = std::fs::read(&saved).unwrap();
+    let json: Value = serde_json::from_slice(&bytes).unwrap();
+    assert!(json["buffers"][0]["uri"].as_str().unwrap().starts_with("data:"));
+    assert!(json["images"][0]["uri"].as_str().unwrap().starts_with("data:image/png;base64,"));
+    use canopy::spatial::mesh_io::{Format, parse};
+    let (read, _) = parse(&bytes, Format::Gltf, saved.parent().unwrap()).unwrap();
+    let (original, _) = canopy::spatial::mesh_io::read(&path("scenes/props/boulder.gltf")).unwrap();
+    assert_eq!(read, original);
+}
