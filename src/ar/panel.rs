@@ -33,19 +33,32 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             shown.map_or("none yet".into(), |r| format!("{} of {} ({})", r.frame + 1, frames.len(), file(r.frame))),
         );
         match shown.map(|r| &r.finding) {
-            Some(Finding::Found { estimate, .. }) => {
-                let (t, r) = (estimate.pose.translation, estimate.pose.rvec());
-                let (error_px, alternative_error_px) = (estimate.error_px, estimate.alternative_error_px);
+            Some(Finding::Found { estimate, kept_alternative, .. }) => {
+                // The pose drawn: the better fit, or the other one where it continues the last.
+                let (pose, error_px, other_px) = match kept_alternative {
+                    true => (estimate.alternative, estimate.alternative_error_px, estimate.error_px),
+                    false => (estimate.pose, estimate.error_px, estimate.alternative_error_px),
+                };
+                let (t, r) = (pose.translation, pose.rvec());
                 row(ui, "found", format!("{:.3} m away", t.length()));
                 row(ui, "tvec (m)", format!("{:.4} {:.4} {:.4}", t.x, t.y, t.z));
                 row(ui, "rvec (rad)", format!("{:.4} {:.4} {:.4}", r.x, r.y, r.z));
-                row(ui, "reprojection", format!("{error_px:.3} px (the other pose {alternative_error_px:.2} px)"));
+                row(ui, "reprojection", format!("{error_px:.3} px (the other pose {other_px:.2} px)"));
             }
             Some(Finding::Lost { held: true }) => row(ui, "lost", "its last pose held".into()),
             Some(Finding::Lost { held: false }) => row(ui, "lost", "only the photograph shows".into()),
             Some(Finding::Unreadable(message)) => row(ui, "unreadable", message.clone()),
             None => {}
         }
+        row(
+            ui,
+            "flips",
+            format!(
+                "{} (the other solution kept {} times, continuing the pose)",
+                state.follower_flips(),
+                state.follower_kept()
+            ),
+        );
         if let Some(error) = state.overlay_error_px {
             row(ui, "drawn marker", format!("{error:.3} px from the found one"));
         }

@@ -24,6 +24,7 @@ use canopy_vision::dictionary::Dictionary;
 use canopy_vision::fit::{Fit, Remap};
 use canopy_vision::gray::Gray;
 use canopy_vision::pose::{Pose, PoseEstimate, estimate, marker_corners};
+use canopy_vision::steady::PoseFollower;
 use image::RgbaImage;
 use serde_json::{Map, Value, json};
 use std::collections::VecDeque;
@@ -109,6 +110,10 @@ pub enum Finding {
         /// The pose, its error and the other planar solution's (boxed: the records of frames
         /// without the marker stay small).
         estimate: Box<PoseEstimate>,
+        /// Whether the other solution was shown, for continuing the pose shown before.
+        kept_alternative: bool,
+        /// Whether the pose shown turned over from the one before.
+        flipped: bool,
     },
     /// Not found; the last pose is shown while it is held.
     Lost {
@@ -144,6 +149,8 @@ pub struct ArState {
     /// Frames read so far: tells a new photograph from the one already fitted.
     images_read: u64,
     tracker: Tracker,
+    /// Chooses between each frame's two solutions so that the pose does not flip.
+    follower: PoseFollower,
     /// The pose the scene is drawn at; `None` hides it.
     pub pose: Option<Pose>,
     /// The shown frames' records, in order: the last [`MAX_RECORDS`].
@@ -168,6 +175,16 @@ pub struct ArState {
 }
 
 impl ArState {
+    /// Frames whose pose turned over from the one before.
+    pub fn follower_flips(&self) -> u64 {
+        self.follower.flips()
+    }
+
+    /// Frames that showed the other solution for continuing the pose.
+    pub fn follower_kept(&self) -> u64 {
+        self.follower.kept()
+    }
+
     /// The marker's corners in the frame shown, if it was found there.
     fn found_corners(&self) -> Option<[DVec2; 4]> {
         match self.records.back()?.finding {
@@ -208,16 +225,24 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
                 estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
             });
             match found {
-                Some((corners, estimate)) => Finding::Found { corners, estimate: Box::new(estimate) },
+                Some((corners, estimate)) => {
+                    let shown = state.follower.follow(&estimate);
+                    let (kept_alternative, flipped) = (shown.kept_alternative, shown.flipped);
+                    Finding::Found { corners, estimate: Box::new(estimate), kept_alternative, flipped }
+                }
                 None => Finding::Lost { held: false },
             }
         }
     };
     let found_pose = match &finding {
+        Finding::Found { estimate, kept_alternative: true, .. } => Some(estimate.alternative),
         Finding::Found { estimate, .. } => Some(estimate.pose),
         _ => None,
     };
     let shown = state.tracker.update(found_pose, state.time_s, view.hold_s);
+    if shown.is_none() {
+        state.follower.forget();
+    }
     state.pose = shown.map(|(pose, _)| pose);
     let finding = match finding {
         Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
@@ -324,9 +349,11 @@ impl DumpState for ArState {
             .map(|record| {
                 let mut entry = json!({"frame": record.frame, "time_s": record.time_s});
                 let fields = match &record.finding {
-                    Finding::Found { corners, estimate } => {
+                    Finding::Found { corners, estimate, kept_alternative, flipped } => {
                         let mut found = marker_json(corners, Some(estimate));
                         found["marker"] = json!("found");
+                        found["shown"] = json!(if *kept_alternative { "alternative" } else { "best" });
+                        found["flipped"] = json!(flipped);
                         found
                     }
                     Finding::Lost { held: true } => json!({"marker": "held"}),
@@ -345,6 +372,8 @@ impl DumpState for ArState {
         out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
         out.insert("overlay_error_max_px".into(), json!(self.overlay_error_max_px));
         out.insert("poses".into(), Value::Array(records));
+        out.insert("flips".into(), json!(self.follower.flips()));
+        out.insert("alternatives_kept".into(), json!(self.follower.kept()));
         out.insert("poses_dropped".into(), json!(self.records_dropped));
     }
 }

@@ -10,6 +10,7 @@
 //! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
 //! | [`fit`] | a camera frame fitted into a view of another size, its distortion removed |
 //! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
+//! | [`steady`] | poses followed from frame to frame without flipping between the two solutions |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
 //!
@@ -24,6 +25,7 @@ pub mod evaluate;
 pub mod fit;
 pub mod gray;
 pub mod pose;
+pub mod steady;
 pub mod synth;
 
 pub use camera::{Distortion, Intrinsics};
