@@ -368,6 +368,27 @@ fn ar_tools_print_markers_poses_and_sequences() {
     let wrong = canopy(&["ar", "marker", "--dictionary", "4x4_50", "--id", "50", "--out", "x.png"]);
     assert!(wrong.status.code() == Some(2) && stderr(&wrong).contains("markers 0 to 49"), "{}", stderr(&wrong));
 
+    // A printable grid board: the detector finds each of its markers where the layout has it.
+    let board = folder.path().join("board.png");
+    let args = ["ar", "board", "--markers", "4x3", "--marker-m", "0.03", "--separation-m", "0.006", "--first-id", "5"];
+    let output = canopy(&[&args[..], &["--pixels-per-metre", "4000", "--out", board.to_str().unwrap()]].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let found = canopy(&["ar", "detect", board.to_str().unwrap()]);
+    let found: serde_json::Value = serde_json::from_slice(&found.stdout).unwrap();
+    let markers = found[0]["markers"].as_array().unwrap();
+    assert_eq!(markers.len(), 12);
+    for marker in markers {
+        let index = marker["id"].as_u64().unwrap() - 5;
+        // 144 pixels a marker and its gap, a 24-pixel margin: the top-left corner's pixel centre.
+        let top_left = [24.0 + 144.0 * (index % 4) as f64 - 0.5, 24.0 + 144.0 * (index / 4) as f64 - 0.5];
+        let corner = marker["corners"][0].as_array().unwrap();
+        assert!((corner[0].as_f64().unwrap() - top_left[0]).abs() < 0.6, "{marker}");
+        assert!((corner[1].as_f64().unwrap() - top_left[1]).abs() < 0.6, "{marker}");
+    }
+    let too_many =
+        canopy(&["ar", "board", "--markers", "20x20", "--marker-m", "0.03", "--separation-m", "0", "--out", "x.png"]);
+    assert!(too_many.status.code() == Some(2) && stderr(&too_many).contains("has 250"), "{}", stderr(&too_many));
+
     // A short synthetic sequence, then the detector on two of its frames and a bad file.
     let sequence = folder.path().join("seq");
     let output = canopy(&[

@@ -7,6 +7,7 @@ use crate::ar::frames::load_image;
 use crate::ar::report::marker_json;
 use crate::ar::sample::{FrameFormat, write_sequence};
 use bevy::math::UVec2;
+use canopy_vision::board::GridBoard;
 use canopy_vision::synth::{SequenceSettings, marker_image};
 use canopy_vision::{Dictionary, Gray, Intrinsics, Scratch, Settings, detect, pose::estimate};
 use clap::{Args, Subcommand};
@@ -37,6 +38,8 @@ pub enum ArCommand {
         #[arg(long)]
         force: bool,
     },
+    /// Write an ArUco grid board as a PNG for printing, laid out as OpenCV's `GridBoard`.
+    Board(BoardArgs),
     /// Write a synthetic camera sequence of a marker on a table under known poses, with noise,
     /// blur, changing light and occlusions: frames, `calibration.yaml` and `truth.json`.
     Sequence(SequenceArgs),
@@ -57,6 +60,44 @@ pub enum ArCommand {
         #[arg(long, value_parser = parse_side)]
         side: Option<f64>,
     },
+}
+
+/// `canopy ar board`.
+#[derive(Args, Debug)]
+pub struct BoardArgs {
+    /// Markers across and down, e.g. 5x7.
+    #[arg(long, value_name = "XxY", value_parser = parse_markers)]
+    markers: [u32; 2],
+    /// Each marker's side as printed, metres.
+    #[arg(long, value_parser = parse_side)]
+    marker_m: f64,
+    /// The gap between neighbouring markers, metres.
+    #[arg(long)]
+    separation_m: f64,
+    /// The top-left marker's id; the others count up along the rows.
+    #[arg(long, default_value_t = 0)]
+    first_id: u32,
+    /// The dictionary, by OpenCV's name.
+    #[arg(long, default_value = "6x6_250")]
+    dictionary: String,
+    /// Pixels a printed metre: 11811 prints at 300 dots an inch.
+    #[arg(long, default_value_t = 11811.0)]
+    pixels_per_metre: f64,
+    /// White margin round the board, metres (the separation by default).
+    #[arg(long)]
+    margin_m: Option<f64>,
+    /// The PNG to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace `--out` if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Markers across and down, `XxY`.
+fn parse_markers(text: &str) -> Result<[u32; 2], String> {
+    let size = parse_size(text)?;
+    Ok([size.x, size.y])
 }
 
 /// `canopy ar sequence`.
@@ -128,6 +169,7 @@ impl ArCommand {
             ArCommand::Marker { dictionary, id, cell_px, margin, out, force } => {
                 write_marker(&dictionary, id, cell_px, margin, &out, force)
             }
+            ArCommand::Board(args) => write_board(&args),
             ArCommand::Sequence(args) => sequence(&args),
             ArCommand::Detect { images, calibration, dictionary, side } => {
                 detect_markers(&images, calibration.as_deref(), &dictionary, side)
@@ -152,17 +194,70 @@ fn write_marker(dictionary: &str, id: u32, cell_px: u32, margin: u32, out: &Path
         eprintln!("canopy ar marker: {dictionary} has markers 0 to {}, not {id}", dictionary.len() - 1);
         return ExitCode::from(2);
     };
-    match image::GrayImage::from_raw(marker.width, marker.height, marker.pixels).map(|image| image.save(out)) {
-        Some(Ok(())) => {
-            println!("{}: {dictionary} marker {id}, {} x {} pixels", out.display(), marker.width, marker.height);
+    let (width, height) = (marker.width, marker.height);
+    match save_gray(marker, out) {
+        Ok(()) => {
+            println!("{}: {dictionary} marker {id}, {width} x {height} pixels", out.display());
             ExitCode::SUCCESS
         }
-        Some(Err(error)) => {
-            eprintln!("{}: {error}", out.display());
+        Err(error) => {
+            eprintln!("{error}");
             ExitCode::from(1)
         }
-        None => ExitCode::from(1),
     }
+}
+
+/// `canopy ar board`: exit 0 with the file written, 1 if it could not be, 2 for bad settings.
+fn write_board(args: &BoardArgs) -> ExitCode {
+    let usage = |error: String| {
+        eprintln!("canopy ar board: {error}");
+        ExitCode::from(2)
+    };
+    let dictionary = match Dictionary::named(&args.dictionary) {
+        Ok(dictionary) => dictionary,
+        Err(error) => return usage(error.to_string()),
+    };
+    let board = match GridBoard::new(args.markers, args.marker_m, args.separation_m, args.first_id, &dictionary) {
+        Ok(board) => board,
+        Err(error) => return usage(error),
+    };
+    let margin_m = args.margin_m.unwrap_or(args.separation_m);
+    let image = match (margin_m.is_finite() && margin_m >= 0.0 && args.pixels_per_metre.is_finite())
+        .then(|| board.image(&dictionary, args.pixels_per_metre, margin_m))
+        .flatten()
+    {
+        Some(image) => image,
+        None => return usage("the image would be empty or more than 16384 pixels a side".into()),
+    };
+    if let Some(refused) = refuse_to_replace(&args.out, args.force) {
+        return refused;
+    }
+    let (width, height) = (image.width, image.height);
+    match save_gray(image, &args.out) {
+        Ok(()) => {
+            let last = args.first_id + args.markers[0] * args.markers[1] - 1;
+            println!(
+                "{}: {dictionary} markers {} to {last}, {width} x {height} pixels; print it {:.1} x {:.1} cm",
+                args.out.display(),
+                args.first_id,
+                f64::from(width) / args.pixels_per_metre * 100.0,
+                f64::from(height) / args.pixels_per_metre * 100.0
+            );
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("{error}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// Writes a grey image as a PNG, or says why it could not be.
+fn save_gray(image: Gray, out: &Path) -> Result<(), String> {
+    let Some(png) = image::GrayImage::from_raw(image.width, image.height, image.pixels) else {
+        return Err(format!("{}: the image's pixels do not fill it", out.display()));
+    };
+    png.save(out).map_err(|error| format!("{}: {error}", out.display()))
 }
 
 /// `canopy ar sequence`: exit 0 with the files written, 1 if they could not be, 2 for bad

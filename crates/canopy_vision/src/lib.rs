@@ -10,12 +10,14 @@
 //! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
 //! | [`fit`] | a camera frame fitted into a view of another size, its distortion removed |
 //! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
+//! | [`board`] | ArUco grid boards in OpenCV's layout: printable images and a pose from every marker found |
 //! | [`steady`] | poses followed from frame to frame without flipping between the two solutions |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
 //!
 //! Pixel coordinates are OpenCV's throughout: pixel `(x, y)`'s centre is at `(x, y)`.
 
+pub mod board;
 pub mod camera;
 pub mod contour;
 pub mod detect;

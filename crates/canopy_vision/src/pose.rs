@@ -200,47 +200,46 @@ fn translation(rotation: &DMat3, object: &[DVec3], normalized: &[DVec2]) -> DVec
 }
 
 /// Levenberg–Marquardt on the rotation vector and translation, minimising the squared pixel
-/// distances between the projected `object` points and `pixels`.
-fn refine(start: Pose, object: &[DVec3; 4], pixels: &[DVec2; 4], camera: &Intrinsics) -> Pose {
+/// distances between the projected `object` points and `pixels` (as many of each).
+pub(crate) fn refine(start: Pose, object: &[DVec3], pixels: &[DVec2], camera: &Intrinsics) -> Pose {
     let pack = |pose: &Pose| {
         let (r, t) = (pose.rvec(), pose.translation);
         [r.x, r.y, r.z, t.x, t.y, t.z]
     };
     let unpack = |x: &[f64; 6]| Pose::from_rvec(DVec3::new(x[0], x[1], x[2]), DVec3::new(x[3], x[4], x[5]));
-    let residuals = |x: &[f64; 6]| -> Option<[f64; 8]> {
+    let residuals = |x: &[f64; 6]| -> Option<Vec<f64>> {
         let pose = unpack(x);
-        let mut out = [0.0; 8];
-        for (i, (&p, &q)) in object.iter().zip(pixels).enumerate() {
+        let mut out = Vec::with_capacity(2 * object.len());
+        for (&p, &q) in object.iter().zip(pixels) {
             let r = camera.project(pose.apply(p))? - q;
-            out[2 * i] = r.x;
-            out[2 * i + 1] = r.y;
+            out.extend([r.x, r.y]);
         }
         Some(out)
     };
-    let cost = |r: &[f64; 8]| r.iter().map(|v| v * v).sum::<f64>();
+    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let mut x = pack(&start);
     let Some(mut r) = residuals(&x) else { return start };
     let mut lambda = 1e-3;
+    let mut jacobian = vec![[0.0; 6]; r.len()];
     for _ in 0..50 {
         // The Jacobian by central differences.
-        let mut jacobian = [[0.0; 6]; 8];
         for k in 0..6 {
             let step = 1e-7 * x[k].abs().max(1e-2);
             let (mut plus, mut minus) = (x, x);
             plus[k] += step;
             minus[k] -= step;
             let (Some(rp), Some(rm)) = (residuals(&plus), residuals(&minus)) else { return unpack(&x) };
-            for i in 0..8 {
-                jacobian[i][k] = (rp[i] - rm[i]) / (2.0 * step);
+            for (row, (p, m)) in jacobian.iter_mut().zip(rp.iter().zip(&rm)) {
+                row[k] = (p - m) / (2.0 * step);
             }
         }
         let mut jtj = [[0.0; 6]; 6];
         let mut jtr = [0.0; 6];
-        for i in 0..8 {
+        for (row, residual) in jacobian.iter().zip(&r) {
             for a in 0..6 {
-                jtr[a] += jacobian[i][a] * r[i];
+                jtr[a] += row[a] * residual;
                 for b in 0..6 {
-                    jtj[a][b] += jacobian[i][a] * jacobian[i][b];
+                    jtj[a][b] += row[a] * row[b];
                 }
             }
         }
