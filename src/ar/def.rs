@@ -95,10 +95,15 @@ pub struct ArDef {
     pub calibration: FolderFile<CalibrationFile>,
     /// The markers' dictionary, by OpenCV's name: `4x4_50`, `6x6_250`, `aruco_original`, ...
     pub dictionary: DictionaryName,
-    /// The marker the scene stands on.
-    pub marker_id: u32,
+    /// The marker the scene stands on (with `marker_side_m`; or a `board`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub marker_id: Option<u32>,
     /// The marker's side (its black square), metres.
-    pub marker_side_m: PositiveMetres,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub marker_side_m: Option<PositiveMetres>,
+    /// Or a grid board of markers the scene stands on, at its centre.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<BoardDef>,
     /// Marker metres to the world metre: the scene shrunk onto the marker; 1 by default.
     #[serde(default = "one")]
     pub scale: Scale,
@@ -124,6 +129,22 @@ pub(super) fn one() -> Scale {
 
 fn half_second() -> HoldSeconds {
     HoldSeconds(0.5)
+}
+
+/// An ArUco grid board in a scene file, laid out as OpenCV's `GridBoard` (see
+/// `canopy ar board`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoardDef {
+    /// Markers across and down.
+    pub markers: [u32; 2],
+    /// Each marker's side, metres.
+    pub marker_m: f64,
+    /// The gap between neighbouring markers, metres.
+    pub separation_m: f64,
+    /// The top-left marker's id; 0 by default.
+    #[serde(default)]
+    pub first_id: u32,
 }
 
 /// What an `ar` entity is built into: its frames and the camera for their size.

@@ -11,6 +11,7 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
 use bevy::app::App;
 use bevy::ecs::world::EntityWorldMut;
+use canopy_vision::board::GridBoard;
 use std::sync::Arc;
 
 /// The `ar` kind.
@@ -24,13 +25,20 @@ impl EntityKind for ArKind {
 
     fn validate(def: &ArDef, cx: &EntityContext) -> Result<(), FileError> {
         let dictionary = def.dictionary.0;
-        if def.marker_id >= dictionary.len() {
-            return Err(cx.field_error(
-                "marker_id",
-                0,
-                "marker_id",
-                format!("{} has markers 0 to {}, not {}", dictionary.name, dictionary.len() - 1, def.marker_id),
-            ));
+        match (def.marker_id, def.marker_side_m, def.board) {
+            (Some(id), Some(_), None) if id >= dictionary.len() => {
+                let message = format!("{} has markers 0 to {}, not {id}", dictionary.name, dictionary.len() - 1);
+                return Err(cx.field_error("marker_id", 0, "marker_id", message));
+            }
+            (Some(_), Some(_), None) => {}
+            (None, None, Some(board)) => {
+                GridBoard::new(board.markers, board.marker_m, board.separation_m, board.first_id, &dictionary)
+                    .map_err(|error| cx.field_error("board", 0, "board", error))?;
+            }
+            _ => {
+                let message = "expected `marker_id` and `marker_side_m`, or a `board`, to stand the scene on";
+                return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("marker_id"))));
+            }
         }
         if cx.kind_index > 0 {
             return Err(cx.field_error("frames", 0, "frames", "a scene has one camera to draw over: one `ar` entity"));

@@ -2,7 +2,7 @@
 //! it, its pose and errors, the time a frame's reading took, and a switch that outlines the
 //! marker found.
 
-use super::plugin::{ArState, ArView, Finding};
+use super::plugin::{ArState, ArView, Finding, Target};
 use bevy::prelude::*;
 use bevy_egui::egui;
 
@@ -10,7 +10,7 @@ use bevy_egui::egui;
 pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
     let Some(view) = entity_mut.get::<ArView>() else { return };
-    let (frames, dictionary, marker_id) = (view.frames.clone(), view.dictionary.name, view.marker_id);
+    let (frames, dictionary, target) = (view.frames.clone(), view.dictionary.name, view.target);
     let Some(mut state) = entity_mut.get_mut::<ArState>() else { return };
     let mut outline = state.outline;
     if ui.checkbox(&mut outline, "Outline the marker found").on_hover_text("its first side in red").changed() {
@@ -26,7 +26,14 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             frames.files[index].file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
         };
         let shown = state.records.back();
-        row(ui, "marker", format!("{dictionary} #{marker_id}"));
+        match target {
+            Target::Marker { id, .. } => row(ui, "marker", format!("{dictionary} #{id}")),
+            Target::Board(board) => row(
+                ui,
+                "board",
+                format!("{dictionary}, {} x {} markers from #{}", board.markers[0], board.markers[1], board.first_id),
+            ),
+        }
         row(
             ui,
             "frame",
@@ -44,6 +51,13 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
                 row(ui, "tvec (m)", format!("{:.4} {:.4} {:.4}", t.x, t.y, t.z));
                 row(ui, "rvec (rad)", format!("{:.4} {:.4} {:.4}", r.x, r.y, r.z));
                 row(ui, "reprojection", format!("{error_px:.3} px (the other pose {other_px:.2} px)"));
+            }
+            Some(Finding::Board { pose, .. }) => {
+                let (t, r) = (pose.pose.translation, pose.pose.rvec());
+                row(ui, "found", format!("{:.3} m away, {} markers", t.length(), pose.markers));
+                row(ui, "tvec (m)", format!("{:.4} {:.4} {:.4}", t.x, t.y, t.z));
+                row(ui, "rvec (rad)", format!("{:.4} {:.4} {:.4}", r.x, r.y, r.z));
+                row(ui, "reprojection", format!("{:.3} px", pose.error_px));
             }
             Some(Finding::Lost { held: true }) => row(ui, "lost", "its last pose held".into()),
             Some(Finding::Lost { held: false }) => row(ui, "lost", "only the photograph shows".into()),

@@ -16,10 +16,11 @@ use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
-use bevy::math::DVec2;
+use bevy::math::{DMat3, DVec2, DVec3};
 use bevy::prelude::*;
+use canopy_vision::board::{BoardPose, GridBoard};
 use canopy_vision::camera::Intrinsics;
-use canopy_vision::detect::{Scratch, Settings, detect};
+use canopy_vision::detect::{Marker, Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
 use canopy_vision::fit::{Fit, Remap};
 use canopy_vision::gray::Gray;
@@ -61,10 +62,8 @@ pub struct ArView {
     pub camera: Intrinsics,
     /// The markers' dictionary.
     pub dictionary: Dictionary,
-    /// The marker the scene stands on.
-    pub marker_id: u32,
-    /// Its side, metres.
-    pub side_m: f64,
+    /// What the scene stands on.
+    pub target: Target,
     /// Marker metres to the world metre.
     pub scale: f64,
     /// Frames a second.
@@ -83,8 +82,7 @@ impl ArView {
             folder: built.folder.clone(),
             camera: built.camera,
             dictionary: def.dictionary.0,
-            marker_id: def.marker_id,
-            side_m: f64::from(def.marker_side_m.0),
+            target: Target::of(def),
             scale: def.scale.0,
             fps: def.fps.0,
             repeat: def.repeat,
@@ -97,6 +95,37 @@ impl ArView {
     fn frame_at(&self, time_s: f64) -> usize {
         let index = (time_s * self.fps + 1e-6).floor() as usize;
         if self.repeat { index % self.frames.len() } else { index.min(self.frames.len() - 1) }
+    }
+}
+
+/// What an `ar` scene stands on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// One marker.
+    Marker {
+        /// Its id in the dictionary.
+        id: u32,
+        /// Its side, metres.
+        side_m: f64,
+    },
+    /// A grid board, the scene on its centre.
+    Board(GridBoard),
+}
+
+impl Target {
+    /// The target a checked definition names.
+    fn of(def: &ArDef) -> Self {
+        match (def.marker_id, def.marker_side_m, def.board) {
+            (_, _, Some(board)) => Target::Board(GridBoard {
+                markers: board.markers,
+                marker_m: board.marker_m,
+                separation_m: board.separation_m,
+                first_id: board.first_id,
+            }),
+            (id, side, None) => {
+                Target::Marker { id: id.unwrap_or_default(), side_m: side.map_or(0.0, |side| f64::from(side.0)) }
+            }
+        }
     }
 }
 
@@ -114,6 +143,14 @@ pub enum Finding {
         kept_alternative: bool,
         /// Whether the pose shown turned over from the one before.
         flipped: bool,
+    },
+    /// The board found: its pose from the markers of it found.
+    Board {
+        /// Its pose, moved to the board's centre with the axes of a marker's frame (x right, y
+        /// up the printed board, z out of it), and its error over every corner used.
+        pose: BoardPose,
+        /// Every corner used: where it lies in that frame, metres, and where it was found.
+        points: Vec<(DVec3, DVec2)>,
     },
     /// Not found; the last pose is shown while it is held.
     Lost {
@@ -185,10 +222,14 @@ impl ArState {
         self.follower.kept()
     }
 
-    /// The marker's corners in the frame shown, if it was found there.
-    fn found_corners(&self) -> Option<[DVec2; 4]> {
-        match self.records.back()?.finding {
-            Finding::Found { corners, .. } => Some(corners),
+    /// The corners found in the frame shown, each with where it lies in the target's frame
+    /// (metres), if the target was found there.
+    fn found_points(&self, target: &Target) -> Option<Vec<(DVec3, DVec2)>> {
+        match (&self.records.back()?.finding, target) {
+            (Finding::Found { corners, .. }, Target::Marker { side_m, .. }) => {
+                Some(marker_corners(*side_m).into_iter().zip(*corners).collect())
+            }
+            (Finding::Board { points, .. }, _) => Some(points.clone()),
             _ => None,
         }
     }
@@ -220,23 +261,32 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
             let markers = detect(&gray, &view.dictionary, &Settings::default(), Some(&view.camera), &mut state.scratch);
             state.image = Some(Arc::new(image));
             state.images_read += 1;
-            let found = markers.iter().find(|m| m.id == view.marker_id).and_then(|marker| {
-                let corners = marker.corners_f64();
-                estimate(&corners, view.side_m, &view.camera).map(|estimate| (corners, estimate))
-            });
-            match found {
-                Some((corners, estimate)) => {
-                    let shown = state.follower.follow(&estimate);
-                    let (kept_alternative, flipped) = (shown.kept_alternative, shown.flipped);
-                    Finding::Found { corners, estimate: Box::new(estimate), kept_alternative, flipped }
+            match view.target {
+                Target::Marker { id, side_m } => {
+                    let found = markers.iter().find(|m| m.id == id).and_then(|marker| {
+                        let corners = marker.corners_f64();
+                        estimate(&corners, side_m, &view.camera).map(|estimate| (corners, estimate))
+                    });
+                    match found {
+                        Some((corners, estimate)) => {
+                            let shown = state.follower.follow(&estimate);
+                            let (kept_alternative, flipped) = (shown.kept_alternative, shown.flipped);
+                            Finding::Found { corners, estimate: Box::new(estimate), kept_alternative, flipped }
+                        }
+                        None => Finding::Lost { held: false },
+                    }
                 }
-                None => Finding::Lost { held: false },
+                Target::Board(board) => match board.pose(&markers, &view.camera) {
+                    Some(found) => board_finding(&board, &markers, found),
+                    None => Finding::Lost { held: false },
+                },
             }
         }
     };
     let found_pose = match &finding {
         Finding::Found { estimate, kept_alternative: true, .. } => Some(estimate.alternative),
         Finding::Found { estimate, .. } => Some(estimate.pose),
+        Finding::Board { pose, .. } => Some(pose.pose),
         _ => None,
     };
     let shown = state.tracker.update(found_pose, state.time_s, view.hold_s);
@@ -254,6 +304,25 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
         state.records_dropped += 1;
     }
     state.records.push_back(FrameRecord { frame: index, time_s: state.time_s, finding });
+}
+
+/// A board's finding: its pose moved to its centre with a marker frame's axes, and the
+/// corners of its markers found, in that frame.
+fn board_finding(board: &GridBoard, markers: &[Marker], found: BoardPose) -> Finding {
+    let centre = (board.size_m() * 0.5).extend(0.0);
+    // A marker frame's point p lies at flip p + centre in the board's frame.
+    let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
+    let rotation = found.pose.rotation * flip;
+    let pose = Pose { rotation, translation: found.pose.translation + found.pose.rotation * centre };
+    let seen_once = |id: u32| markers.iter().filter(|m| m.id == id).count() == 1;
+    let points = markers
+        .iter()
+        .filter(|marker| seen_once(marker.id))
+        .filter_map(|marker| Some((board.corners(marker.id)?, marker.corners_f64())))
+        .flat_map(|(object, pixels)| object.into_iter().zip(pixels))
+        .map(|(object, pixel)| (flip * (object - centre), pixel))
+        .collect();
+    Finding::Board { pose: BoardPose { pose, ..found }, points }
 }
 
 fn place_camera(
@@ -274,11 +343,10 @@ fn place_camera(
     // Where the drawn scene puts the marker's corners, against where they were found (both
     // without the lens's distortion, as the backdrop shows them).
     let clip = render.camera.view_projection(size.x as f32 / size.y as f32);
-    state.overlay_error_px = state.found_corners().map(|corners| {
-        marker_corners(view.side_m)
-            .iter()
-            .zip(corners)
-            .map(|(&corner, found)| {
+    state.overlay_error_px = state.found_points(&view.target).map(|points| {
+        points
+            .into_iter()
+            .map(|(corner, found)| {
                 let ndc = clip.project_point3(world_from_marker(corner, view.scale));
                 let drawn = DVec2::new(
                     f64::from((ndc.x + 1.0) * 0.5 * size.x as f32) - 0.5,
@@ -319,14 +387,18 @@ fn lay_over_frame(
     }
     framebuffer.fill_empty(&state.backdrop_pixels);
     if state.outline
-        && let Some(corners) = state.found_corners()
+        && let Some(points) = state.found_points(&view.target)
     {
         let fit = Fit::new(view.camera.size, size);
-        let corners = corners.map(|corner| fit.to_view(view.camera.straightened(corner)));
-        for (i, &from) in corners.iter().enumerate() {
-            // The first side (top-left to top-right as printed) in red, the others in green.
-            let color = if i == 0 { [230, 40, 40, 255] } else { [40, 220, 60, 255] };
-            framebuffer.draw_line(from.as_vec2(), corners[(i + 1) % 4].as_vec2(), color);
+        // Each marker found: its four corners in OpenCV's order.
+        for quad in points.chunks_exact(4) {
+            let corners: Vec<DVec2> =
+                quad.iter().map(|&(_, found)| fit.to_view(view.camera.straightened(found))).collect();
+            for (i, &from) in corners.iter().enumerate() {
+                // The first side (top-left to top-right as printed) in red, the others in green.
+                let color = if i == 0 { [230, 40, 40, 255] } else { [40, 220, 60, 255] };
+                framebuffer.draw_line(from.as_vec2(), corners[(i + 1) % 4].as_vec2(), color);
+            }
         }
     }
 }
@@ -336,8 +408,18 @@ impl DumpState for ArView {
         out.insert("frames".into(), json!(self.frames.len()));
         out.insert("frame_size".into(), json!(self.frames.size));
         out.insert("dictionary".into(), json!(self.dictionary.name));
-        out.insert("marker_id".into(), json!(self.marker_id));
-        out.insert("marker_side_m".into(), json!(self.side_m));
+        match self.target {
+            Target::Marker { id, side_m } => {
+                out.insert("marker_id".into(), json!(id));
+                out.insert("marker_side_m".into(), json!(side_m));
+            }
+            Target::Board(board) => {
+                let (markers, first_id) = (board.markers, board.first_id);
+                let (marker_m, separation_m) = (board.marker_m, board.separation_m);
+                let board = json!({"markers": markers, "marker_m": marker_m, "separation_m": separation_m, "first_id": first_id});
+                out.insert("board".into(), board);
+            }
+        }
     }
 }
 
@@ -356,6 +438,13 @@ impl DumpState for ArState {
                         found["flipped"] = json!(flipped);
                         found
                     }
+                    Finding::Board { pose, .. } => json!({
+                        "marker": "found",
+                        "board_markers": pose.markers,
+                        "rvec": pose.pose.rvec().to_array(),
+                        "tvec": pose.pose.translation.to_array(),
+                        "reprojection_error_px": pose.error_px,
+                    }),
                     Finding::Lost { held: true } => json!({"marker": "held"}),
                     Finding::Lost { held: false } => json!({"marker": "not found"}),
                     Finding::Unreadable(message) => json!({"marker": "unreadable", "error": message}),

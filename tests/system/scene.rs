@@ -74,6 +74,8 @@ const MALFORMED: &[(&str, Option<usize>, &[&str])] = &[
     ("nan_position.yaml", Some(6), &["entities[1].shape.position", "expected a coordinate", "NaN"]),
     ("huge_number.yaml", Some(2), &["camera.position", "expected a coordinate", "found 1e300"]),
     ("unknown_primitive.yaml", Some(4), &["entities[0].shape.primitive", "unknown variant `cone`"]),
+    ("ar_board_too_large.yaml", Some(7), &["entities[0].ar.board", "400 markers", "6x6_250 has 250"]),
+    ("ar_marker_and_board.yaml", Some(3), &["entities[0].ar.marker_id", "or a `board`"]),
     ("shape_nothing.yaml", Some(5), &["entities[1].shape.primitive", "expected `primitive: box`", "or `mesh: FILE`"]),
     ("shape_mesh_and_primitive.yaml", Some(5), &["entities[0].shape.mesh", "a primitive or a mesh, not both"]),
     ("shape_mesh_texture.yaml", Some(5), &["entities[0].shape.texture", "takes its textures from its file"]),

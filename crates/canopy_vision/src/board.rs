@@ -178,43 +178,11 @@ impl GridBoard {
 mod tests {
     use super::*;
     use crate::detect::{Scratch, Settings, detect};
+    use crate::synth::photograph_print;
 
     fn board() -> (GridBoard, Dictionary) {
         let dictionary = Dictionary::named("6x6_250").unwrap();
         (GridBoard::new([4, 3], 0.04, 0.01, 10, &dictionary).unwrap(), dictionary)
-    }
-
-    /// The printed board `image` (at `pixels_per_metre`, `margin_m` round it) photographed by
-    /// `camera` from `pose` (board frame to camera), on a grey table, four samples a pixel.
-    fn photograph(image: &Gray, pixels_per_metre: f64, margin_m: f64, pose: &Pose, camera: &Intrinsics) -> Gray {
-        let [width, height] = camera.size;
-        let to_board = pose.rotation.transpose();
-        let eye = -(to_board * pose.translation);
-        let mut out = Gray::filled(width, height, 0);
-        for y in 0..height {
-            for x in 0..width {
-                let mut sum = 0.0;
-                for (dx, dy) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
-                    let ray =
-                        to_board * camera.normalized(DVec2::new(f64::from(x) + dx, f64::from(y) + dy)).extend(1.0);
-                    let s = -eye.z / ray.z;
-                    let hit = eye + ray * s;
-                    let pixel = (hit.truncate() + DVec2::splat(margin_m)) * pixels_per_metre;
-                    let inside = s > 0.0
-                        && pixel.x >= 0.0
-                        && pixel.y >= 0.0
-                        && pixel.x < f64::from(image.width)
-                        && pixel.y < f64::from(image.height);
-                    sum += if inside {
-                        f64::from(image.pixels[(pixel.y as u32 * image.width + pixel.x as u32) as usize])
-                    } else {
-                        110.0
-                    };
-                }
-                out.pixels[(y * width + x) as usize] = (sum / 4.0).round() as u8;
-            }
-        }
-        out
     }
 
     #[test]
@@ -243,7 +211,7 @@ mod tests {
         let rotation = DMat3::from_rotation_y(0.35) * DMat3::from_rotation_x(-0.6);
         let translation = DVec3::new(0.0, 0.0, 0.45) - rotation * (board.size_m() * 0.5).extend(0.0);
         let truth = Pose { rotation, translation };
-        let frame = photograph(&image, pixels_per_metre, margin_m, &truth, &camera);
+        let frame = photograph_print(&image, pixels_per_metre, margin_m, &truth, &camera);
         let markers = detect(&frame, &dictionary, &Settings::default(), Some(&camera), &mut Scratch::default());
         let found = board.pose(&markers, &camera).unwrap();
         assert_eq!(found.markers, 12, "every marker of the board");

@@ -36,6 +36,38 @@ pub fn marker_image(dictionary: &Dictionary, id: u32, cell_px: u32, margin_cells
     Some(image)
 }
 
+/// A print lying flat photographed: `image` printed at `pixels_per_metre` in the plane z = 0
+/// of its frame, x right and y down the print, the print's top-left corner at `(-margin_m,
+/// -margin_m)` (a board's frame, its margin round it), seen by `camera` from `pose` (print
+/// frame to camera frame) on a grey table, four samples a pixel.
+pub fn photograph_print(image: &Gray, pixels_per_metre: f64, margin_m: f64, pose: &Pose, camera: &Intrinsics) -> Gray {
+    let [width, height] = camera.size;
+    let to_print = pose.rotation.transpose();
+    let eye = -(to_print * pose.translation);
+    let mut out = Gray::filled(width, height, 0);
+    for y in 0..height {
+        for x in 0..width {
+            let mut sum = 0.0;
+            for (dx, dy) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
+                let ray = to_print * camera.normalized(DVec2::new(f64::from(x) + dx, f64::from(y) + dy)).extend(1.0);
+                let s = -eye.z / ray.z;
+                let pixel = ((eye + ray * s).truncate() + DVec2::splat(margin_m)) * pixels_per_metre;
+                let on_print = s > 0.0
+                    && pixel.x >= 0.0
+                    && pixel.y >= 0.0
+                    && pixel.x < f64::from(image.width)
+                    && pixel.y < f64::from(image.height);
+                sum += match on_print {
+                    true => f64::from(image.pixels[(pixel.y as u32 * image.width + pixel.x as u32) as usize]),
+                    false => 110.0,
+                };
+            }
+            out.pixels[(y * width + x) as usize] = (sum / 4.0).round() as u8;
+        }
+    }
+    out
+}
+
 /// What a synthetic sequence shows and how it is spoilt.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SequenceSettings {
