@@ -64,15 +64,8 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             Some(Finding::Unreadable(message)) => row(ui, "unreadable", message.clone()),
             None => {}
         }
-        row(
-            ui,
-            "flips",
-            format!(
-                "{} (the other solution kept {} times, continuing the pose)",
-                state.follower_flips(),
-                state.follower_kept()
-            ),
-        );
+        let (flips, kept) = (state.follower_flips(), state.follower_kept());
+        row(ui, "flips", format!("{flips} (the other pose kept {kept} times)"));
         if let Some(error) = state.overlay_error_px {
             row(ui, "drawn marker", format!("{error:.3} px from the found one"));
         }
