@@ -1,6 +1,7 @@
 //! `canopy ar`: printable markers, synthetic camera sequences with known poses, and the marker
 //! detector on images.
 
+use super::ar_calibrate::CalibrateArgs;
 use super::{parse_size, refuse_to_replace};
 use crate::ar::calibration as calib;
 use crate::ar::frames::load_image;
@@ -40,6 +41,11 @@ pub enum ArCommand {
     },
     /// Write an ArUco grid board as a PNG for printing, laid out as OpenCV's `GridBoard`.
     Board(BoardArgs),
+    /// Calibrate a camera from photographs of a printed board, without OpenCV: Zhang's method
+    /// refined by Levenberg-Marquardt over the focal lengths, principal point and OpenCV's
+    /// five distortion coefficients; prints each view's reprojection error and writes the
+    /// calibration file.
+    Calibrate(CalibrateArgs),
     /// Write a synthetic camera sequence of a marker on a table under known poses, with noise,
     /// blur, changing light and occlusions: frames, `calibration.yaml` and `truth.json`.
     Sequence(SequenceArgs),
@@ -95,7 +101,7 @@ pub struct BoardArgs {
 }
 
 /// Markers across and down, `XxY`.
-fn parse_markers(text: &str) -> Result<[u32; 2], String> {
+pub(super) fn parse_markers(text: &str) -> Result<[u32; 2], String> {
     let size = parse_size(text)?;
     Ok([size.x, size.y])
 }
@@ -170,6 +176,7 @@ impl ArCommand {
                 write_marker(&dictionary, id, cell_px, margin, &out, force)
             }
             ArCommand::Board(args) => write_board(&args),
+            ArCommand::Calibrate(args) => args.run(),
             ArCommand::Sequence(args) => sequence(&args),
             ArCommand::Detect { images, calibration, dictionary, side } => {
                 detect_markers(&images, calibration.as_deref(), &dictionary, side)

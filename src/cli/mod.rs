@@ -17,6 +17,7 @@
 //! written) or 2 (settings that make no sense), with a message naming what is wrong.
 
 pub mod ar;
+pub mod ar_calibrate;
 pub mod bench;
 pub mod deform_batch;
 pub mod mesh;

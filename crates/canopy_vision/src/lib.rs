@@ -7,6 +7,7 @@
 //! | [`contour`] | adaptive threshold, dark regions' outer boundaries, polygon simplification |
 //! | [`dictionary`] | OpenCV's predefined ArUco and AprilTag dictionaries and matching with error correction |
 //! | [`detect`] | the marker detector: candidates, cells, ids, sub-pixel corners |
+//! | [`calibrate`] | a camera calibrated from views of a flat target: Zhang's closed form refined by Levenberg-Marquardt |
 //! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
 //! | [`fit`] | a camera frame fitted into a view of another size, its distortion removed |
 //! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
@@ -18,6 +19,7 @@
 //! Pixel coordinates are OpenCV's throughout: pixel `(x, y)`'s centre is at `(x, y)`.
 
 pub mod board;
+pub mod calibrate;
 pub mod camera;
 pub mod contour;
 pub mod detect;
