@@ -2,7 +2,7 @@
 //! detector on images.
 
 use super::ar_calibrate::CalibrateArgs;
-use super::{parse_size, refuse_to_replace};
+use super::{parse_markers, parse_size, refuse_to_replace};
 use crate::ar::calibration as calib;
 use crate::ar::frames::load_image;
 use crate::ar::report::marker_json;
@@ -98,12 +98,6 @@ pub struct BoardArgs {
     /// Replace `--out` if it exists.
     #[arg(long)]
     force: bool,
-}
-
-/// Markers across and down, `XxY`.
-pub(super) fn parse_markers(text: &str) -> Result<[u32; 2], String> {
-    let size = parse_size(text)?;
-    Ok([size.x, size.y])
 }
 
 /// `canopy ar sequence`.

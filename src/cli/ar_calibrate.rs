@@ -29,7 +29,7 @@ pub struct CalibrateArgs {
     #[arg(long, value_enum, default_value = "grid")]
     board: BoardKind,
     /// Its markers across and down, e.g. 5x7.
-    #[arg(long, value_name = "XxY", value_parser = super::ar::parse_markers)]
+    #[arg(long, value_name = "XxY", value_parser = super::parse_markers)]
     markers: [u32; 2],
     /// Each marker's side as printed, metres.
     #[arg(long)]

@@ -125,6 +125,12 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
     if valid.contains(&w) && valid.contains(&h) { Ok(UVec2::new(w, h)) } else { Err(error()) }
 }
 
+/// Markers across and down a board, `XxY`.
+fn parse_markers(text: &str) -> Result<[u32; 2], String> {
+    let size = parse_size(text)?;
+    Ok([size.x, size.y])
+}
+
 /// Simulated seconds, from 0 to `max`.
 fn parse_seconds(text: &str, max: f64) -> Result<f64, String> {
     match text.parse::<f64>() {
