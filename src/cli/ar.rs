@@ -2,13 +2,13 @@
 //! detector on images.
 
 use super::ar_calibrate::CalibrateArgs;
-use super::{parse_markers, parse_size, refuse_to_replace};
+use super::board_layout::BoardLayout;
+use super::{parse_size, refuse_to_replace};
 use crate::ar::calibration as calib;
 use crate::ar::frames::load_image;
 use crate::ar::report::marker_json;
 use crate::ar::sample::{FrameFormat, write_sequence};
 use bevy::math::UVec2;
-use canopy_vision::board::GridBoard;
 use canopy_vision::synth::{SequenceSettings, marker_image};
 use canopy_vision::{Dictionary, Gray, Intrinsics, Scratch, Settings, detect, pose::estimate};
 use clap::{Args, Subcommand};
@@ -71,21 +71,8 @@ pub enum ArCommand {
 /// `canopy ar board`.
 #[derive(Args, Debug)]
 pub struct BoardArgs {
-    /// Markers across and down, e.g. 5x7.
-    #[arg(long, value_name = "XxY", value_parser = parse_markers)]
-    markers: [u32; 2],
-    /// Each marker's side as printed, metres.
-    #[arg(long, value_parser = parse_side)]
-    marker_m: f64,
-    /// The gap between neighbouring markers, metres.
-    #[arg(long)]
-    separation_m: f64,
-    /// The top-left marker's id; the others count up along the rows.
-    #[arg(long, default_value_t = 0)]
-    first_id: u32,
-    /// The dictionary, by OpenCV's name.
-    #[arg(long, default_value = "6x6_250")]
-    dictionary: String,
+    #[command(flatten)]
+    layout: BoardLayout,
     /// Pixels a printed metre: 11811 prints at 300 dots an inch.
     #[arg(long, default_value_t = 11811.0)]
     pixels_per_metre: f64,
@@ -214,15 +201,11 @@ fn write_board(args: &BoardArgs) -> ExitCode {
         eprintln!("canopy ar board: {error}");
         ExitCode::from(2)
     };
-    let dictionary = match Dictionary::named(&args.dictionary) {
-        Ok(dictionary) => dictionary,
-        Err(error) => return usage(error.to_string()),
-    };
-    let board = match GridBoard::new(args.markers, args.marker_m, args.separation_m, args.first_id, &dictionary) {
-        Ok(board) => board,
+    let (board, dictionary) = match args.layout.board() {
+        Ok(found) => found,
         Err(error) => return usage(error),
     };
-    let margin_m = args.margin_m.unwrap_or(args.separation_m);
+    let margin_m = args.margin_m.unwrap_or(board.separation_m);
     let image = match (margin_m.is_finite() && margin_m >= 0.0 && args.pixels_per_metre.is_finite())
         .then(|| board.image(&dictionary, args.pixels_per_metre, margin_m))
         .flatten()
@@ -236,11 +219,11 @@ fn write_board(args: &BoardArgs) -> ExitCode {
     let (width, height) = (image.width, image.height);
     match save_gray(image, &args.out) {
         Ok(()) => {
-            let last = args.first_id + args.markers[0] * args.markers[1] - 1;
+            let last = board.first_id + board.markers[0] * board.markers[1] - 1;
             println!(
                 "{}: {dictionary} markers {} to {last}, {width} x {height} pixels; print it {:.1} x {:.1} cm",
                 args.out.display(),
-                args.first_id,
+                board.first_id,
                 f64::from(width) / args.pixels_per_metre * 100.0,
                 f64::from(height) / args.pixels_per_metre * 100.0
             );

@@ -1,12 +1,12 @@
 //! `canopy ar calibrate`: a camera calibrated from photographs of a printed grid board,
 //! without OpenCV, written as the calibration file Canopy and OpenCV both read.
 
+use super::board_layout::BoardLayout;
 use super::refuse_to_replace;
 use crate::ar::calibration::to_yaml;
 use crate::ar::frames::load_image;
-use canopy_vision::board::GridBoard;
 use canopy_vision::calibrate::{View, calibrate};
-use canopy_vision::{Dictionary, Gray, Scratch, Settings, detect};
+use canopy_vision::{Gray, Scratch, Settings, detect};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,21 +28,8 @@ pub struct CalibrateArgs {
     /// The board photographed.
     #[arg(long, value_enum, default_value = "grid")]
     board: BoardKind,
-    /// Its markers across and down, e.g. 5x7.
-    #[arg(long, value_name = "XxY", value_parser = super::parse_markers)]
-    markers: [u32; 2],
-    /// Each marker's side as printed, metres.
-    #[arg(long)]
-    marker_m: f64,
-    /// The gap between neighbouring markers as printed, metres.
-    #[arg(long)]
-    separation_m: f64,
-    /// The top-left marker's id.
-    #[arg(long, default_value_t = 0)]
-    first_id: u32,
-    /// The dictionary, by OpenCV's name.
-    #[arg(long, default_value = "6x6_250")]
-    dictionary: String,
+    #[command(flatten)]
+    layout: BoardLayout,
     /// The calibration file to write (OpenCV's YAML layout).
     #[arg(long)]
     out: PathBuf,
@@ -63,12 +50,8 @@ impl CalibrateArgs {
             eprintln!("canopy ar calibrate: {error}");
             ExitCode::from(2)
         };
-        let dictionary = match Dictionary::named(&self.dictionary) {
-            Ok(dictionary) => dictionary,
-            Err(error) => return usage(error.to_string()),
-        };
-        let board = match GridBoard::new(self.markers, self.marker_m, self.separation_m, self.first_id, &dictionary) {
-            Ok(board) => board,
+        let (board, dictionary) = match self.layout.board() {
+            Ok(found) => found,
             Err(error) => return usage(error),
         };
         let mut scratch = Scratch::default();

@@ -19,6 +19,7 @@
 pub mod ar;
 pub mod ar_calibrate;
 pub mod bench;
+pub mod board_layout;
 pub mod deform_batch;
 pub mod mesh;
 pub mod play;
