@@ -4,6 +4,7 @@
 //! coefficients (`k1 k2 p1 p2 k3`) and every view's pose, on the pixel reprojection error.
 
 use crate::camera::{Distortion, Intrinsics};
+use crate::linear::solve;
 use crate::pose::Pose;
 use bevy_math::{DMat3, DVec2, DVec3};
 
@@ -221,7 +222,7 @@ fn refine(views: &[View], camera: Intrinsics, poses: Vec<Pose>) -> (Intrinsics, 
                 row[a] *= 1.0 + lambda;
                 row[a] += 1e-12;
             }
-            let Some(delta) = solve(system, jtr.clone()) else { break };
+            let Some(delta) = solve(&mut system, &mut jtr.clone(), 1e-300) else { break };
             let candidate: Vec<f64> = x.iter().zip(&delta).map(|(x, d)| x - d).collect();
             let candidate_cost = cost(&candidate);
             if candidate_cost < current {
@@ -238,35 +239,6 @@ fn refine(views: &[View], camera: Intrinsics, poses: Vec<Pose>) -> (Intrinsics, 
         }
     }
     unpack(&x)
-}
-
-/// Solves a square system by Gaussian elimination with partial pivoting.
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for col in 0..n {
-        let pivot = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[pivot][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        let pivot_row = a[col].clone();
-        for row in col + 1..n {
-            let factor = a[row][col] / pivot_row[col];
-            if factor != 0.0 {
-                for (value, pivot_value) in a[row].iter_mut().zip(&pivot_row).skip(col) {
-                    *value -= factor * pivot_value;
-                }
-                b[row] -= factor * b[col];
-            }
-        }
-    }
-    let mut x = vec![0.0; n];
-    for row in (0..n).rev() {
-        let tail: f64 = (row + 1..n).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - tail) / a[row][row];
-    }
-    Some(x)
 }
 
 /// The unit eigenvector of the smallest eigenvalue of a symmetric matrix, by Jacobi rotations.

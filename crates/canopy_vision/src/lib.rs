@@ -28,6 +28,7 @@ pub mod dictionary;
 pub mod evaluate;
 pub mod fit;
 pub mod gray;
+mod linear;
 pub mod pose;
 pub mod steady;
 pub mod synth;

@@ -8,6 +8,7 @@
 //! bottom-right, bottom-left as printed).
 
 use crate::camera::Intrinsics;
+use crate::linear::solve;
 use bevy_math::{DMat2, DMat3, DQuat, DVec2, DVec3};
 
 /// A rigid transform from the marker frame to the camera frame: `camera = R marker + t`.
@@ -112,34 +113,14 @@ pub fn estimate(corners: &[DVec2; 4], side: f64, camera: &Intrinsics) -> Option<
 /// The homography taking four plane points to four image points (`h33 = 1`), by solving the
 /// eight linear equations of the direct linear transform.
 fn homography(from: &[DVec2; 4], to: &[DVec2; 4]) -> Option<DMat3> {
-    let mut system = [[0.0f64; 9]; 8];
+    let (mut system, mut right) = ([[0.0f64; 8]; 8], [0.0f64; 8]);
     for (i, (p, q)) in from.iter().zip(to).enumerate() {
-        system[2 * i] = [p.x, p.y, 1.0, 0.0, 0.0, 0.0, -p.x * q.x, -p.y * q.x, q.x];
-        system[2 * i + 1] = [0.0, 0.0, 0.0, p.x, p.y, 1.0, -p.x * q.y, -p.y * q.y, q.y];
+        system[2 * i] = [p.x, p.y, 1.0, 0.0, 0.0, 0.0, -p.x * q.x, -p.y * q.x];
+        system[2 * i + 1] = [0.0, 0.0, 0.0, p.x, p.y, 1.0, -p.x * q.y, -p.y * q.y];
+        (right[2 * i], right[2 * i + 1]) = (q.x, q.y);
     }
-    let h = solve8(system)?;
+    let h = solve(&mut system, &mut right, 1e-14)?;
     Some(DMat3::from_cols_array(&[h[0], h[3], h[6], h[1], h[4], h[7], h[2], h[5], 1.0]))
-}
-
-/// Gaussian elimination with partial pivoting of eight equations (augmented rows).
-fn solve8(mut rows: [[f64; 9]; 8]) -> Option<[f64; 8]> {
-    for col in 0..8 {
-        let pivot = (col..8).max_by(|&a, &b| rows[a][col].abs().total_cmp(&rows[b][col].abs()))?;
-        if rows[pivot][col].abs() < 1e-14 {
-            return None;
-        }
-        rows.swap(col, pivot);
-        let pivot_row = rows[col];
-        for (index, row) in rows.iter_mut().enumerate() {
-            if index != col {
-                let factor = row[col] / pivot_row[col];
-                for (value, pivot_value) in row.iter_mut().zip(&pivot_row).skip(col) {
-                    *value -= factor * pivot_value;
-                }
-            }
-        }
-    }
-    Some(std::array::from_fn(|i| rows[i][8] / rows[i][i]))
 }
 
 /// The two rotations IPPE finds from the homography's first-order behaviour at the plane's
@@ -249,7 +230,7 @@ pub(crate) fn refine(start: Pose, object: &[DVec3], pixels: &[DVec2], camera: &I
             for (a, row) in system.iter_mut().enumerate() {
                 row[a] *= 1.0 + lambda;
             }
-            let Some(delta) = solve6(system, jtr) else { break };
+            let Some(delta) = solve(&mut system, &mut jtr.clone(), 1e-30) else { break };
             let candidate: [f64; 6] = std::array::from_fn(|k| x[k] - delta[k]);
             if let Some(rc) = residuals(&candidate)
                 && cost(&rc) < cost(&r)
@@ -268,32 +249,6 @@ pub(crate) fn refine(start: Pose, object: &[DVec3], pixels: &[DVec2], camera: &I
         }
     }
     unpack(&x)
-}
-
-/// Solves a symmetric positive definite 6 x 6 system by Gaussian elimination.
-fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
-    for col in 0..6 {
-        let pivot = (col..6).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[pivot][col].abs() < 1e-30 {
-            return None;
-        }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        let pivot_row = a[col];
-        for row in col + 1..6 {
-            let factor = a[row][col] / pivot_row[col];
-            for (value, pivot_value) in a[row].iter_mut().zip(&pivot_row).skip(col) {
-                *value -= factor * pivot_value;
-            }
-            b[row] -= factor * b[col];
-        }
-    }
-    let mut x = [0.0; 6];
-    for row in (0..6).rev() {
-        let tail: f64 = (row + 1..6).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - tail) / a[row][row];
-    }
-    Some(x)
 }
 
 #[cfg(test)]
