@@ -16,7 +16,7 @@ use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::{RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
-use bevy::math::{DMat3, DVec2, DVec3};
+use bevy::math::{DVec2, DVec3};
 use bevy::prelude::*;
 use canopy_vision::board::{BoardPose, GridBoard};
 use canopy_vision::camera::Intrinsics;
@@ -309,20 +309,13 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
 /// A board's finding: its pose moved to its centre with a marker frame's axes, and the
 /// corners of its markers found, in that frame.
 fn board_finding(board: &GridBoard, markers: &[Marker], found: BoardPose) -> Finding {
-    let centre = (board.size_m() * 0.5).extend(0.0);
-    // A marker frame's point p lies at flip p + centre in the board's frame.
-    let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
-    let rotation = found.pose.rotation * flip;
-    let pose = Pose { rotation, translation: found.pose.translation + found.pose.rotation * centre };
-    let seen_once = |id: u32| markers.iter().filter(|m| m.id == id).count() == 1;
-    let points = markers
-        .iter()
-        .filter(|marker| seen_once(marker.id))
-        .filter_map(|marker| Some((board.corners(marker.id)?, marker.corners_f64())))
-        .flat_map(|(object, pixels)| object.into_iter().zip(pixels))
-        .map(|(object, pixel)| (flip * (object - centre), pixel))
+    let points = board
+        .matched(markers)
+        .into_iter()
+        .flat_map(|(marker, object)| object.into_iter().zip(marker.corners_f64()))
+        .map(|(object, pixel)| (board.from_board(object), pixel))
         .collect();
-    Finding::Board { pose: BoardPose { pose, ..found }, points }
+    Finding::Board { pose: BoardPose { pose: board.centred(&found.pose), ..found }, points }
 }
 
 fn place_camera(

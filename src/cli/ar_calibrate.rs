@@ -64,11 +64,10 @@ impl CalibrateArgs {
             size = Some([image.width(), image.height()]);
             let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
             let markers = detect(&gray, &dictionary, &Settings::default(), None, &mut scratch);
-            let (object, pixels): (Vec<_>, Vec<_>) = markers
-                .iter()
-                .filter(|m| markers.iter().filter(|o| o.id == m.id).count() == 1)
-                .filter_map(|m| Some((board.corners(m.id)?, m.corners_f64())))
-                .flat_map(|(object, pixels)| object.into_iter().map(|p| p.truncate()).zip(pixels))
+            let (object, pixels): (Vec<_>, Vec<_>) = board
+                .matched(&markers)
+                .into_iter()
+                .flat_map(|(marker, object)| object.into_iter().map(|p| p.truncate()).zip(marker.corners_f64()))
                 .unzip();
             if object.len() < MIN_CORNERS {
                 println!("{}: {} corners of the board, left out", path.display(), object.len());

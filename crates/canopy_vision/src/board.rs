@@ -29,6 +29,10 @@ pub struct GridBoard {
     pub first_id: u32,
 }
 
+/// A marker's own frame's axes in a board's frame (its own inverse): x along the board's x,
+/// y and z against the board's y (down the print) and z (into it).
+const MARKER_AXES: DMat3 = DMat3::from_cols(DVec3::X, DVec3::NEG_Y, DVec3::NEG_Z);
+
 /// A board's pose from the markers of it found in a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoardPose {
@@ -131,17 +135,36 @@ impl GridBoard {
         Some(image)
     }
 
-    /// The board's pose from the `markers` found in a frame, those of its ids seen once: each
-    /// of both planar solutions of its two largest markers in the image tried as a start,
-    /// refined over every corner, the one that fits best kept; `None` if none of its markers
-    /// was found.
-    pub fn pose(&self, markers: &[Marker], camera: &Intrinsics) -> Option<BoardPose> {
+    /// The board's markers among `markers` (those of its ids found once: an id found twice
+    /// cannot say which is the board's), each with its corners in the board's frame.
+    pub fn matched<'a>(&self, markers: &'a [Marker]) -> Vec<(&'a Marker, [DVec3; 4])> {
         let seen_once = |id: u32| markers.iter().filter(|m| m.id == id).count() == 1;
-        let mut used: Vec<(&Marker, [DVec3; 4])> = markers
-            .iter()
-            .filter(|m| seen_once(m.id))
-            .filter_map(|m| self.corners(m.id).map(|corners| (m, corners)))
-            .collect();
+        markers.iter().filter(|m| seen_once(m.id)).filter_map(|m| Some((m, self.corners(m.id)?))).collect()
+    }
+
+    /// The pose of the frame at the board's centre with a marker's axes (x right, y up the
+    /// print, z out of it), from the board's `pose`.
+    pub fn centred(&self, pose: &Pose) -> Pose {
+        let centre = self.centre();
+        Pose { rotation: pose.rotation * MARKER_AXES, translation: pose.translation + pose.rotation * centre }
+    }
+
+    /// A point of the board's frame in the frame of [`Self::centred`].
+    pub fn from_board(&self, point: DVec3) -> DVec3 {
+        MARKER_AXES * (point - self.centre())
+    }
+
+    /// The board's centre in its frame.
+    fn centre(&self) -> DVec3 {
+        (self.size_m() * 0.5).extend(0.0)
+    }
+
+    /// The board's pose from the `markers` found in a frame, those [`Self::matched`]: each of
+    /// both planar solutions of its two largest markers in the image tried as a start, refined
+    /// over every corner, the one that fits best kept; `None` if none of its markers was
+    /// found.
+    pub fn pose(&self, markers: &[Marker], camera: &Intrinsics) -> Option<BoardPose> {
+        let mut used = self.matched(markers);
         if used.is_empty() {
             return None;
         }
@@ -152,13 +175,12 @@ impl GridBoard {
         used.sort_by(|a, b| area(b.0).total_cmp(&area(a.0)));
         let object: Vec<DVec3> = used.iter().flat_map(|(_, corners)| *corners).collect();
         let pixels: Vec<DVec2> = used.iter().flat_map(|(m, _)| m.corners_f64()).collect();
-        // A marker's own frame has its origin at its centre, y up and z out of the board.
-        let flip = DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0));
+        // A marker's pose puts its own frame (at its centre) where the board's lies.
         let starts = used.iter().take(2).filter_map(|(m, corners)| {
             let found = estimate(&m.corners_f64(), self.marker_m, camera)?;
             let centre = (corners[0] + corners[2]) * 0.5;
             Some([found.pose, found.alternative].map(|marker| {
-                let rotation = marker.rotation * flip;
+                let rotation = marker.rotation * MARKER_AXES;
                 Pose { rotation, translation: marker.translation - rotation * centre }
             }))
         });

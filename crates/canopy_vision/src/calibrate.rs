@@ -322,10 +322,10 @@ mod tests {
             let pose = Pose { rotation, translation: DVec3::new(x, 0.01, 0.32) - rotation * centre };
             let frame = photograph_print(&print, pixels_per_metre, margin_m, &pose, &truth);
             let markers = detect(&frame, &dictionary, &Settings::default(), None, &mut Scratch::default());
-            let (object, pixels): (Vec<DVec2>, Vec<DVec2>) = markers
-                .iter()
-                .filter_map(|m| Some((board.corners(m.id)?, m.corners_f64())))
-                .flat_map(|(object, pixels)| object.into_iter().map(|p| p.truncate()).zip(pixels))
+            let (object, pixels): (Vec<DVec2>, Vec<DVec2>) = board
+                .matched(&markers)
+                .into_iter()
+                .flat_map(|(marker, object)| object.into_iter().map(|p| p.truncate()).zip(marker.corners_f64()))
                 .unzip();
             assert!(object.len() >= 40, "view sees {} corners", object.len() / 4);
             views.push(View { object, pixels });
