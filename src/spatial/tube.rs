@@ -36,6 +36,12 @@ pub fn tip_rings(radius: f32, tolerance: f32) -> usize {
         .unwrap_or(TIP_RINGS)
 }
 
+/// Triangles of the tube [`add_tube_with_tips`] makes around `points` points, `sides` around
+/// and `tip` rings rounding each tip: two a side between each pair of consecutive rings.
+pub fn tube_triangles(points: usize, sides: usize, tip: usize) -> usize {
+    2 * sides * (points + 2 * tip.min(TIP_RINGS) + 1)
+}
+
 /// Appends the tube around `points` with `radii`, `sides` vertices around each ring and
 /// `tip` rings (at most the tips' most) rounding each tip.
 pub fn add_tube_with_tips(mesh: &mut MeshData, points: &[Vec3], radii: &[f32], sides: usize, tip: usize) {

@@ -7,7 +7,7 @@ use super::model::{Support, Tree};
 use crate::raster::MeshData;
 use crate::raster::levels::MeshLevels;
 use crate::spatial::polyline::simplified;
-use crate::spatial::tube::{TIP_RINGS, add_tube, add_tube_with_tips, tip_rings};
+use crate::spatial::tube::{TIP_RINGS, add_tube, add_tube_with_tips, tip_rings, tube_triangles};
 use bevy::math::Vec3;
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -49,9 +49,10 @@ pub fn tree_clusters(tree: &Tree, sides: usize) -> Vec<TreeCluster> {
     split(tree.supports.iter().collect(), sides.max(3), &mut groups);
     groups
         .into_iter()
-        .map(|supports| TreeCluster {
-            mesh: supports_mesh(&supports, sides),
-            levels: supports_levels(&supports, sides),
+        .map(|supports| {
+            let mesh = supports_mesh(&supports, sides);
+            let levels = supports_levels(&supports, sides, mesh.triangles.len());
+            TreeCluster { mesh, levels }
         })
         .collect()
 }
@@ -60,7 +61,7 @@ pub fn tree_clusters(tree: &Tree, sides: usize) -> Vec<TreeCluster> {
 /// their centres' box, again and again, until each group is small enough; the groups go to
 /// `groups`.
 fn split<'a>(mut supports: Vec<&'a Support>, sides: usize, groups: &mut Vec<Vec<&'a Support>>) {
-    let weight = |s: &Support| triangles(s.points.len(), sides, TIP_RINGS);
+    let weight = |s: &Support| tube_triangles(s.points.len(), sides, TIP_RINGS);
     let total: usize = supports.iter().map(|s| weight(s)).sum();
     if total <= CLUSTER_TRIANGLES || supports.len() < 2 {
         groups.push(supports);
@@ -98,15 +99,16 @@ fn supports_mesh(supports: &[&Support], sides: usize) -> MeshData {
     mesh
 }
 
-/// The coarser levels of [`supports_mesh`]`(supports, sides)`: at each of
+/// The coarser levels of [`supports_mesh`]`(supports, sides)`, which has `full_triangles`: at
+/// each of
 /// [`LEVEL_PIXELS_PER_METRE`], every support with as few sides and tip rings as keep its
 /// thickest ring within [`LEVEL_TOLERANCE_PX`] of round, and without the points of its axis
 /// that lie as near the line through the points on either side; a level that saves too
 /// little is left out.
-fn supports_levels(supports: &[&Support], sides: usize) -> MeshLevels {
+fn supports_levels(supports: &[&Support], sides: usize, full_triangles: usize) -> MeshLevels {
     let sides = sides.max(3);
     let mut levels: Vec<(f32, Arc<MeshData>)> = Vec::new();
-    let mut before = supports.iter().map(|s| triangles(s.points.len(), sides, TIP_RINGS)).sum::<usize>();
+    let mut before = full_triangles;
     for pixels_per_metre in LEVEL_PIXELS_PER_METRE {
         let tolerance = LEVEL_TOLERANCE_PX / pixels_per_metre;
         let mut mesh = MeshData::default();
@@ -122,11 +124,6 @@ fn supports_levels(supports: &[&Support], sides: usize) -> MeshLevels {
         }
     }
     MeshLevels { bounds: bounds(supports), levels }
-}
-
-/// Triangles of a tube of `points`, `sides` around and `tip` rings at each end.
-fn triangles(points: usize, sides: usize, tip: usize) -> usize {
-    2 * sides * (points + 2 * tip + 1)
 }
 
 /// The fewest sides, from 3 to `most`, of a polygon within `tolerance` of a circle of
@@ -194,6 +191,7 @@ mod tests {
         assert_eq!(clusters.len(), 1, "a small tree is one cluster");
         let TreeCluster { mesh: full, levels } = clusters.remove(0);
         assert_eq!(full, tree_mesh(&tree, 12));
+        assert_eq!(tube_triangles(4, 12, TIP_RINGS), full.triangles.len(), "the count the clusters weigh by");
         let segments: Vec<_> = tree.segments().map(|(_, s)| s).collect();
         let mut before = full.triangles.len();
         assert!(!levels.levels.is_empty());
