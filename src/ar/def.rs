@@ -1,13 +1,12 @@
 //! The `ar:` entry of a scene file, and the kind that reads and spawns it.
 
 use super::calibration::Calibration;
-use super::frames::FrameFolder;
+use super::source::{CameraSettings, Source};
 use crate::foundation::values::{FileType, FolderFile, PositiveMetres, checked_number, inside_folder};
 use crate::foundation::yaml::deserialize_str_with;
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::dictionary::Dictionary;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
-use std::path::PathBuf;
 use std::sync::Arc;
 
 checked_number!(
@@ -37,6 +36,47 @@ impl FileType for CalibrationFile {
     const EXTENSIONS: &'static [&'static str] = &[".yaml", ".yml", ".json"];
     const EXPECTING: &'static str = "a .yaml, .yml or .json calibration file in the scene's folder";
     const FILES: &'static str = "a .yaml, .yml or .json file";
+}
+
+/// Video files FFmpeg reads.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VideoFileType;
+
+impl FileType for VideoFileType {
+    const EXTENSIONS: &'static [&'static str] =
+        &[".mp4", ".m4v", ".mov", ".mkv", ".webm", ".avi", ".mjpeg", ".mjpg", ".ogv"];
+    const EXPECTING: &'static str = "a video file (.mp4, .mov, .mkv, .webm, .avi, .mjpeg) in the scene's folder";
+    const FILES: &'static str = "a video file (.mp4, .m4v, .mov, .mkv, .webm, .avi, .mjpeg, .mjpg or .ogv)";
+}
+
+/// A live camera in a scene file: a Video4Linux2 device and what is asked of it.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDef {
+    /// The device; `/dev/video0` by default.
+    #[serde(default = "first_camera")]
+    pub device: String,
+    /// The frames' width and height, pixels; 640 x 480 by default.
+    #[serde(default = "vga")]
+    pub size: [u32; 2],
+    /// Frames a second asked of it; 30 by default.
+    #[serde(default = "thirty")]
+    pub fps: FrameRate,
+}
+
+impl CameraDef {
+    /// The settings the camera is opened with.
+    pub fn settings(&self) -> CameraSettings {
+        CameraSettings { device: self.device.clone(), size: self.size, fps: self.fps.0 }
+    }
+}
+
+fn first_camera() -> String {
+    "/dev/video0".into()
+}
+
+fn vga() -> [u32; 2] {
+    [640, 480]
 }
 
 /// A folder next to the scene: relative, without `..`.
@@ -83,12 +123,20 @@ impl<'de> Deserialize<'de> for DictionaryName {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArDef {
-    /// The folder of frames (PNG or JPEG files, shown in name order), next to the scene.
-    pub frames: FolderPath,
-    /// Frames a second; 30 by default.
-    #[serde(default = "thirty")]
-    pub fps: FrameRate,
-    /// Whether the frames start over after the last; yes by default.
+    /// A folder of frames (PNG or JPEG files, shown in name order), next to the scene; or a
+    /// `video` or a `camera`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<FolderPath>,
+    /// A video file next to the scene, decoded by FFmpeg.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub video: Option<FolderFile<VideoFileType>>,
+    /// A live camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraDef>,
+    /// Frames a second of a folder (30 by default) or a video (its own rate by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<FrameRate>,
+    /// Whether a folder's or a video's frames start over after the last; yes by default.
     #[serde(default = "yes", rename = "loop")]
     pub repeat: bool,
     /// The camera's calibration in OpenCV's layout.
@@ -147,15 +195,15 @@ pub struct BoardDef {
     pub first_id: u32,
 }
 
-/// What an `ar` entity is built into: its frames and the camera for their size.
+/// What an `ar` entity is built into: its source of frames and the camera for their size.
 #[derive(Debug, Clone)]
 pub struct ArBuilt {
-    /// The frames.
-    pub frames: Arc<FrameFolder>,
+    /// Where the frames come from.
+    pub source: Source,
     /// The calibrated camera for the frames' size.
     pub camera: Intrinsics,
-    /// Where the frames are, for messages and the dump.
-    pub folder: PathBuf,
+    /// The calibration, for a camera opened at another size.
+    pub calibration: Arc<Calibration>,
 }
 
 #[cfg(test)]
@@ -168,7 +216,19 @@ mod tests {
             "{frames: clip, calibration: cam.yaml, dictionary: DICT_6X6_250, marker_id: 3, marker_side_m: 0.1}",
         )
         .unwrap();
-        assert_eq!((def.fps, def.repeat, def.scale, def.hold_s), (FrameRate(30.0), true, Scale(1.0), HoldSeconds(0.5)));
+        assert_eq!((def.fps, def.repeat, def.scale, def.hold_s), (None, true, Scale(1.0), HoldSeconds(0.5)));
+        let camera: ArDef = serde_yaml::from_str(
+            "{camera: {size: [1280, 720]}, calibration: cam.yaml, dictionary: 4x4_50, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap();
+        let expected = CameraSettings { device: "/dev/video0".into(), size: [1280, 720], fps: 30.0 };
+        assert_eq!(camera.camera.unwrap().settings(), expected);
+        let error = serde_yaml::from_str::<ArDef>(
+            "{video: clip.txt, calibration: cam.yaml, dictionary: 4x4_50, marker_id: 3, marker_side_m: 0.1}",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(error.contains("a video file"), "{error}");
         assert_eq!(def.dictionary.0.name, "6x6_250");
         let error = serde_yaml::from_str::<ArDef>(
             "{frames: clip, calibration: cam.yaml, dictionary: 9x9, marker_id: 3, marker_side_m: 0.1}",

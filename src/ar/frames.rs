@@ -2,9 +2,11 @@
 //! compared as numbers, so `frame-9` comes before `frame-10`), all of one size, decoded one at
 //! a time when shown.
 
+use super::stream::FrameReader;
 use image::{ImageReader, Limits, RgbaImage};
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The most frames a folder may hold.
 pub const MAX_FRAMES: usize = 100_000;
@@ -68,6 +70,29 @@ impl FrameFolder {
     pub fn load(&self, index: usize) -> Result<RgbaImage, String> {
         let path = self.files.get(index).ok_or_else(|| format!("no frame {index}"))?;
         load_image(path, Some(self.size))
+    }
+}
+
+/// A folder's frames read in order.
+pub struct FolderReader {
+    /// The folder.
+    pub frames: Arc<FrameFolder>,
+    /// The next frame's index.
+    pub next: usize,
+}
+
+impl FrameReader for FolderReader {
+    fn next_frame(&mut self) -> Option<Result<RgbaImage, String>> {
+        let index = self.next;
+        (index < self.frames.len()).then(|| {
+            self.next += 1;
+            self.frames.load(index)
+        })
+    }
+
+    fn rewind(&mut self) -> Result<(), String> {
+        self.next = 0;
+        Ok(())
     }
 }
 

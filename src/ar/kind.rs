@@ -3,9 +3,11 @@
 
 use super::calibration;
 use super::def::{ArBuilt, ArDef};
-use super::frames::FrameFolder;
+use super::frames::{FrameFolder, MAX_FRAME_SIDE};
 use super::panel;
 use super::plugin::{ArPlugin, ArState, ArView};
+use super::source::Source;
+use super::video::VideoFile;
 use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, ReferencedFile};
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
@@ -40,6 +42,21 @@ impl EntityKind for ArKind {
                 return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("marker_id"))));
             }
         }
+        let sources = [def.frames.is_some(), def.video.is_some(), def.camera.is_some()];
+        if sources.iter().filter(|&&given| given).count() != 1 {
+            let message = "expected one source of frames: `frames` (a folder), `video` (a file) or `camera`";
+            return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("frames"))));
+        }
+        if let Some(camera) = &def.camera {
+            if def.fps.is_some() {
+                let message = "a camera's rate is its `fps`, in `camera`";
+                return Err(cx.field_error("fps", 0, "fps", message));
+            }
+            if camera.size.iter().any(|&side| side == 0 || side > MAX_FRAME_SIDE) {
+                let message = format!("expected 1 to {MAX_FRAME_SIDE} pixels a side, found {:?}", camera.size);
+                return Err(cx.field_error("size", 0, "camera.size", message));
+            }
+        }
         if cx.kind_index > 0 {
             return Err(cx.field_error("frames", 0, "frames", "a scene has one camera to draw over: one `ar` entity"));
         }
@@ -59,16 +76,34 @@ impl EntityKind for ArKind {
 
     fn build(def: &ArDef, cx: &BuildContext) -> Result<ArBuilt, FileError> {
         let entity = cx.entity;
-        let folder = entity.path.parent().unwrap_or(std::path::Path::new(".")).join(&def.frames.0);
-        let frames = FrameFolder::open(&folder).map_err(|error| entity.field_error("frames", 0, "frames", error))?;
+        let beside = |relative: &str| entity.path.parent().unwrap_or(std::path::Path::new(".")).join(relative);
+        let source = match (&def.frames, &def.video, &def.camera) {
+            (Some(folder), _, _) => {
+                let path = beside(&folder.0);
+                let frames =
+                    FrameFolder::open(&path).map_err(|error| entity.field_error("frames", 0, "frames", error))?;
+                Source::Folder { path, frames: Arc::new(frames) }
+            }
+            (_, Some(video), _) => {
+                let video = VideoFile::probe(&beside(&video.path))
+                    .map_err(|error| entity.field_error("video", 0, "video", error))?;
+                Source::Video(Arc::new(video))
+            }
+            // A camera is opened when the scene plays: one that is not there is a message in
+            // the panel, not a scene that cannot load.
+            (_, _, Some(camera)) => Source::Camera(camera.settings()),
+            (None, None, None) => {
+                return Err(entity.field_error("frames", 0, "frames", "no source of frames"));
+            }
+        };
         let calibration = def
             .calibration_read
             .as_ref()
             .ok_or_else(|| entity.field_error("calibration", 0, "calibration", "the calibration file was not read"))?;
         let camera = calibration
-            .for_frames(frames.size)
+            .for_frames(source.size())
             .map_err(|error| entity.field_error("calibration", 0, "calibration", error))?;
-        Ok(ArBuilt { frames: Arc::new(frames), camera, folder })
+        Ok(ArBuilt { source, camera, calibration: calibration.clone() })
     }
 
     fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {

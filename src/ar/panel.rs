@@ -10,7 +10,7 @@ use bevy_egui::egui;
 pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
     let Some(view) = entity_mut.get::<ArView>() else { return };
-    let (frames, dictionary, target) = (view.frames.clone(), view.dictionary.name, view.target);
+    let (source, dictionary, target) = (view.source.clone(), view.dictionary.name, view.target);
     let Some(mut state) = entity_mut.get_mut::<ArState>() else { return };
     let mut outline = state.outline;
     if ui.checkbox(&mut outline, "Outline the marker found").on_hover_text("its first side in red").changed() {
@@ -22,9 +22,6 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
             ui.label(value);
             ui.end_row();
         };
-        let file = |index: usize| {
-            frames.files[index].file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
-        };
         let shown = state.records.back();
         match target {
             Target::Marker { id, .. } => row(ui, "marker", format!("{dictionary} #{id}")),
@@ -34,11 +31,16 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
                 format!("{dictionary}, {} x {} markers from #{}", board.markers[0], board.markers[1], board.first_id),
             ),
         }
+        row(ui, source.kind(), source.location());
+        let of = source.len().map_or(String::new(), |frames| format!(" of {frames}"));
         row(
             ui,
             "frame",
-            shown.map_or("none yet".into(), |r| format!("{} of {} ({})", r.frame + 1, frames.len(), file(r.frame))),
+            shown.map_or("none yet".into(), |r| format!("{}{of} ({})", r.frame + 1, source.frame_name(r.frame))),
         );
+        if let Some(error) = &state.source_error {
+            row(ui, "source", error.clone());
+        }
         match shown.map(|r| &r.finding) {
             Some(Finding::Found { estimate, kept_alternative, .. }) => {
                 // The pose drawn: the better fit, or the other one where it continues the last.
@@ -69,6 +71,6 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
         if let Some(error) = state.overlay_error_px {
             row(ui, "drawn marker", format!("{error:.3} px from the found one"));
         }
-        row(ui, "reading", format!("{:.2} ms (decoding, detection, pose)", state.read_time.as_secs_f64() * 1e3));
+        row(ui, "reading", format!("{:.2} ms (decoding, detection)", state.read_time.as_secs_f64() * 1e3));
     });
 }

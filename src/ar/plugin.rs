@@ -8,30 +8,30 @@
 //! | `PostUpdate`, [`RenderSystems::Camera`] | `place_camera` | the render camera at the pose, fitted to the view |
 //! | `PostUpdate`, [`RenderSystems::Composite`] | `lay_over_frame` | the photograph behind what was drawn, or alone when the marker is lost |
 
+use super::calibration::Calibration;
 use super::def::{ArBuilt, ArDef};
-use super::frames::FrameFolder;
 use super::overlay::{Tracker, render_camera, world_from_marker};
 use super::report::marker_json;
+use super::source::Source;
+use super::stream::{FrameStream, ReadFrame, StreamStatus, Taking};
 use crate::foundation::dump::{DumpState, RegisterDump};
-use crate::foundation::schedule::{RenderSystems, SimSystems};
+use crate::foundation::schedule::{LongWorkArrival, RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
 use bevy::math::{DVec2, DVec3};
 use bevy::prelude::*;
 use canopy_vision::board::{BoardPose, GridBoard};
 use canopy_vision::camera::Intrinsics;
-use canopy_vision::detect::{Marker, Scratch, Settings, detect};
+use canopy_vision::detect::Marker;
 use canopy_vision::dictionary::Dictionary;
 use canopy_vision::fit::{Fit, Remap};
-use canopy_vision::gray::Gray;
 use canopy_vision::pose::{Pose, PoseEstimate, estimate, marker_corners};
 use canopy_vision::steady::PoseFollower;
 use image::RgbaImage;
 use serde_json::{Map, Value, json};
 use std::collections::VecDeque;
-use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Runs `ar` entities.
 #[derive(Default)]
@@ -54,12 +54,12 @@ pub const MAX_RECORDS: usize = 108_000;
 /// What an `ar` entity shows and how: fixed when the scene is loaded.
 #[derive(Component, Debug, Clone)]
 pub struct ArView {
-    /// The camera frames.
-    pub frames: Arc<FrameFolder>,
-    /// The folder they are in.
-    pub folder: PathBuf,
+    /// Where the camera frames come from.
+    pub source: Source,
     /// The calibrated camera, for the frames' size.
     pub camera: Intrinsics,
+    /// The calibration, for a camera opened at another size.
+    pub calibration: Arc<Calibration>,
     /// The markers' dictionary.
     pub dictionary: Dictionary,
     /// What the scene stands on.
@@ -68,7 +68,7 @@ pub struct ArView {
     pub scale: f64,
     /// Frames a second.
     pub fps: f64,
-    /// Whether the frames start over after the last.
+    /// Whether a folder's or a video's frames start over after the last.
     pub repeat: bool,
     /// Seconds a lost marker's pose is kept.
     pub hold_s: f64,
@@ -78,23 +78,28 @@ impl ArView {
     /// The view an `ar` definition describes.
     pub fn new(def: &ArDef, built: &ArBuilt) -> Self {
         Self {
-            frames: built.frames.clone(),
-            folder: built.folder.clone(),
+            source: built.source.clone(),
             camera: built.camera,
+            calibration: built.calibration.clone(),
             dictionary: def.dictionary.0,
             target: Target::of(def),
             scale: def.scale.0,
-            fps: def.fps.0,
+            fps: built.source.fps(def.fps.map(|fps| fps.0)),
             repeat: def.repeat,
             hold_s: def.hold_s.0,
         }
     }
 
-    /// The frame due at `time_s` seconds (a millionth of a frame early counts as on time:
-    /// fixed steps of 1/60 s are not exact in binary).
-    fn frame_at(&self, time_s: f64) -> usize {
-        let index = (time_s * self.fps + 1e-6).floor() as usize;
-        if self.repeat { index % self.frames.len() } else { index.min(self.frames.len() - 1) }
+    /// The position (frames since the first) due at `time_s` seconds (a millionth of a frame
+    /// early counts as on time: fixed steps of 1/60 s are not exact in binary).
+    fn position_at(&self, time_s: f64) -> u64 {
+        (time_s * self.fps + 1e-6).floor() as u64
+    }
+
+    /// Starts reading the source's frames.
+    fn start(&self) -> Result<FrameStream, String> {
+        let reader = self.source.open()?;
+        Ok(FrameStream::start(reader, self.dictionary, self.camera, self.repeat && !self.source.live()))
     }
 }
 
@@ -164,7 +169,7 @@ pub enum Finding {
 /// One shown frame's record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameRecord {
-    /// Its index in the folder.
+    /// Its index in the source.
     pub frame: usize,
     /// When it was shown, simulated seconds.
     pub time_s: f64,
@@ -179,8 +184,17 @@ pub struct ArState {
     steps: u64,
     /// Simulated seconds since the first frame.
     time_s: f64,
-    /// The frame shown.
+    /// The frame shown: its index in the source.
     shown: Option<usize>,
+    /// The frames being read; `None` until the first step, and after the source failed to
+    /// open.
+    stream: Option<FrameStream>,
+    /// The position of the last frame taken from the stream.
+    taken: Option<u64>,
+    /// Why the source could not be opened or stopped, for the panel and the dump.
+    pub source_error: Option<String>,
+    /// Whether the source has been opened (or tried).
+    opened: bool,
     /// The last frame read's pixels (an unreadable frame leaves the one before).
     image: Option<Arc<RgbaImage>>,
     /// Frames read so far: tells a new photograph from the one already fitted.
@@ -200,8 +214,8 @@ pub struct ArState {
     pub overlay_error_px: Option<f64>,
     /// The largest [`ArState::overlay_error_px`] of every frame drawn so far.
     pub overlay_error_max_px: f64,
-    scratch: Scratch,
-    /// Wall-clock time the last frame's decoding, detection and pose took (for display only).
+    /// Wall-clock time the last frame's decoding and detection took, on the reading thread
+    /// (for display only).
     pub read_time: Duration,
     /// Whether the found marker's outline is drawn over the frame (the panel's switch).
     pub outline: bool,
@@ -235,32 +249,57 @@ impl ArState {
     }
 }
 
-fn show_frames(time: Res<Time>, mut overlays: Query<(&ArView, &mut ArState)>) {
+fn show_frames(time: Res<Time>, arrival: Res<LongWorkArrival>, mut overlays: Query<(&ArView, &mut ArState)>) {
     for (view, mut state) in &mut overlays {
         let state = &mut *state;
-        let due = view.frame_at(state.time_s);
-        if state.shown != Some(due) {
-            show(view, state, due);
+        if !state.opened {
+            state.opened = true;
+            match view.start() {
+                Ok(stream) => state.stream = Some(stream),
+                Err(message) => {
+                    warn!("{message}");
+                    state.source_error = Some(message);
+                }
+            }
+        }
+        let due = view.position_at(state.time_s);
+        let taking = match (view.source.live(), *arrival) {
+            (true, _) => Some(Taking::Newest(u64::MAX)),
+            (false, _) if state.taken.is_some_and(|taken| taken >= due) => None,
+            (false, LongWorkArrival::FixedFrames) => Some(Taking::Wait(due)),
+            (false, LongWorkArrival::WhenReady) => Some(Taking::Newest(due)),
+        };
+        if let (Some(taking), Some(stream)) = (taking, state.stream.as_mut()) {
+            let frame = stream.take(taking);
+            if let StreamStatus::Failed(message) = &stream.status
+                && state.source_error.as_ref() != Some(message)
+            {
+                warn!("{message}");
+                state.source_error = Some(message.clone());
+            }
+            if let Some(frame) = frame {
+                show(view, state, frame);
+            }
         }
         state.steps += 1;
         state.time_s = state.steps as f64 * time.delta_secs_f64();
     }
 }
 
-/// Reads frame `index`, finds the marker and updates the pose.
-fn show(view: &ArView, state: &mut ArState, index: usize) {
-    let started = Instant::now();
-    state.shown = Some(index);
-    let finding = match view.frames.load(index) {
+/// Shows a frame read: the target found in it, the pose updated.
+fn show(view: &ArView, state: &mut ArState, frame: ReadFrame) {
+    state.taken = Some(frame.position);
+    state.shown = Some(frame.index);
+    let finding = match frame.content {
         Err(message) => {
             warn!("{message}");
             Finding::Unreadable(message)
         }
-        Ok(image) => {
-            let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
-            let markers = detect(&gray, &view.dictionary, &Settings::default(), Some(&view.camera), &mut state.scratch);
-            state.image = Some(Arc::new(image));
+        Ok(searched) => {
+            state.image = Some(searched.image);
             state.images_read += 1;
+            state.read_time = searched.work;
+            let markers = searched.markers;
             match view.target {
                 Target::Marker { id, side_m } => {
                     let found = markers.iter().find(|m| m.id == id).and_then(|marker| {
@@ -298,12 +337,11 @@ fn show(view: &ArView, state: &mut ArState, index: usize) {
         Finding::Lost { .. } => Finding::Lost { held: shown.is_some() },
         other => other,
     };
-    state.read_time = started.elapsed();
     if state.records.len() == MAX_RECORDS {
         state.records.pop_front();
         state.records_dropped += 1;
     }
-    state.records.push_back(FrameRecord { frame: index, time_s: state.time_s, finding });
+    state.records.push_back(FrameRecord { frame: frame.index, time_s: state.time_s, finding });
 }
 
 /// A board's finding: its pose moved to its centre with a marker frame's axes, and the
@@ -398,8 +436,10 @@ fn lay_over_frame(
 
 impl DumpState for ArView {
     fn dump(&self, out: &mut Map<String, Value>) {
-        out.insert("frames".into(), json!(self.frames.len()));
-        out.insert("frame_size".into(), json!(self.frames.size));
+        out.insert("source".into(), json!(self.source.kind()));
+        out.insert("frames".into(), json!(self.source.len()));
+        out.insert("frame_size".into(), json!(self.source.size()));
+        out.insert("fps".into(), json!(self.fps));
         out.insert("dictionary".into(), json!(self.dictionary.name));
         match self.target {
             Target::Marker { id, side_m } => {
@@ -449,6 +489,7 @@ impl DumpState for ArState {
             })
             .collect();
         out.insert("shown".into(), json!(self.shown));
+        out.insert("source_error".into(), json!(self.source_error));
         out.insert("overlay_visible".into(), json!(self.pose.is_some()));
         out.insert("outline".into(), json!(self.outline));
         out.insert("overlay_error_px".into(), json!(self.overlay_error_px));
