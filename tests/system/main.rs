@@ -3,6 +3,7 @@
 //! run in parallel.
 
 mod ar;
+mod ar_sources;
 mod canopy;
 mod common;
 mod controls;
