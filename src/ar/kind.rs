@@ -2,7 +2,7 @@
 //! the app offers for its entities beside its plugin.
 
 use super::calibration;
-use super::def::{ArBuilt, ArDef};
+use super::def::{ArBuilt, ArDef, FrameRate};
 use super::frames::{FrameFolder, MAX_FRAME_SIDE};
 use super::panel;
 use super::plugin::{ArPlugin, ArState, ArView};
@@ -12,7 +12,7 @@ use crate::foundation::kind::{BuildContext, EntityContext, EntityKind, Reference
 use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
 use bevy::app::App;
-use bevy::ecs::world::EntityWorldMut;
+use bevy::ecs::world::{EntityRef, EntityWorldMut};
 use canopy_vision::board::GridBoard;
 use std::sync::Arc;
 
@@ -108,6 +108,17 @@ impl EntityKind for ArKind {
 
     fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {
         entity.insert((ArView::new(def, built), ArState::default()));
+    }
+
+    fn save_live(def: &mut ArDef, entity: EntityRef) {
+        // A camera chosen in the panel is the one saved.
+        if let (Some(camera), Some(Source::Camera(settings))) =
+            (&mut def.camera, entity.get::<ArView>().map(|v| &v.source))
+        {
+            camera.device = settings.device.clone();
+            camera.size = settings.size;
+            camera.fps = FrameRate(settings.fps);
+        }
     }
 
     fn register(app: &mut App) {

@@ -1,13 +1,64 @@
-//! The overlay's section of the window's panel: the frame shown, what became of the marker in
-//! it, its pose and errors, the time a frame's reading took, and a switch that outlines the
-//! marker found.
+//! The overlay's section of the window's panel: a live camera's device, size and rate, the
+//! frame shown, what became of the marker in it, its pose and errors, the time a frame's
+//! reading took, and a switch that outlines the marker found.
 
+use super::camera;
+use super::frames::MAX_FRAME_SIDE;
 use super::plugin::{ArState, ArView, Finding, Target};
+use super::source::{CameraSettings, Source};
 use bevy::prelude::*;
 use bevy_egui::egui;
 
+/// The camera's controls: the device (from those found connected), the size and the rate,
+/// opened again with `Open`; a calibration for another shape is refused in the panel.
+fn camera_controls(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
+    let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
+    let Some(Source::Camera(current)) = entity_mut.get::<ArView>().map(|view| view.source.clone()) else { return };
+    let id = ui.id().with(("ar-camera", entity));
+    let mut draft: CameraSettings = ui.data_mut(|data| data.get_temp(id)).unwrap_or_else(|| current.clone());
+    let mut found: Option<Vec<(String, String)>> = ui.data_mut(|data| data.get_temp(id.with("found")));
+    ui.horizontal(|ui| {
+        ui.label("camera");
+        egui::ComboBox::from_id_salt(id.with("device")).selected_text(draft.device.clone()).show_ui(ui, |ui| {
+            for (path, name) in found.iter().flatten() {
+                ui.selectable_value(&mut draft.device, path.clone(), format!("{path}  {name}"));
+            }
+        });
+        if ui.button("Find").on_hover_text("list the cameras connected").clicked() {
+            found = Some(camera::connected());
+        }
+    });
+    if found.as_ref().is_some_and(Vec::is_empty) {
+        ui.label("no cameras connected");
+    }
+    ui.horizontal(|ui| {
+        ui.label("size");
+        ui.add(egui::DragValue::new(&mut draft.size[0]).range(16..=MAX_FRAME_SIDE));
+        ui.label("x");
+        ui.add(egui::DragValue::new(&mut draft.size[1]).range(16..=MAX_FRAME_SIDE));
+        ui.label("fps");
+        ui.add(egui::DragValue::new(&mut draft.fps).range(1.0..=240.0));
+        if ui.button("Open").on_hover_text("open the camera with these settings").clicked() {
+            let opened = entity_mut.get_mut::<ArView>().map(|mut view| view.use_camera(draft.clone()));
+            if let (Some(result), Some(mut state)) = (opened, entity_mut.get_mut::<ArState>()) {
+                state.restart();
+                if let Err(why) = result {
+                    state.source_error = Some(format!("{}: {why}", draft.device));
+                }
+            }
+        }
+    });
+    ui.data_mut(|data| {
+        data.insert_temp(id, draft);
+        if let Some(found) = found {
+            data.insert_temp(id.with("found"), found);
+        }
+    });
+}
+
 /// Draws the overlay section for `entity`.
 pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
+    camera_controls(ui, world, entity);
     let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
     let Some(view) = entity_mut.get::<ArView>() else { return };
     let (source, dictionary, target) = (view.source.clone(), view.dictionary.name, view.target);
@@ -31,7 +82,9 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
                 format!("{dictionary}, {} x {} markers from #{}", board.markers[0], board.markers[1], board.first_id),
             ),
         }
-        row(ui, source.kind(), source.location());
+        if !source.live() {
+            row(ui, source.kind(), source.location());
+        }
         let of = source.len().map_or(String::new(), |frames| format!(" of {frames}"));
         row(
             ui,

@@ -12,8 +12,8 @@ use super::calibration::Calibration;
 use super::def::{ArBuilt, ArDef};
 use super::overlay::{Tracker, render_camera, world_from_marker};
 use super::report::marker_json;
-use super::source::Source;
-use super::stream::{FrameStream, ReadFrame, StreamStatus, Taking};
+use super::source::{CameraSettings, Source};
+use super::stream::{Backdrop, FrameStream, ReadFrame, StreamStatus, Taking};
 use crate::foundation::dump::{DumpState, RegisterDump};
 use crate::foundation::schedule::{LongWorkArrival, RenderSystems, SimSystems};
 use crate::raster::plugin::RasterTarget;
@@ -94,6 +94,14 @@ impl ArView {
     /// early counts as on time: fixed steps of 1/60 s are not exact in binary).
     fn position_at(&self, time_s: f64) -> u64 {
         (time_s * self.fps + 1e-6).floor() as u64
+    }
+
+    /// Turns to a live camera with `settings`, the calibration scaled to its size; the view is
+    /// unchanged if the calibration is for another shape.
+    pub fn use_camera(&mut self, settings: CameraSettings) -> Result<(), String> {
+        self.camera = self.calibration.for_frames(settings.size)?;
+        self.source = Source::Camera(settings);
+        Ok(())
     }
 
     /// Starts reading the source's frames.
@@ -219,13 +227,25 @@ pub struct ArState {
     pub read_time: Duration,
     /// Whether the found marker's outline is drawn over the frame (the panel's switch).
     pub outline: bool,
-    /// The photograph fitted to the view, and the frame and background it was made from.
-    backdrop: Option<Remap>,
+    /// How the photograph is fitted to the view now.
+    backdrop: Option<Arc<Backdrop>>,
+    /// The shown frame fitted on the reading thread, and how.
+    fitted: Option<(Arc<Backdrop>, Vec<u8>)>,
+    /// The photograph fitted to the view, and the frame (by [`ArState::images_read`]) it
+    /// was made from with the backdrop of now.
     backdrop_pixels: Vec<u8>,
-    backdrop_of: Option<(u64, [u8; 4])>,
+    backdrop_of: Option<u64>,
 }
 
 impl ArState {
+    /// Reads the source again from its start at the next step (after the view's source changed).
+    pub fn restart(&mut self) {
+        self.stream = None;
+        self.opened = false;
+        self.taken = None;
+        self.source_error = None;
+    }
+
     /// Frames whose pose turned over from the one before.
     pub fn follower_flips(&self) -> u64 {
         self.follower.flips()
@@ -255,7 +275,12 @@ fn show_frames(time: Res<Time>, arrival: Res<LongWorkArrival>, mut overlays: Que
         if !state.opened {
             state.opened = true;
             match view.start() {
-                Ok(stream) => state.stream = Some(stream),
+                Ok(stream) => {
+                    if let Some(backdrop) = &state.backdrop {
+                        stream.fit_with(backdrop.clone());
+                    }
+                    state.stream = Some(stream);
+                }
                 Err(message) => {
                     warn!("{message}");
                     state.source_error = Some(message);
@@ -297,6 +322,7 @@ fn show(view: &ArView, state: &mut ArState, frame: ReadFrame) {
         }
         Ok(searched) => {
             state.image = Some(searched.image);
+            state.fitted = searched.fitted;
             state.images_read += 1;
             state.read_time = searched.work;
             let markers = searched.markers;
@@ -400,17 +426,27 @@ fn lay_over_frame(
     let Some(image) = &state.image else { return };
     let framebuffer = &mut target.framebuffer;
     let size = [framebuffer.width(), framebuffer.height()];
-    if state.backdrop.as_ref().is_none_or(|map| map.target != size || map.camera != view.camera) {
-        state.backdrop = Some(Remap::new(&view.camera, size));
+    let background = render.background;
+    if state.backdrop.as_ref().is_none_or(|backdrop| {
+        backdrop.map.target != size || backdrop.map.camera != view.camera || backdrop.background != background
+    }) {
+        let backdrop = Arc::new(Backdrop { map: Remap::new(&view.camera, size), background });
+        if let Some(stream) = &state.stream {
+            stream.fit_with(backdrop.clone());
+        }
+        state.backdrop = Some(backdrop);
         state.backdrop_of = None;
     }
-    // The photograph fitted to the view is made once per camera frame.
-    let current = (state.images_read, render.background);
-    if state.backdrop_of != Some(current)
-        && let Some(map) = &state.backdrop
+    // The photograph fitted to the view once per camera frame: on the reading thread when it
+    // had the backdrop of now.
+    if state.backdrop_of != Some(state.images_read)
+        && let Some(backdrop) = &state.backdrop
     {
-        map.apply(image.as_raw(), render.background, &mut state.backdrop_pixels);
-        state.backdrop_of = Some(current);
+        match state.fitted.take() {
+            Some((by, pixels)) if Arc::ptr_eq(&by, backdrop) => state.backdrop_pixels = pixels,
+            _ => backdrop.map.apply(image.as_raw(), backdrop.background, &mut state.backdrop_pixels),
+        }
+        state.backdrop_of = Some(state.images_read);
     }
     if state.pose.is_none() {
         // The marker is lost: the photograph alone.

@@ -6,10 +6,14 @@
 //! counting every pass through a looping source). The overlay takes the frame due at the
 //! simulated time: a headless run waits for that very frame, so the same scene gives the same
 //! dump however fast the machine; the window takes the newest frame ready and never waits.
+//!
+//! The thread also fits each frame to the view (the overlay's backdrop) with the map the
+//! overlay last gave it, so that a large video's resampling is not the frame's work either.
 
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::detect::{Marker, Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
+use canopy_vision::fit::Remap;
 use canopy_vision::gray::Gray;
 use image::RgbaImage;
 use std::sync::mpsc::{Receiver, RecvError, SyncSender, TryRecvError, sync_channel};
@@ -47,9 +51,33 @@ pub struct Searched {
     pub image: Arc<RgbaImage>,
     /// Every marker of the dictionary found.
     pub markers: Vec<Marker>,
+    /// The pixels fitted to the view, with the map they were fitted with (the overlay's map
+    /// when the frame was read: one made since is not this one).
+    pub fitted: Option<(Arc<Backdrop>, Vec<u8>)>,
     /// Wall-clock time its reading (decoding included) and searching took, for display.
     pub work: Duration,
 }
+
+/// How frames are fitted to the view: the map and the colour around the frame.
+#[derive(Debug)]
+pub struct Backdrop {
+    /// The map from the view's pixels to the frame's.
+    pub map: Remap,
+    /// RGBA around the frame, where the view's shape differs.
+    pub background: [u8; 4],
+}
+
+impl Backdrop {
+    /// `frame` fitted to the view, RGBA row by row.
+    pub fn fit(&self, frame: &RgbaImage) -> Vec<u8> {
+        let mut pixels = Vec::new();
+        self.map.apply(frame.as_raw(), self.background, &mut pixels);
+        pixels
+    }
+}
+
+/// The backdrop the reading thread fits frames with, set by the overlay.
+type SharedBackdrop = Arc<Mutex<Option<Arc<Backdrop>>>>;
 
 /// What the reading thread sends.
 enum Message {
@@ -91,6 +119,8 @@ pub struct FrameStream {
     early: Option<ReadFrame>,
     /// What the thread reported.
     pub status: StreamStatus,
+    /// The map frames are fitted to the view with.
+    backdrop: SharedBackdrop,
 }
 
 impl FrameStream {
@@ -98,15 +128,24 @@ impl FrameStream {
     /// `camera`'s lens; `repeat` starts the source over after its last frame.
     pub fn start(reader: Box<dyn FrameReader>, dictionary: Dictionary, camera: Intrinsics, repeat: bool) -> Self {
         let (sender, frames) = sync_channel(FRAMES_AHEAD);
-        std::thread::Builder::new()
+        let backdrop = SharedBackdrop::default();
+        let work = Work { dictionary, camera, repeat, backdrop: backdrop.clone() };
+        let (frames, status) = match std::thread::Builder::new()
             .name("canopy-frames".into())
-            .spawn(move || read_frames(reader, dictionary, camera, repeat, sender))
-            .map(|_| Self { frames: Mutex::new(frames), early: None, status: StreamStatus::Reading })
-            .unwrap_or_else(|error| {
+            .spawn(move || read_frames(reader, work, sender))
+        {
+            Ok(_) => (frames, StreamStatus::Reading),
+            Err(error) => {
                 let (_, frames) = sync_channel(0);
-                let status = StreamStatus::Failed(format!("cannot start the thread that reads frames: {error}"));
-                Self { frames: Mutex::new(frames), early: None, status }
-            })
+                (frames, StreamStatus::Failed(format!("cannot start the thread that reads frames: {error}")))
+            }
+        };
+        Self { frames: Mutex::new(frames), early: None, status, backdrop }
+    }
+
+    /// Fits the frames read from now on with `backdrop`.
+    pub fn fit_with(&self, backdrop: Arc<Backdrop>) {
+        *self.backdrop.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = Some(backdrop);
     }
 
     /// The frame to show now, if there is a new one; see [`Taking`]. Frames before it are let
@@ -146,15 +185,17 @@ impl FrameStream {
     }
 }
 
-/// The reading thread: frames in order, each searched, until the source ends or fails or the
-/// stream is dropped.
-fn read_frames(
-    mut reader: Box<dyn FrameReader>,
+/// What the reading thread does with each frame.
+struct Work {
     dictionary: Dictionary,
     camera: Intrinsics,
     repeat: bool,
-    sender: SyncSender<Message>,
-) {
+    backdrop: SharedBackdrop,
+}
+
+/// The reading thread: frames in order, each searched and fitted, until the source ends or
+/// fails or the stream is dropped.
+fn read_frames(mut reader: Box<dyn FrameReader>, work: Work, sender: SyncSender<Message>) {
     let settings = Settings::default();
     let mut scratch = Scratch::default();
     let (mut position, mut index) = (0u64, 0usize);
@@ -164,15 +205,20 @@ fn read_frames(
             Some(read) => {
                 let content = read.map(|image| {
                     let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
-                    let markers = detect(&gray, &dictionary, &settings, Some(&camera), &mut scratch);
-                    Searched { image: Arc::new(image), markers, work: started.elapsed() }
+                    let markers = detect(&gray, &work.dictionary, &settings, Some(&work.camera), &mut scratch);
+                    let backdrop = work.backdrop.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone();
+                    let fitted = backdrop.map(|backdrop| {
+                        let pixels = backdrop.fit(&image);
+                        (backdrop, pixels)
+                    });
+                    Searched { image: Arc::new(image), markers, fitted, work: started.elapsed() }
                 });
                 let frame = ReadFrame { position, index, content };
                 position += 1;
                 index += 1;
                 Message::Frame(frame)
             }
-            None if repeat && index > 0 => match reader.rewind() {
+            None if work.repeat && index > 0 => match reader.rewind() {
                 Ok(()) => {
                     index = 0;
                     continue;
