@@ -724,50 +724,56 @@ fn sloth_gait_prints_the_study_beside_the_walk_and_draws_the_footfalls() {
 #[test]
 fn a_camera_is_calibrated_from_photographs_of_a_printed_board() {
     use bevy::math::{DMat3, DVec3};
-    use canopy_vision::board::GridBoard;
+    use canopy_vision::board::{Board, CharucoBoard, GridBoard};
     use canopy_vision::synth::photograph_print;
     use canopy_vision::{Distortion, Intrinsics, Pose};
-    let folder = tempfile::tempdir().unwrap();
     let dictionary = canopy_vision::Dictionary::named("6x6_250").unwrap();
-    let board = GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).unwrap();
-    let print = board.image(&dictionary, 4000.0, 0.006).unwrap();
-    let truth = Intrinsics {
-        fx: 610.0,
-        fy: 606.0,
-        cx: 318.0,
-        cy: 244.0,
-        distortion: Distortion([-0.1, 0.04, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
-        size: [640, 480],
-    };
-    let centre = (board.size_m() * 0.5).extend(0.0);
-    let mut images = Vec::new();
-    for (k, (turn, tilt, roll)) in
-        [(0.4, -0.3, 0.1), (-0.35, -0.4, -0.3), (0.1, 0.5, 0.4), (-0.5, 0.2, 0.0), (0.2, -0.55, -0.5)]
-            .into_iter()
-            .enumerate()
-    {
-        let rotation = DMat3::from_rotation_z(roll) * DMat3::from_rotation_y(turn) * DMat3::from_rotation_x(tilt);
-        let pose = Pose { rotation, translation: DVec3::new(0.0, 0.0, 0.36) - rotation * centre };
-        let frame = photograph_print(&print, 4000.0, 0.006, &pose, &truth);
-        let path = folder.path().join(format!("view-{k}.png"));
-        image::GrayImage::from_raw(640, 480, frame.pixels).unwrap().save(&path).unwrap();
-        images.push(path.to_string_lossy().into_owned());
+    let grid = Board::Grid(GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).unwrap());
+    let charuco = Board::Charuco(CharucoBoard::new([7, 5], 0.03, 0.018, 0, false, &dictionary).unwrap());
+    let grid_args = ["--markers", "5x4", "--marker-m", "0.03", "--separation-m", "0.006"];
+    let charuco_args = ["--board", "charuco", "--squares", "7x5", "--square-m", "0.03", "--marker-m", "0.018"];
+    for (board, layout) in [(grid, &grid_args[..]), (charuco, &charuco_args[..])] {
+        let folder = tempfile::tempdir().unwrap();
+        let print = board.image(&dictionary, 4000.0, 0.006).unwrap();
+        let truth = Intrinsics {
+            fx: 610.0,
+            fy: 606.0,
+            cx: 318.0,
+            cy: 244.0,
+            distortion: Distortion([-0.1, 0.04, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+            size: [640, 480],
+        };
+        let centre = (board.size_m() * 0.5).extend(0.0);
+        let mut images = Vec::new();
+        for (k, (turn, tilt, roll)) in
+            [(0.4, -0.3, 0.1), (-0.35, -0.4, -0.3), (0.1, 0.5, 0.4), (-0.5, 0.2, 0.0), (0.2, -0.55, -0.5)]
+                .into_iter()
+                .enumerate()
+        {
+            let rotation = DMat3::from_rotation_z(roll) * DMat3::from_rotation_y(turn) * DMat3::from_rotation_x(tilt);
+            let pose = Pose { rotation, translation: DVec3::new(0.0, 0.0, 0.36) - rotation * centre };
+            let frame = photograph_print(&print, 4000.0, 0.006, &pose, &truth);
+            let path = folder.path().join(format!("view-{k}.png"));
+            image::GrayImage::from_raw(640, 480, frame.pixels).unwrap().save(&path).unwrap();
+            images.push(path.to_string_lossy().into_owned());
+        }
+        let out = folder.path().join("camera.yaml");
+        let args = [&["ar", "calibrate"], layout, &["--out"]].concat();
+        let image_args: Vec<&str> = images.iter().map(String::as_str).collect();
+        let output = canopy(&[&args[..], &[out.to_str().unwrap()], &image_args].concat());
+        assert!(output.status.success(), "{}", stderr(&output));
+        let said = String::from_utf8_lossy(&output.stdout);
+        assert!(said.contains("5 views") && said.lines().filter(|l| l.contains("view-")).count() == 5, "{said}");
+        // The file written is read as any calibration is, and holds the camera within 0.5 %.
+        let camera = canopy::ar::calibration::read(&out).unwrap().for_frames([640, 480]).unwrap();
+        for (got, want) in [(camera.fx, truth.fx), (camera.fy, truth.fy), (camera.cx, truth.cx), (camera.cy, truth.cy)]
+        {
+            assert!((got - want).abs() / want < 0.005, "{got} against {want}\n{said}");
+        }
+        // Too few photographs: the camera cannot be found, and nothing is written.
+        let few = canopy(&[&args[..], &[folder.path().join("few.yaml").to_str().unwrap()], &image_args[..2]].concat());
+        assert_eq!(few.status.code(), Some(1));
+        assert!(stderr(&few).contains("at least 3 views"), "{}", stderr(&few));
+        assert!(!folder.path().join("few.yaml").exists());
     }
-    let out = folder.path().join("camera.yaml");
-    let args = ["ar", "calibrate", "--markers", "5x4", "--marker-m", "0.03", "--separation-m", "0.006", "--out"];
-    let image_args: Vec<&str> = images.iter().map(String::as_str).collect();
-    let output = canopy(&[&args[..], &[out.to_str().unwrap()], &image_args].concat());
-    assert!(output.status.success(), "{}", stderr(&output));
-    let said = String::from_utf8_lossy(&output.stdout);
-    assert!(said.contains("5 views") && said.lines().filter(|l| l.contains("view-")).count() == 5, "{said}");
-    // The file written is read as any calibration is, and holds the camera within 0.5 %.
-    let camera = canopy::ar::calibration::read(&out).unwrap().for_frames([640, 480]).unwrap();
-    for (got, want) in [(camera.fx, truth.fx), (camera.fy, truth.fy), (camera.cx, truth.cx), (camera.cy, truth.cy)] {
-        assert!((got - want).abs() / want < 0.005, "{got} against {want}\n{said}");
-    }
-    // Too few photographs: the camera cannot be found, and nothing is written.
-    let few = canopy(&[&args[..], &[folder.path().join("few.yaml").to_str().unwrap()], &image_args[..2]].concat());
-    assert_eq!(few.status.code(), Some(1));
-    assert!(stderr(&few).contains("at least 3 views"), "{}", stderr(&few));
-    assert!(!folder.path().join("few.yaml").exists());
 }

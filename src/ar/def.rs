@@ -4,6 +4,7 @@ use super::calibration::Calibration;
 use super::source::{CameraSettings, Source};
 use crate::foundation::values::{FileType, FolderFile, PositiveMetres, checked_number, inside_folder};
 use crate::foundation::yaml::deserialize_str_with;
+use canopy_vision::board::{Board, CharucoBoard, GridBoard};
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::dictionary::Dictionary;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -149,7 +150,7 @@ pub struct ArDef {
     /// The marker's side (its black square), metres.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub marker_side_m: Option<PositiveMetres>,
-    /// Or a grid board of markers the scene stands on, at its centre.
+    /// Or a board the scene stands on, at its centre: a grid of markers or a ChArUco board.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub board: Option<BoardDef>,
     /// Marker metres to the world metre: the scene shrunk onto the marker; 1 by default.
@@ -179,20 +180,56 @@ fn half_second() -> HoldSeconds {
     HoldSeconds(0.5)
 }
 
-/// An ArUco grid board in a scene file, laid out as OpenCV's `GridBoard` (see
+/// A board in a scene file: an ArUco grid board (`markers` and `separation_m`) or a ChArUco
+/// board (`squares` and `square_m`), laid out as OpenCV's `GridBoard` and `CharucoBoard` (see
 /// `canopy ar board`).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoardDef {
-    /// Markers across and down.
-    pub markers: [u32; 2],
+    /// A grid board's markers across and down.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub markers: Option<[u32; 2]>,
+    /// A grid board's gap between neighbouring markers, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub separation_m: Option<f64>,
+    /// A ChArUco board's squares across and down.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub squares: Option<[u32; 2]>,
+    /// A ChArUco board's square side, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub square_m: Option<f64>,
     /// Each marker's side, metres.
     pub marker_m: f64,
-    /// The gap between neighbouring markers, metres.
-    pub separation_m: f64,
-    /// The top-left marker's id; 0 by default.
+    /// The first marker's id; 0 by default.
     #[serde(default)]
     pub first_id: u32,
+    /// A ChArUco board of an even number of rows made by OpenCV before 4.6; no by default.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub legacy: bool,
+}
+
+impl BoardDef {
+    /// The board described, or what is wrong with it for `dictionary`.
+    pub fn board(&self, dictionary: &Dictionary) -> Result<Board, String> {
+        match (self.markers, self.separation_m, self.squares, self.square_m) {
+            (Some(markers), Some(separation_m), None, None) if !self.legacy => {
+                Ok(Board::Grid(GridBoard::new(markers, self.marker_m, separation_m, self.first_id, dictionary)?))
+            }
+            (None, None, Some(squares), Some(square_m)) => Ok(Board::Charuco(CharucoBoard::new(
+                squares,
+                square_m,
+                self.marker_m,
+                self.first_id,
+                self.legacy,
+                dictionary,
+            )?)),
+            _ => Err(
+                "expected `markers` and `separation_m` (a grid board), or `squares` and `square_m` (a ChArUco board, \
+                      which alone takes `legacy`)"
+                    .into(),
+            ),
+        }
+    }
 }
 
 /// What an `ar` entity is built into: its source of frames and the camera for their size.
@@ -204,6 +241,8 @@ pub struct ArBuilt {
     pub camera: Intrinsics,
     /// The calibration, for a camera opened at another size.
     pub calibration: Arc<Calibration>,
+    /// The board the scene stands on, if not a marker.
+    pub board: Option<Board>,
 }
 
 #[cfg(test)]

@@ -13,7 +13,6 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
 use bevy::app::App;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
-use canopy_vision::board::GridBoard;
 use std::sync::Arc;
 
 /// The `ar` kind.
@@ -34,8 +33,7 @@ impl EntityKind for ArKind {
             }
             (Some(_), Some(_), None) => {}
             (None, None, Some(board)) => {
-                GridBoard::new(board.markers, board.marker_m, board.separation_m, board.first_id, &dictionary)
-                    .map_err(|error| cx.field_error("board", 0, "board", error))?;
+                board.board(&dictionary).map_err(|error| cx.field_error("board", 0, "board", error))?;
             }
             _ => {
                 let message = "expected `marker_id` and `marker_side_m`, or a `board`, to stand the scene on";
@@ -103,7 +101,12 @@ impl EntityKind for ArKind {
         let camera = calibration
             .for_frames(source.size())
             .map_err(|error| entity.field_error("calibration", 0, "calibration", error))?;
-        Ok(ArBuilt { source, camera, calibration: calibration.clone() })
+        let board = def
+            .board
+            .map(|board| board.board(&def.dictionary.0))
+            .transpose()
+            .map_err(|error| entity.field_error("board", 0, "board", error))?;
+        Ok(ArBuilt { source, camera, calibration: calibration.clone(), board })
     }
 
     fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {

@@ -8,6 +8,7 @@ use super::plugin::{ArState, ArView, Finding, Target};
 use super::source::{CameraSettings, Source};
 use bevy::prelude::*;
 use bevy_egui::egui;
+use canopy_vision::board::Board;
 
 /// The camera's controls: the device (from those found connected), the size and the rate,
 /// opened again with `Open`; a calibration for another shape is refused in the panel.
@@ -76,10 +77,18 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
         let shown = state.records.back();
         match target {
             Target::Marker { id, .. } => row(ui, "marker", format!("{dictionary} #{id}")),
-            Target::Board(board) => row(
+            Target::Board(Board::Grid(grid)) => row(
                 ui,
                 "board",
-                format!("{dictionary}, {} x {} markers from #{}", board.markers[0], board.markers[1], board.first_id),
+                format!("{dictionary}, {} x {} markers from #{}", grid.markers[0], grid.markers[1], grid.first_id),
+            ),
+            Target::Board(Board::Charuco(charuco)) => row(
+                ui,
+                "board",
+                format!(
+                    "ChArUco, {} x {} squares, {dictionary} from #{}",
+                    charuco.squares[0], charuco.squares[1], charuco.first_id
+                ),
             ),
         }
         if !source.live() {

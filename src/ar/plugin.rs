@@ -20,9 +20,8 @@ use crate::raster::plugin::RasterTarget;
 use crate::raster::{MAX_TARGET_SIZE, RenderView};
 use bevy::math::{DVec2, DVec3};
 use bevy::prelude::*;
-use canopy_vision::board::{BoardPose, GridBoard};
+use canopy_vision::board::{Board, BoardPose};
 use canopy_vision::camera::Intrinsics;
-use canopy_vision::detect::Marker;
 use canopy_vision::dictionary::Dictionary;
 use canopy_vision::fit::{Fit, Remap};
 use canopy_vision::pose::{Pose, PoseEstimate, estimate, marker_corners};
@@ -82,7 +81,7 @@ impl ArView {
             camera: built.camera,
             calibration: built.calibration.clone(),
             dictionary: def.dictionary.0,
-            target: Target::of(def),
+            target: Target::of(def, built),
             scale: def.scale.0,
             fps: built.source.fps(def.fps.map(|fps| fps.0)),
             repeat: def.repeat,
@@ -107,7 +106,11 @@ impl ArView {
     /// Starts reading the source's frames.
     fn start(&self) -> Result<FrameStream, String> {
         let reader = self.source.open()?;
-        Ok(FrameStream::start(reader, self.dictionary, self.camera, self.repeat && !self.source.live()))
+        let board = match self.target {
+            Target::Board(board) => Some(board),
+            Target::Marker { .. } => None,
+        };
+        Ok(FrameStream::start(reader, self.dictionary, self.camera, board, self.repeat && !self.source.live()))
     }
 }
 
@@ -121,21 +124,16 @@ pub enum Target {
         /// Its side, metres.
         side_m: f64,
     },
-    /// A grid board, the scene on its centre.
-    Board(GridBoard),
+    /// A board, the scene on its centre.
+    Board(Board),
 }
 
 impl Target {
-    /// The target a checked definition names.
-    fn of(def: &ArDef) -> Self {
-        match (def.marker_id, def.marker_side_m, def.board) {
-            (_, _, Some(board)) => Target::Board(GridBoard {
-                markers: board.markers,
-                marker_m: board.marker_m,
-                separation_m: board.separation_m,
-                first_id: board.first_id,
-            }),
-            (id, side, None) => {
+    /// The target a checked definition names: its board as built, or its marker.
+    fn of(def: &ArDef, built: &ArBuilt) -> Self {
+        match (built.board, def.marker_id, def.marker_side_m) {
+            (Some(board), ..) => Target::Board(board),
+            (None, id, side) => {
                 Target::Marker { id: id.unwrap_or_default(), side_m: side.map_or(0.0, |side| f64::from(side.0)) }
             }
         }
@@ -341,8 +339,8 @@ fn show(view: &ArView, state: &mut ArState, frame: ReadFrame) {
                         None => Finding::Lost { held: false },
                     }
                 }
-                Target::Board(board) => match board.pose(&markers, &view.camera) {
-                    Some(found) => board_finding(&board, &markers, found),
+                Target::Board(board) => match board.pose(&searched.points, &markers, &view.camera) {
+                    Some(found) => board_finding(&board, &searched.points, found),
                     None => Finding::Lost { held: false },
                 },
             }
@@ -370,15 +368,10 @@ fn show(view: &ArView, state: &mut ArState, frame: ReadFrame) {
     state.records.push_back(FrameRecord { frame: frame.index, time_s: state.time_s, finding });
 }
 
-/// A board's finding: its pose moved to its centre with a marker frame's axes, and the
-/// corners of its markers found, in that frame.
-fn board_finding(board: &GridBoard, markers: &[Marker], found: BoardPose) -> Finding {
-    let points = board
-        .matched(markers)
-        .into_iter()
-        .flat_map(|(marker, object)| object.into_iter().zip(marker.corners_f64()))
-        .map(|(object, pixel)| (board.from_board(object), pixel))
-        .collect();
+/// A board's finding: its pose moved to its centre with a marker frame's axes, and its points
+/// found, in that frame.
+fn board_finding(board: &Board, points: &[(DVec3, DVec2)], found: BoardPose) -> Finding {
+    let points = points.iter().map(|&(object, pixel)| (board.from_board(object), pixel)).collect();
     Finding::Board { pose: BoardPose { pose: board.centred(&found.pose), ..found }, points }
 }
 
@@ -457,14 +450,23 @@ fn lay_over_frame(
         && let Some(points) = state.found_points(&view.target)
     {
         let fit = Fit::new(view.camera.size, size);
+        let shown: Vec<Vec2> =
+            points.iter().map(|&(_, found)| fit.to_view(view.camera.straightened(found)).as_vec2()).collect();
+        if let Target::Board(Board::Charuco(_)) = view.target {
+            // Each chessboard corner found: a cross.
+            for &corner in &shown {
+                for arm in [Vec2::new(4.0, 4.0), Vec2::new(4.0, -4.0)] {
+                    framebuffer.draw_line(corner - arm, corner + arm, [40, 220, 60, 255]);
+                }
+            }
+            return;
+        }
         // Each marker found: its four corners in OpenCV's order.
-        for quad in points.chunks_exact(4) {
-            let corners: Vec<DVec2> =
-                quad.iter().map(|&(_, found)| fit.to_view(view.camera.straightened(found))).collect();
+        for corners in shown.chunks_exact(4) {
             for (i, &from) in corners.iter().enumerate() {
                 // The first side (top-left to top-right as printed) in red, the others in green.
                 let color = if i == 0 { [230, 40, 40, 255] } else { [40, 220, 60, 255] };
-                framebuffer.draw_line(from.as_vec2(), corners[(i + 1) % 4].as_vec2(), color);
+                framebuffer.draw_line(from, corners[(i + 1) % 4], color);
             }
         }
     }
@@ -482,10 +484,14 @@ impl DumpState for ArView {
                 out.insert("marker_id".into(), json!(id));
                 out.insert("marker_side_m".into(), json!(side_m));
             }
-            Target::Board(board) => {
-                let (markers, first_id) = (board.markers, board.first_id);
-                let (marker_m, separation_m) = (board.marker_m, board.separation_m);
-                let board = json!({"markers": markers, "marker_m": marker_m, "separation_m": separation_m, "first_id": first_id});
+            Target::Board(Board::Grid(grid)) => {
+                let board = json!({"markers": grid.markers, "marker_m": grid.marker_m,
+                    "separation_m": grid.separation_m, "first_id": grid.first_id});
+                out.insert("board".into(), board);
+            }
+            Target::Board(Board::Charuco(charuco)) => {
+                let board = json!({"squares": charuco.squares, "square_m": charuco.square_m,
+                    "marker_m": charuco.marker_m, "first_id": charuco.first_id, "legacy": charuco.legacy});
                 out.insert("board".into(), board);
             }
         }
@@ -507,9 +513,10 @@ impl DumpState for ArState {
                         found["flipped"] = json!(flipped);
                         found
                     }
-                    Finding::Board { pose, .. } => json!({
+                    Finding::Board { pose, points } => json!({
                         "marker": "found",
                         "board_markers": pose.markers,
+                        "board_points": points.len(),
                         "rvec": pose.pose.rvec().to_array(),
                         "tvec": pose.pose.translation.to_array(),
                         "reprojection_error_px": pose.error_px,

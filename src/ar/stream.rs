@@ -10,6 +10,8 @@
 //! The thread also fits each frame to the view (the overlay's backdrop) with the map the
 //! overlay last gave it, so that a large video's resampling is not the frame's work either.
 
+use bevy::math::{DVec2, DVec3};
+use canopy_vision::board::Board;
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::detect::{Marker, Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
@@ -51,6 +53,9 @@ pub struct Searched {
     pub image: Arc<RgbaImage>,
     /// Every marker of the dictionary found.
     pub markers: Vec<Marker>,
+    /// The board's points found, each with where it lies on the board (metres), when the
+    /// overlay stands on a board: see [`Board::points`].
+    pub points: Vec<(DVec3, DVec2)>,
     /// The pixels fitted to the view, with the map they were fitted with (the overlay's map
     /// when the frame was read: one made since is not this one).
     pub fitted: Option<(Arc<Backdrop>, Vec<u8>)>,
@@ -125,11 +130,18 @@ pub struct FrameStream {
 
 impl FrameStream {
     /// Starts reading `reader`'s frames, searching each for `dictionary`'s markers through
-    /// `camera`'s lens; `repeat` starts the source over after its last frame.
-    pub fn start(reader: Box<dyn FrameReader>, dictionary: Dictionary, camera: Intrinsics, repeat: bool) -> Self {
+    /// `camera`'s lens, and for `board`'s points if it has one; `repeat` starts the source over
+    /// after its last frame.
+    pub fn start(
+        reader: Box<dyn FrameReader>,
+        dictionary: Dictionary,
+        camera: Intrinsics,
+        board: Option<Board>,
+        repeat: bool,
+    ) -> Self {
         let (sender, frames) = sync_channel(FRAMES_AHEAD);
         let backdrop = SharedBackdrop::default();
-        let work = Work { dictionary, camera, repeat, backdrop: backdrop.clone() };
+        let work = Work { dictionary, camera, board, repeat, backdrop: backdrop.clone() };
         let (frames, status) = match std::thread::Builder::new()
             .name("canopy-frames".into())
             .spawn(move || read_frames(reader, work, sender))
@@ -189,6 +201,7 @@ impl FrameStream {
 struct Work {
     dictionary: Dictionary,
     camera: Intrinsics,
+    board: Option<Board>,
     repeat: bool,
     backdrop: SharedBackdrop,
 }
@@ -206,12 +219,13 @@ fn read_frames(mut reader: Box<dyn FrameReader>, work: Work, sender: SyncSender<
                 let content = read.map(|image| {
                     let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
                     let markers = detect(&gray, &work.dictionary, &settings, Some(&work.camera), &mut scratch);
+                    let points = work.board.map(|board| board.points(&gray, &markers)).unwrap_or_default();
                     let backdrop = work.backdrop.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone();
                     let fitted = backdrop.map(|backdrop| {
                         let pixels = backdrop.fit(&image);
                         (backdrop, pixels)
                     });
-                    Searched { image: Arc::new(image), markers, fitted, work: started.elapsed() }
+                    Searched { image: Arc::new(image), markers, points, fitted, work: started.elapsed() }
                 });
                 let frame = ReadFrame { position, index, content };
                 position += 1;
@@ -266,7 +280,7 @@ mod tests {
     fn stream(frames: usize, failing: Option<usize>, repeat: bool) -> FrameStream {
         let camera = Intrinsics::pinhole([8, 6], 60.0);
         let dictionary = Dictionary::named("4x4_50").unwrap();
-        FrameStream::start(Box::new(Counting { frames, next: 0, failing }), dictionary, camera, repeat)
+        FrameStream::start(Box::new(Counting { frames, next: 0, failing }), dictionary, camera, None, repeat)
     }
 
     fn level(frame: &ReadFrame) -> u8 {

@@ -9,6 +9,7 @@ use crate::ar::frames::load_image;
 use crate::ar::report::marker_json;
 use crate::ar::sample::{FrameFormat, write_sequence};
 use bevy::math::UVec2;
+use canopy_vision::board::Board;
 use canopy_vision::synth::{SequenceSettings, marker_image};
 use canopy_vision::{Dictionary, Gray, Intrinsics, Scratch, Settings, detect, pose::estimate};
 use clap::{Args, Subcommand};
@@ -39,7 +40,8 @@ pub enum ArCommand {
         #[arg(long)]
         force: bool,
     },
-    /// Write an ArUco grid board as a PNG for printing, laid out as OpenCV's `GridBoard`.
+    /// Write a board as a PNG for printing: an ArUco grid board or a ChArUco board, laid out as
+    /// OpenCV's `GridBoard` and `CharucoBoard`.
     Board(BoardArgs),
     /// Calibrate a camera from photographs of a printed board, without OpenCV: Zhang's method
     /// refined by Levenberg-Marquardt over the focal lengths, principal point and OpenCV's
@@ -76,7 +78,8 @@ pub struct BoardArgs {
     /// Pixels a printed metre: 11811 prints at 300 dots an inch.
     #[arg(long, default_value_t = 11811.0)]
     pixels_per_metre: f64,
-    /// White margin round the board, metres (the separation by default).
+    /// White margin round the board, metres (a grid's separation, or a ChArUco board's square
+    /// less its marker, by default).
     #[arg(long)]
     margin_m: Option<f64>,
     /// The PNG to write.
@@ -205,7 +208,10 @@ fn write_board(args: &BoardArgs) -> ExitCode {
         Ok(found) => found,
         Err(error) => return usage(error),
     };
-    let margin_m = args.margin_m.unwrap_or(board.separation_m);
+    let margin_m = args.margin_m.unwrap_or(match board {
+        Board::Grid(grid) => grid.separation_m,
+        Board::Charuco(charuco) => charuco.square_m - charuco.marker_m,
+    });
     let image = match (margin_m.is_finite() && margin_m >= 0.0 && args.pixels_per_metre.is_finite())
         .then(|| board.image(&dictionary, args.pixels_per_metre, margin_m))
         .flatten()
@@ -219,11 +225,14 @@ fn write_board(args: &BoardArgs) -> ExitCode {
     let (width, height) = (image.width, image.height);
     match save_gray(image, &args.out) {
         Ok(()) => {
-            let last = board.first_id + board.markers[0] * board.markers[1] - 1;
+            let (first, count) = match board {
+                Board::Grid(grid) => (grid.first_id, grid.markers[0] * grid.markers[1]),
+                Board::Charuco(charuco) => (charuco.first_id, charuco.marker_count()),
+            };
             println!(
-                "{}: {dictionary} markers {} to {last}, {width} x {height} pixels; print it {:.1} x {:.1} cm",
+                "{}: {dictionary} markers {first} to {}, {width} x {height} pixels; print it {:.1} x {:.1} cm",
                 args.out.display(),
-                board.first_id,
+                first + count - 1,
                 f64::from(width) / args.pixels_per_metre * 100.0,
                 f64::from(height) / args.pixels_per_metre * 100.0
             );

@@ -1,5 +1,5 @@
-//! `canopy ar calibrate`: a camera calibrated from photographs of a printed grid board,
-//! without OpenCV, written as the calibration file Canopy and OpenCV both read.
+//! `canopy ar calibrate`: a camera calibrated from photographs of a printed board (grid or
+//! ChArUco), without OpenCV, written as the calibration file Canopy and OpenCV both read.
 
 use super::board_layout::BoardLayout;
 use super::refuse_to_replace;
@@ -7,16 +7,9 @@ use crate::ar::calibration::to_yaml;
 use crate::ar::frames::load_image;
 use canopy_vision::calibrate::{View, calibrate};
 use canopy_vision::{Gray, Scratch, Settings, detect};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
-
-/// The calibration targets `canopy ar calibrate` finds.
-#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BoardKind {
-    /// An ArUco grid board (`canopy ar board`).
-    Grid,
-}
 
 /// `canopy ar calibrate`.
 #[derive(Args, Debug)]
@@ -26,8 +19,6 @@ pub struct CalibrateArgs {
     #[arg(required = true)]
     images: Vec<PathBuf>,
     /// The board photographed.
-    #[arg(long, value_enum, default_value = "grid")]
-    board: BoardKind,
     #[command(flatten)]
     layout: BoardLayout,
     /// The calibration file to write (OpenCV's YAML layout).
@@ -64,11 +55,8 @@ impl CalibrateArgs {
             size = Some([image.width(), image.height()]);
             let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
             let markers = detect(&gray, &dictionary, &Settings::default(), None, &mut scratch);
-            let (object, pixels): (Vec<_>, Vec<_>) = board
-                .matched(&markers)
-                .into_iter()
-                .flat_map(|(marker, object)| object.into_iter().map(|p| p.truncate()).zip(marker.corners_f64()))
-                .unzip();
+            let (object, pixels): (Vec<_>, Vec<_>) =
+                board.points(&gray, &markers).into_iter().map(|(object, pixel)| (object.truncate(), pixel)).unzip();
             if object.len() < MIN_CORNERS {
                 println!("{}: {} corners of the board, left out", path.display(), object.len());
                 continue;

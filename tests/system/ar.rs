@@ -251,49 +251,60 @@ fn through_a_distorting_lens_the_straightened_frame_and_the_scene_line_up() {
 }
 
 #[test]
-fn a_scene_stands_on_a_board_found_from_every_marker_of_it() {
-    use canopy_vision::board::GridBoard;
+fn a_scene_stands_on_a_grid_or_charuco_board_found_from_all_of_it() {
+    use canopy_vision::board::{Board, CharucoBoard, GridBoard};
     use canopy_vision::synth::photograph_print;
     use canopy_vision::{Dictionary, Intrinsics};
-    // Three photographs of a 4 x 3 board from different sides, and their calibration.
-    let folder = tempfile::tempdir().unwrap();
     let dictionary = Dictionary::named("6x6_250").unwrap();
-    let board = GridBoard::new([4, 3], 0.04, 0.01, 0, &dictionary).unwrap();
-    let (pixels_per_metre, margin_m) = (4000.0, 0.01);
-    let print = board.image(&dictionary, pixels_per_metre, margin_m).unwrap();
-    let camera = Intrinsics::pinhole([640, 480], 50.0);
-    let clip = folder.path().join("clip");
-    std::fs::create_dir(&clip).unwrap();
-    let centre = (board.size_m() * 0.5).extend(0.0);
-    let mut truths = Vec::new();
-    for (k, (turn, tilt)) in [(0.3, -0.5), (-0.2, -0.7), (0.1, -0.3)].into_iter().enumerate() {
-        let rotation = bevy::math::DMat3::from_rotation_y(turn) * bevy::math::DMat3::from_rotation_x(tilt);
-        let pose = Pose { rotation, translation: DVec3::new(0.01, 0.0, 0.5) - rotation * centre };
-        let frame = photograph_print(&print, pixels_per_metre, margin_m, &pose, &camera);
-        image::GrayImage::from_raw(640, 480, frame.pixels).unwrap().save(clip.join(format!("{k}.png"))).unwrap();
-        truths.push(pose);
+    let grid = Board::Grid(GridBoard::new([4, 3], 0.04, 0.01, 0, &dictionary).unwrap());
+    let charuco = Board::Charuco(CharucoBoard::new([5, 4], 0.035, 0.025, 0, false, &dictionary).unwrap());
+    // The grid's pose from every marker's corners, the ChArUco board's from its 12 inner
+    // chessboard corners.
+    let boards = [
+        (grid, "{markers: [4, 3], marker_m: 0.04, separation_m: 0.01}", 12, 48),
+        (charuco, "{squares: [5, 4], square_m: 0.035, marker_m: 0.025}", 10, 12),
+    ];
+    for (board, entry, markers, points) in boards {
+        // Three photographs of the board from different sides, and their calibration.
+        let folder = tempfile::tempdir().unwrap();
+        let (pixels_per_metre, margin_m) = (4000.0, 0.01);
+        let print = board.image(&dictionary, pixels_per_metre, margin_m).unwrap();
+        let camera = Intrinsics::pinhole([640, 480], 50.0);
+        let clip = folder.path().join("clip");
+        std::fs::create_dir(&clip).unwrap();
+        let centre = (board.size_m() * 0.5).extend(0.0);
+        let mut truths = Vec::new();
+        for (k, (turn, tilt)) in [(0.3, -0.5), (-0.2, -0.7), (0.1, -0.3)].into_iter().enumerate() {
+            let rotation = bevy::math::DMat3::from_rotation_y(turn) * bevy::math::DMat3::from_rotation_x(tilt);
+            let pose = Pose { rotation, translation: DVec3::new(0.01, 0.0, 0.5) - rotation * centre };
+            let frame = photograph_print(&print, pixels_per_metre, margin_m, &pose, &camera);
+            image::GrayImage::from_raw(640, 480, frame.pixels).unwrap().save(clip.join(format!("{k}.png"))).unwrap();
+            truths.push(pose);
+        }
+        std::fs::write(folder.path().join("camera.yaml"), canopy::ar::calibration::to_yaml(&camera)).unwrap();
+        let scene = folder.path().join("scene.yaml");
+        std::fs::write(
+            &scene,
+            format!(
+                "entities:\n  - name: overlay\n    ar: {{frames: clip, fps: 30, loop: false, calibration: camera.yaml, \
+                 dictionary: 6x6_250, board: {entry}, scale: 0.02}}\n  - shape: {{primitive: box, size: 2}}\n"
+            ),
+        )
+        .unwrap();
+        let dump = run(&scene, 0.1, UVec2::new(320, 240), false);
+        let overlay = entity(&dump, "overlay");
+        assert!(overlay["board"].is_object(), "{overlay}");
+        let poses = overlay["poses"].as_array().unwrap();
+        assert_eq!(poses.len(), 3);
+        for (pose, truth) in poses.iter().zip(&truths) {
+            let found = (pose["marker"].as_str(), pose["board_markers"].as_u64(), pose["board_points"].as_u64());
+            assert_eq!(found, (Some("found"), Some(markers), Some(points)), "{pose}");
+            // The pose is the board's centre, as a marker there would have it.
+            let tvec = vector(&pose["tvec"]);
+            assert!(tvec.distance(truth.apply(centre)) < 1e-3, "{tvec} against {}", truth.apply(centre));
+            assert!(pose["reprojection_error_px"].as_f64().unwrap() < 0.3, "{pose}");
+        }
+        // Drawn within a pixel of where every point of the board was photographed.
+        assert!(overlay["overlay_error_max_px"].as_f64().unwrap() < 1.0, "{overlay}");
     }
-    std::fs::write(folder.path().join("camera.yaml"), canopy::ar::calibration::to_yaml(&camera)).unwrap();
-    let scene = folder.path().join("scene.yaml");
-    std::fs::write(
-        &scene,
-        "entities:\n  - name: overlay\n    ar: {frames: clip, fps: 30, loop: false, calibration: camera.yaml, \
-         dictionary: 6x6_250, board: {markers: [4, 3], marker_m: 0.04, separation_m: 0.01}, scale: 0.02}\n  \
-         - shape: {primitive: box, size: 2}\n",
-    )
-    .unwrap();
-    let dump = run(&scene, 0.1, UVec2::new(320, 240), false);
-    let overlay = entity(&dump, "overlay");
-    assert_eq!(overlay["board"]["markers"], serde_json::json!([4, 3]));
-    let poses = overlay["poses"].as_array().unwrap();
-    assert_eq!(poses.len(), 3);
-    for (pose, truth) in poses.iter().zip(&truths) {
-        assert_eq!((pose["marker"].as_str(), pose["board_markers"].as_u64()), (Some("found"), Some(12)), "{pose}");
-        // The pose is the board's centre, as a marker there would have it.
-        let tvec = vector(&pose["tvec"]);
-        assert!(tvec.distance(truth.apply(centre)) < 1e-3, "{tvec} against {}", truth.apply(centre));
-        assert!(pose["reprojection_error_px"].as_f64().unwrap() < 0.5, "{pose}");
-    }
-    // Drawn within a pixel of where every corner of the board was photographed.
-    assert!(overlay["overlay_error_max_px"].as_f64().unwrap() < 1.0, "{overlay}");
 }

@@ -14,7 +14,7 @@ use aruco_rs::core::dictionary::{DICTIONARY_ARUCO, Dictionary as PeerDictionary}
 use aruco_rs::simd::native::NativeCV;
 use bevy_math::{DMat3, DVec2, DVec3};
 use canopy_vision::Pose;
-use canopy_vision::board::GridBoard;
+use canopy_vision::board::{Board, CharucoBoard, GridBoard};
 use canopy_vision::camera::Intrinsics;
 use canopy_vision::detect::{Scratch, Settings, detect};
 use canopy_vision::dictionary::Dictionary;
@@ -144,14 +144,17 @@ fn main() {
         }
         println!("| {label} | ratio aruco-rs / Canopy detection | {:.2} | | |", peer_ms / detection);
     }
-    board_row(RUNS);
+    let dictionary = Dictionary::named("6x6_250").expect("a predefined dictionary");
+    let grid = GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).expect("a board the dictionary holds");
+    board_row(RUNS, Board::Grid(grid), "a 5 x 4 grid board");
+    let charuco = CharucoBoard::new([6, 5], 0.027, 0.018, 0, false, &dictionary).expect("a board the dictionary holds");
+    board_row(RUNS, Board::Charuco(charuco), "a 6 x 5 ChArUco board");
 }
 
-/// A 5 x 4 grid board photographed from ten sides at 640 x 480: the board's markers found and
-/// its pose from every corner, per frame (the AR scene's work when it stands on a board).
-fn board_row(runs: usize) {
+/// A board photographed from ten sides at 640 x 480: the board's markers and points found and
+/// its pose from them, per frame (the AR scene's work when it stands on a board).
+fn board_row(runs: usize, board: Board, label: &str) {
     let dictionary = Dictionary::named("6x6_250").expect("a predefined dictionary");
-    let board = GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).expect("a board the dictionary holds");
     let print = board.image(&dictionary, 4000.0, 0.006).expect("a printable board");
     let camera = Intrinsics::pinhole([640, 480], 50.0);
     let centre = (board.size_m() * 0.5).extend(0.0);
@@ -172,14 +175,10 @@ fn board_row(runs: usize) {
             .iter()
             .filter_map(|frame| {
                 let markers = detect(frame, &dictionary, &Settings::default(), Some(&camera), &mut scratch);
-                black_box(board.pose(&markers, &camera))
+                black_box(board.pose(&board.points(frame, &markers), &markers, &camera))
             })
             .count();
         times.push(started.elapsed().as_secs_f64() * 1e3 / frames.len() as f64);
     }
-    println!(
-        "| 640 x 480 | Canopy, a 5 x 4 board: detection and pose | {:.2} | {found}/{} | |",
-        median(times),
-        frames.len()
-    );
+    println!("| 640 x 480 | Canopy, {label}: detection and pose | {:.2} | {found}/{} | |", median(times), frames.len());
 }

@@ -59,7 +59,7 @@ pub fn calibrate(views: &[View], size: [u32; 2]) -> Result<Calibrated, String> {
 
 /// The homography taking the plane's points to the pixels, by the normalized direct linear
 /// transform: the eigenvector of the smallest eigenvalue of `A^T A`.
-fn homography(object: &[DVec2], pixels: &[DVec2]) -> Option<DMat3> {
+pub(crate) fn homography(object: &[DVec2], pixels: &[DVec2]) -> Option<DMat3> {
     let (to_object, _) = normalizer(object)?;
     let (to_pixels, from_pixels) = normalizer(pixels)?;
     let mut ata = [[0.0; 9]; 9];
@@ -289,7 +289,7 @@ fn smallest_eigenvector<const N: usize>(mut a: [[f64; N]; N]) -> [f64; N] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::board::GridBoard;
+    use crate::board::{Board, GridBoard};
     use crate::detect::{Scratch, Settings, detect};
     use crate::dictionary::Dictionary;
     use crate::synth::photograph_print;
@@ -297,7 +297,7 @@ mod tests {
     #[test]
     fn a_known_camera_is_recovered_from_synthetic_views_of_a_board() {
         let dictionary = Dictionary::named("6x6_250").unwrap();
-        let board = GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).unwrap();
+        let board = Board::Grid(GridBoard::new([5, 4], 0.03, 0.006, 0, &dictionary).unwrap());
         let (pixels_per_metre, margin_m) = (4000.0, 0.006);
         let print = board.image(&dictionary, pixels_per_metre, margin_m).unwrap();
         let truth = Intrinsics {

@@ -11,7 +11,10 @@
 //! | [`camera`] | the calibrated camera: pinhole with OpenCV's distortion model |
 //! | [`fit`] | a camera frame fitted into a view of another size, its distortion removed |
 //! | [`pose`] | a square marker's pose: both planar solutions (IPPE) refined on reprojection error |
-//! | [`board`] | ArUco grid boards in OpenCV's layout: printable images and a pose from every marker found |
+//! | [`grid`] | ArUco grid boards in OpenCV's layout, printable |
+//! | [`charuco`] | ChArUco boards in OpenCV's layout, printable; their chessboard corners found between their markers |
+//! | [`saddle`] | a chessboard corner placed to a fraction of a pixel (OpenCV's `cornerSubPix`) |
+//! | [`board`] | either board, and its pose from every point of it found |
 //! | [`steady`] | poses followed from frame to frame without flipping between the two solutions |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
@@ -21,6 +24,7 @@
 pub mod board;
 pub mod calibrate;
 pub mod camera;
+pub mod charuco;
 pub mod contour;
 pub mod detect;
 mod dictionaries;
@@ -28,8 +32,10 @@ pub mod dictionary;
 pub mod evaluate;
 pub mod fit;
 pub mod gray;
+pub mod grid;
 mod linear;
 pub mod pose;
+pub mod saddle;
 pub mod steady;
 pub mod synth;
 

@@ -36,10 +36,14 @@ pub fn marker_image(dictionary: &Dictionary, id: u32, cell_px: u32, margin_cells
     Some(image)
 }
 
+/// Samples across and down each pixel of a photographed print: enough that an edge's place in
+/// the photograph is exact to a twentieth of a pixel.
+pub const SAMPLES: u32 = 4;
+
 /// A print lying flat photographed: `image` printed at `pixels_per_metre` in the plane z = 0
 /// of its frame, x right and y down the print, the print's top-left corner at `(-margin_m,
 /// -margin_m)` (a board's frame, its margin round it), seen by `camera` from `pose` (print
-/// frame to camera frame) on a grey table, four samples a pixel.
+/// frame to camera frame) on a grey table, [`SAMPLES`] x [`SAMPLES`] samples a pixel.
 pub fn photograph_print(image: &Gray, pixels_per_metre: f64, margin_m: f64, pose: &Pose, camera: &Intrinsics) -> Gray {
     let [width, height] = camera.size;
     let to_print = pose.rotation.transpose();
@@ -48,7 +52,9 @@ pub fn photograph_print(image: &Gray, pixels_per_metre: f64, margin_m: f64, pose
     for y in 0..height {
         for x in 0..width {
             let mut sum = 0.0;
-            for (dx, dy) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
+            for k in 0..SAMPLES * SAMPLES {
+                let (dx, dy) = ((k % SAMPLES) as f64, (k / SAMPLES) as f64);
+                let (dx, dy) = ((dx + 0.5) / SAMPLES as f64 - 0.5, (dy + 0.5) / SAMPLES as f64 - 0.5);
                 let ray = to_print * camera.normalized(DVec2::new(f64::from(x) + dx, f64::from(y) + dy)).extend(1.0);
                 let s = -eye.z / ray.z;
                 let pixel = ((eye + ray * s).truncate() + DVec2::splat(margin_m)) * pixels_per_metre;
@@ -62,7 +68,7 @@ pub fn photograph_print(image: &Gray, pixels_per_metre: f64, margin_m: f64, pose
                     false => 110.0,
                 };
             }
-            out.pixels[(y * width + x) as usize] = (sum / 4.0).round() as u8;
+            out.pixels[(y * width + x) as usize] = (sum / f64::from(SAMPLES * SAMPLES)).round() as u8;
         }
     }
     out
