@@ -44,9 +44,20 @@ pub fn calibrate(views: &[View], size: [u32; 2]) -> Result<Calibrated, String> {
     }
     let homographies = views.iter().map(|v| homography(&v.object, &v.pixels)).collect::<Option<Vec<_>>>();
     let homographies = homographies.ok_or("a view's points lie on a line: its homography is undetermined")?;
-    let camera = closed_form(&homographies, size).ok_or("the views do not determine the camera (too alike?)")?;
-    let poses: Vec<Pose> = homographies.iter().map(|h| pose_of(h, &camera)).collect();
-    let (camera, poses) = refine(views, camera, poses);
+    // Two starts: Zhang's closed form, and OpenCV's (the principal point at the image's middle,
+    // the focal lengths from the vanishing points); a few views near alike determine the
+    // principal point poorly, and the closed form can then start far from it. The refinement
+    // that fits best is kept.
+    let starts = [closed_form(&homographies, size), centred_start(&homographies, size)];
+    let (camera, poses) = starts
+        .into_iter()
+        .flatten()
+        .map(|camera| {
+            let poses: Vec<Pose> = homographies.iter().map(|h| pose_of(h, &camera)).collect();
+            refine(views, camera, poses)
+        })
+        .min_by(|a, b| total_error(views, a).total_cmp(&total_error(views, b)))
+        .ok_or("the views do not determine the camera (too alike?)")?;
     let view_errors_px: Vec<f64> = views.iter().zip(&poses).map(|(v, p)| rms(&residuals(v, &camera, p))).collect();
     let count: usize = views.iter().map(|v| v.object.len()).sum();
     let squares: f64 = views.iter().zip(&view_errors_px).map(|(v, e)| e * e * v.object.len() as f64).sum();
@@ -126,6 +137,42 @@ fn closed_form(homographies: &[DMat3], size: [u32; 2]) -> Option<Intrinsics> {
     let cx = -b13 * fx * fx / lambda;
     let camera = Intrinsics { fx, fy, cx, cy, distortion: Distortion::default(), size };
     [fx, fy, cx, cy].iter().all(|v| v.is_finite()).then_some(camera).filter(|c| c.fx > 0.0 && c.fy > 0.0)
+}
+
+/// OpenCV's start (`initIntrinsicParams2D`): the principal point at the image's middle, and
+/// the focal lengths for which each view's two vanishing points, and those of its diagonals,
+/// are perpendicular, by least squares.
+fn centred_start(homographies: &[DMat3], size: [u32; 2]) -> Option<Intrinsics> {
+    let (cx, cy) = ((f64::from(size[0]) - 1.0) * 0.5, (f64::from(size[1]) - 1.0) * 0.5);
+    let to_centre = DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::new(-cx, -cy, 1.0));
+    let (mut ata, mut atb) = ([[0.0; 2]; 2], [0.0; 2]);
+    for h in homographies {
+        let h = to_centre * *h;
+        let (a, b) = (h.col(0).normalize(), h.col(1).normalize());
+        let (d1, d2) = (((a + b) * 0.5).normalize(), ((a - b) * 0.5).normalize());
+        for (p, q) in [(a, b), (d1, d2)] {
+            let (row, rhs) = ([p.x * q.x, p.y * q.y], -p.z * q.z);
+            for i in 0..2 {
+                atb[i] += row[i] * rhs;
+                for j in 0..2 {
+                    ata[i][j] += row[i] * row[j];
+                }
+            }
+        }
+    }
+    let det = ata[0][0] * ata[1][1] - ata[0][1] * ata[1][0];
+    let inverse_fx2 = (atb[0] * ata[1][1] - atb[1] * ata[0][1]) / det;
+    let inverse_fy2 = (ata[0][0] * atb[1] - ata[1][0] * atb[0]) / det;
+    let (fx, fy) = ((1.0 / inverse_fx2.abs()).sqrt(), (1.0 / inverse_fy2.abs()).sqrt());
+    let camera = Intrinsics { fx, fy, cx, cy, distortion: Distortion::default(), size };
+    (fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0).then_some(camera)
+}
+
+/// The sum of squared pixel residuals of a calibration over every view.
+fn total_error(views: &[View], (camera, poses): &(Intrinsics, Vec<Pose>)) -> f64 {
+    let total: f64 =
+        views.iter().zip(poses).map(|(v, p)| residuals(v, camera, p).iter().map(|r| r * r).sum::<f64>()).sum();
+    if total.is_finite() { total } else { f64::INFINITY }
 }
 
 /// A view's pose from its homography and the camera: `[r1 r2 t] = K^-1 H` scaled to unit
