@@ -858,3 +858,30 @@ fn real_photographs_of_a_charuco_board_calibrate_as_well_as_opencv() {
         .unwrap_or_else(|| panic!("{said}"));
     assert!(overall <= 0.18776, "{overall} px RMS against OpenCV's 0.18776\n{said}");
 }
+
+#[test]
+fn a_dictionary_of_the_users_prints_and_reads_its_markers() {
+    // As OpenCV 4.14's `extendDictionary(5, 4, randomSeed=7)` wrote it.
+    let dictionary = "%YAML:1.0\n---\nnmarkers: 5\nmarkersize: 4\nmaxCorrectionBits: 2\n\
+        marker_0: \"1111010111000100\"\nmarker_1: \"1001101110110100\"\nmarker_2: \"0100101101001100\"\n\
+        marker_3: \"0110111000101001\"\nmarker_4: \"0011100101000000\"\n";
+    let folder = tempfile::tempdir().unwrap();
+    let file = folder.path().join("mine.yml");
+    std::fs::write(&file, dictionary).unwrap();
+    let (file, marker) = (file.to_str().unwrap(), folder.path().join("marker.png"));
+    let printed = canopy(&["ar", "marker", "--dictionary", file, "--id", "2", "--out", marker.to_str().unwrap()]);
+    assert!(printed.status.success(), "{}", stderr(&printed));
+    let found = canopy(&["ar", "detect", marker.to_str().unwrap(), "--dictionary", file]);
+    assert!(found.status.success(), "{}", stderr(&found));
+    let results: serde_json::Value = serde_json::from_slice(&found.stdout).unwrap();
+    assert_eq!(results[0]["markers"][0]["id"], 2, "{results}");
+    // A marker past its end, and a broken file, are refused with the file's line.
+    let other = folder.path().join("other.png");
+    let past = canopy(&["ar", "marker", "--dictionary", file, "--id", "5", "--out", other.to_str().unwrap()]);
+    assert_eq!(past.status.code(), Some(2), "{}", stderr(&past));
+    assert!(stderr(&past).contains("mine has markers 0 to 4"), "{}", stderr(&past));
+    std::fs::write(folder.path().join("mine.yml"), dictionary.replace("\"0100101101001100\"", "\"01\"")).unwrap();
+    let broken = canopy(&["ar", "detect", marker.to_str().unwrap(), "--dictionary", file]);
+    assert_eq!(broken.status.code(), Some(2));
+    assert!(stderr(&broken).contains("mine.yml:8") && stderr(&broken).contains("marker_2"), "{}", stderr(&broken));
+}

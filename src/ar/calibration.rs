@@ -3,6 +3,7 @@
 //! `distortion_coefficients` (4, 5 or 8 numbers: `k1 k2 p1 p2 [k3 [k4 k5 k6]]`), with
 //! `image_width` and `image_height` when the file has them.
 
+use super::opencv_file::{read_mapping, untag};
 use crate::foundation::yaml::{FileError, locate_key};
 use canopy_vision::camera::{Distortion, Intrinsics};
 use serde_yaml::Value;
@@ -55,19 +56,9 @@ pub fn read(path: &Path) -> Result<Calibration, FileError> {
 
 /// Parses a calibration file's bytes; `path` names it in errors.
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Calibration, FileError> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|_| FileError::whole_file(path, "not UTF-8 text: expected OpenCV's calibration YAML or JSON"))?;
-    // OpenCV's `%YAML:1.0` is not YAML's `%YAML 1.0`: blanked, keeping the line numbers.
-    let cleaned: String =
-        text.lines().map(|line| if line.starts_with("%YAML") { "" } else { line }).collect::<Vec<_>>().join("\n");
-    let root: Value = serde_yaml::from_str(&cleaned).map_err(|error| match error.location() {
-        Some(at) => FileError::at(path, at.line(), at.column(), format!("not valid YAML or JSON: {error}")),
-        None => FileError::whole_file(path, format!("not valid YAML or JSON: {error}")),
-    })?;
-    let root = untag(&root);
-    let Value::Mapping(fields) = root else {
-        return Err(FileError::whole_file(path, "expected a mapping with camera_matrix and distortion_coefficients"));
-    };
+    let (text, fields) =
+        read_mapping(path, bytes, "OpenCV's calibration YAML or JSON with camera_matrix and distortion_coefficients")?;
+    let text = text.as_str();
     let at = |key: &str, message: String| locate_key(path, text, key, 0, format!("{key}: {message}"));
     let matrix = |key: &str| -> Result<Vec<f64>, FileError> {
         let value = fields.get(key).ok_or_else(|| {
@@ -117,14 +108,6 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Calibration, FileError> {
         intrinsics: Intrinsics { fx, fy, cx, cy, distortion: Distortion(coefficients), size: size.unwrap_or([0, 0]) },
         sized: size.is_some(),
     })
-}
-
-/// A tagged value's content (`!!opencv-matrix {..}` is its mapping).
-fn untag(value: &Value) -> &Value {
-    match value {
-        Value::Tagged(tagged) => untag(&tagged.value),
-        other => other,
-    }
 }
 
 /// The numbers of an OpenCV matrix (`rows`, `cols`, `data`) or of a plain list (flat or

@@ -102,20 +102,59 @@ impl<'de> Deserialize<'de> for FolderPath {
     }
 }
 
-/// A dictionary by OpenCV's name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DictionaryName(pub Dictionary);
+/// Marker dictionary files: OpenCV's YAML or JSON.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DictionaryFile;
+
+impl FileType for DictionaryFile {
+    const EXTENSIONS: &'static [&'static str] = &[".yaml", ".yml", ".json"];
+    const EXPECTING: &'static str = "a .yaml, .yml or .json dictionary file in the scene's folder";
+    const FILES: &'static str = "a .yaml, .yml or .json file";
+}
+
+/// A marker dictionary in a scene file: OpenCV's name of a predefined one, or a file of the
+/// user's next to the scene, as OpenCV's `writeDictionary` writes it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DictionaryName {
+    /// A predefined dictionary.
+    Named(Dictionary),
+    /// A dictionary file.
+    File {
+        /// The file, relative to the scene's folder.
+        file: FolderFile<DictionaryFile>,
+        /// The dictionary, read when the scene is resolved.
+        read: Option<Arc<Dictionary>>,
+    },
+}
+
+impl DictionaryName {
+    /// The dictionary; `None` for a file not read yet.
+    pub fn dictionary(&self) -> Option<&Dictionary> {
+        match self {
+            DictionaryName::Named(dictionary) => Some(dictionary),
+            DictionaryName::File { read, .. } => read.as_deref(),
+        }
+    }
+}
 
 impl Serialize for DictionaryName {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.0.name)
+        match self {
+            DictionaryName::Named(dictionary) => serializer.serialize_str(&dictionary.name),
+            DictionaryName::File { file, .. } => file.serialize(serializer),
+        }
     }
 }
 
 impl<'de> Deserialize<'de> for DictionaryName {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        deserialize_str_with(deserializer, "a marker dictionary such as 6x6_250", |name| {
-            Dictionary::named(name).map(DictionaryName).map_err(|error| error.to_string())
+        deserialize_str_with(deserializer, "a marker dictionary such as 6x6_250, or a dictionary file", |name| {
+            let lower = name.to_ascii_lowercase();
+            if DictionaryFile::EXTENSIONS.iter().any(|extension| lower.ends_with(extension)) {
+                FolderFile::new(name).map(|file| DictionaryName::File { file, read: None })
+            } else {
+                Dictionary::named(name).map(DictionaryName::Named).map_err(|error| error.to_string())
+            }
         })
     }
 }
@@ -142,7 +181,8 @@ pub struct ArDef {
     pub repeat: bool,
     /// The camera's calibration in OpenCV's layout.
     pub calibration: FolderFile<CalibrationFile>,
-    /// The markers' dictionary, by OpenCV's name: `4x4_50`, `6x6_250`, `aruco_original`, ...
+    /// The markers' dictionary, by OpenCV's name (`4x4_50`, `6x6_250`, `aruco_original`, ...)
+    /// or a dictionary file next to the scene.
     pub dictionary: DictionaryName,
     /// The marker the scene stands on (with `marker_side_m`; or a `board`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -243,6 +283,8 @@ pub struct ArBuilt {
     pub calibration: Arc<Calibration>,
     /// The board the scene stands on, if not a marker.
     pub board: Option<Board>,
+    /// The markers' dictionary.
+    pub dictionary: Dictionary,
 }
 
 #[cfg(test)]
@@ -268,7 +310,7 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(error.contains("a video file"), "{error}");
-        assert_eq!(def.dictionary.0.name, "6x6_250");
+        assert_eq!(def.dictionary.dictionary().map(|d| d.name.as_ref()), Some("6x6_250"));
         let error = serde_yaml::from_str::<ArDef>(
             "{frames: clip, calibration: cam.yaml, dictionary: 9x9, marker_id: 3, marker_side_m: 0.1}",
         )

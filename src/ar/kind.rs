@@ -2,7 +2,8 @@
 //! the app offers for its entities beside its plugin.
 
 use super::calibration;
-use super::def::{ArBuilt, ArDef, FrameRate};
+use super::def::{ArBuilt, ArDef, DictionaryName, FrameRate};
+use super::dictionary_file;
 use super::frames::{FrameFolder, MAX_FRAME_SIDE};
 use super::panel;
 use super::plugin::{ArPlugin, ArState, ArView};
@@ -25,20 +26,11 @@ impl EntityKind for ArKind {
     type Plugin = ArPlugin;
 
     fn validate(def: &ArDef, cx: &EntityContext) -> Result<(), FileError> {
-        let dictionary = def.dictionary.0;
-        match (def.marker_id, def.marker_side_m, def.board) {
-            (Some(id), Some(_), None) if id >= dictionary.len() => {
-                let message = format!("{} has markers 0 to {}, not {id}", dictionary.name, dictionary.len() - 1);
-                return Err(cx.field_error("marker_id", 0, "marker_id", message));
-            }
-            (Some(_), Some(_), None) => {}
-            (None, None, Some(board)) => {
-                board.board(&dictionary).map_err(|error| cx.field_error("board", 0, "board", error))?;
-            }
-            _ => {
-                let message = "expected `marker_id` and `marker_side_m`, or a `board`, to stand the scene on";
-                return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("marker_id"))));
-            }
+        // The marker's id and the board are checked against the dictionary when it is built:
+        // a dictionary file is read after this.
+        if !matches!((def.marker_id, def.marker_side_m, def.board), (Some(_), Some(_), None) | (None, None, Some(_))) {
+            let message = "expected `marker_id` and `marker_side_m`, or a `board`, to stand the scene on";
+            return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("marker_id"))));
         }
         let sources = [def.frames.is_some(), def.video.is_some(), def.camera.is_some()];
         if sources.iter().filter(|&&given| given).count() != 1 {
@@ -62,12 +54,21 @@ impl EntityKind for ArKind {
     }
 
     fn references(def: &ArDef) -> Vec<String> {
-        vec![def.calibration.path.clone()]
+        let mut files = vec![def.calibration.path.clone()];
+        if let DictionaryName::File { file, .. } = &def.dictionary {
+            files.push(file.path.clone());
+        }
+        files
     }
 
     fn resolve(def: &mut ArDef, file: &mut ReferencedFile, _cx: &EntityContext) -> Result<(), FileError> {
         if def.calibration.path == file.file {
             def.calibration_read = Some(file.decoded(calibration::parse)?);
+        }
+        if let DictionaryName::File { file: name, read } = &mut def.dictionary
+            && name.path == file.file
+        {
+            *read = Some(file.decoded(dictionary_file::parse)?);
         }
         Ok(())
     }
@@ -101,12 +102,23 @@ impl EntityKind for ArKind {
         let camera = calibration
             .for_frames(source.size())
             .map_err(|error| entity.field_error("calibration", 0, "calibration", error))?;
+        let dictionary = def
+            .dictionary
+            .dictionary()
+            .ok_or_else(|| entity.field_error("dictionary", 0, "dictionary", "the dictionary file was not read"))?
+            .clone();
+        if let Some(id) = def.marker_id
+            && id >= dictionary.len()
+        {
+            let message = format!("{} has markers 0 to {}, not {id}", dictionary.name, dictionary.len() - 1);
+            return Err(entity.field_error("marker_id", 0, "marker_id", message));
+        }
         let board = def
             .board
-            .map(|board| board.board(&def.dictionary.0))
+            .map(|board| board.board(&dictionary))
             .transpose()
             .map_err(|error| entity.field_error("board", 0, "board", error))?;
-        Ok(ArBuilt { source, camera, calibration: calibration.clone(), board })
+        Ok(ArBuilt { source, camera, calibration: calibration.clone(), board, dictionary })
     }
 
     fn spawn(def: &ArDef, built: &ArBuilt, entity: &mut EntityWorldMut) {

@@ -7,6 +7,8 @@
 //! | [`kind`] | [`ArKind`]: the frames and calibration read, the overlay spawned; its panel |
 //! | [`def`] | the `ar:` entry of a scene file and its checks |
 //! | [`calibration`] | OpenCV's calibration files (YAML and JSON), read and written |
+//! | [`dictionary_file`] | marker dictionaries of the user's, in OpenCV's dictionary files |
+//! | [`opencv_file`] | OpenCV's YAML and JSON files read as a mapping |
 //! | [`source`] | where frames come from: a folder, a video file or a live camera |
 //! | [`frames`] | a folder of PNG and JPEG frames in name order |
 //! | [`video`] | video files decoded by the system's FFmpeg |
@@ -25,8 +27,10 @@
 pub mod calibration;
 pub mod camera;
 pub mod def;
+pub mod dictionary_file;
 pub mod frames;
 pub mod kind;
+pub mod opencv_file;
 pub mod overlay;
 pub mod panel;
 pub mod plugin;

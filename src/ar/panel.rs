@@ -62,7 +62,7 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     camera_controls(ui, world, entity);
     let Ok(mut entity_mut) = world.get_entity_mut(entity) else { return };
     let Some(view) = entity_mut.get::<ArView>() else { return };
-    let (source, dictionary, target) = (view.source.clone(), view.dictionary.name, view.target);
+    let (source, dictionary, target) = (view.source.clone(), view.dictionary.name.clone(), view.target);
     let Some(mut state) = entity_mut.get_mut::<ArState>() else { return };
     let mut outline = state.outline;
     if ui.checkbox(&mut outline, "Outline the marker found").on_hover_text("its first side in red").changed() {

@@ -80,7 +80,7 @@ impl ArView {
             source: built.source.clone(),
             camera: built.camera,
             calibration: built.calibration.clone(),
-            dictionary: def.dictionary.0,
+            dictionary: built.dictionary.clone(),
             target: Target::of(def, built),
             scale: def.scale.0,
             fps: built.source.fps(def.fps.map(|fps| fps.0)),
@@ -110,7 +110,7 @@ impl ArView {
             Target::Board(board) => Some(board),
             Target::Marker { .. } => None,
         };
-        Ok(FrameStream::start(reader, self.dictionary, self.camera, board, self.repeat && !self.source.live()))
+        Ok(FrameStream::start(reader, self.dictionary.clone(), self.camera, board, self.repeat && !self.source.live()))
     }
 }
 
@@ -478,7 +478,7 @@ impl DumpState for ArView {
         out.insert("frames".into(), json!(self.source.len()));
         out.insert("frame_size".into(), json!(self.source.size()));
         out.insert("fps".into(), json!(self.fps));
-        out.insert("dictionary".into(), json!(self.dictionary.name));
+        out.insert("dictionary".into(), json!(self.dictionary.name.as_ref()));
         match self.target {
             Target::Marker { id, side_m } => {
                 out.insert("marker_id".into(), json!(id));

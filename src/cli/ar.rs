@@ -3,7 +3,7 @@
 
 use super::ar_calibrate::CalibrateArgs;
 use super::board_layout::BoardLayout;
-use super::{parse_size, refuse_to_replace};
+use super::{dictionary_of, parse_size, refuse_to_replace};
 use crate::ar::calibration as calib;
 use crate::ar::frames::load_image;
 use crate::ar::report::marker_json;
@@ -11,7 +11,7 @@ use crate::ar::sample::{FrameFormat, write_sequence};
 use bevy::math::UVec2;
 use canopy_vision::board::Board;
 use canopy_vision::synth::{SequenceSettings, marker_image};
-use canopy_vision::{Dictionary, Gray, Intrinsics, Scratch, Settings, detect, pose::estimate};
+use canopy_vision::{Gray, Intrinsics, Scratch, Settings, detect, pose::estimate};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -21,7 +21,8 @@ use std::process::ExitCode;
 pub enum ArCommand {
     /// Write a marker as a PNG for printing: its black border, its cells and a white margin.
     Marker {
-        /// The dictionary, by OpenCV's name: 4x4_50, 5x5_100, 6x6_250, aruco_original, ...
+        /// The dictionary, by OpenCV's name (4x4_50, 5x5_100, 6x6_250, aruco_original, ...) or a
+        /// dictionary file as OpenCV writes it.
         #[arg(long, default_value = "6x6_250")]
         dictionary: String,
         /// The marker's id in the dictionary.
@@ -61,7 +62,7 @@ pub enum ArCommand {
         /// The camera's calibration in OpenCV's YAML or JSON layout.
         #[arg(long)]
         calibration: Option<PathBuf>,
-        /// The dictionary, by OpenCV's name.
+        /// The dictionary, by OpenCV's name or a dictionary file as OpenCV writes it.
         #[arg(long, default_value = "6x6_250")]
         dictionary: String,
         /// The markers' side (the black square) in metres, for their poses.
@@ -105,7 +106,7 @@ pub struct SequenceArgs {
     /// The camera's vertical field of view, degrees (10 to 120).
     #[arg(long, default_value_t = 50.0)]
     fov: f64,
-    /// The dictionary, by OpenCV's name.
+    /// The dictionary, by OpenCV's name or a dictionary file as OpenCV writes it.
     #[arg(long, default_value = "6x6_250")]
     dictionary: String,
     /// The marker's id.
@@ -171,7 +172,7 @@ impl ArCommand {
 
 /// `canopy ar marker`: exit 0 with the file written, 1 if it could not be, 2 for bad settings.
 fn write_marker(dictionary: &str, id: u32, cell_px: u32, margin: u32, out: &Path, force: bool) -> ExitCode {
-    let dictionary = match Dictionary::named(dictionary) {
+    let dictionary = match dictionary_of(dictionary) {
         Ok(dictionary) => dictionary,
         Err(error) => {
             eprintln!("canopy ar marker: {error}");
@@ -256,7 +257,7 @@ fn save_gray(image: Gray, out: &Path) -> Result<(), String> {
 /// `canopy ar sequence`: exit 0 with the files written, 1 if they could not be, 2 for bad
 /// settings.
 fn sequence(args: &SequenceArgs) -> ExitCode {
-    let settings = Dictionary::named(&args.dictionary).map_err(|e| e.to_string()).and_then(|dictionary| {
+    let settings = dictionary_of(&args.dictionary).and_then(|dictionary| {
         if args.id >= dictionary.len() {
             return Err(format!("{dictionary} has markers 0 to {}, not {}", dictionary.len() - 1, args.id));
         }
@@ -313,7 +314,7 @@ fn sequence(args: &SequenceArgs) -> ExitCode {
 /// `canopy ar detect`: prints the JSON; exit 0 if every image was read, 1 if some could not
 /// be, 2 for bad settings.
 fn detect_markers(images: &[PathBuf], calibration: Option<&Path>, dictionary: &str, side: Option<f64>) -> ExitCode {
-    let dictionary = match Dictionary::named(dictionary) {
+    let dictionary = match dictionary_of(dictionary) {
         Ok(dictionary) => dictionary,
         Err(error) => {
             eprintln!("canopy ar detect: {error}");

@@ -43,7 +43,7 @@ pub struct BoardLayout {
     /// The first marker's id; the others count up along the rows.
     #[arg(long, default_value_t = 0)]
     pub first_id: u32,
-    /// The dictionary, by OpenCV's name.
+    /// The dictionary, by OpenCV's name or a dictionary file as OpenCV writes it.
     #[arg(long, default_value = "6x6_250")]
     pub dictionary: String,
 }
@@ -51,7 +51,7 @@ pub struct BoardLayout {
 impl BoardLayout {
     /// The board and its dictionary, or what is wrong with them.
     pub fn board(&self) -> Result<(Board, Dictionary), String> {
-        let dictionary = Dictionary::named(&self.dictionary).map_err(|error| error.to_string())?;
+        let dictionary = super::dictionary_of(&self.dictionary)?;
         let board = match (self.board, self.markers, self.separation_m, self.squares, self.square_m) {
             (BoardKind::Grid, Some(markers), Some(separation_m), None, None) => {
                 Board::Grid(GridBoard::new(markers, self.marker_m, separation_m, self.first_id, &dictionary)?)

@@ -132,6 +132,17 @@ fn parse_markers(text: &str) -> Result<[u32; 2], String> {
     Ok([size.x, size.y])
 }
 
+/// A marker dictionary given on the command line: OpenCV's name of a predefined one, or a
+/// dictionary file (`.yml`, `.yaml` or `.json`, as OpenCV's `writeDictionary` writes it).
+fn dictionary_of(text: &str) -> Result<canopy_vision::Dictionary, String> {
+    let lower = text.to_ascii_lowercase();
+    if [".yml", ".yaml", ".json"].iter().any(|extension| lower.ends_with(extension)) {
+        crate::ar::dictionary_file::read(Path::new(text)).map_err(|error| error.to_string())
+    } else {
+        canopy_vision::Dictionary::named(text).map_err(|error| error.to_string())
+    }
+}
+
 /// Simulated seconds, from 0 to `max`.
 fn parse_seconds(text: &str, max: f64) -> Result<f64, String> {
     match text.parse::<f64>() {

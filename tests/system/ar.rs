@@ -308,3 +308,42 @@ fn a_scene_stands_on_a_grid_or_charuco_board_found_from_all_of_it() {
         assert!(overlay["overlay_error_max_px"].as_f64().unwrap() < 1.0, "{overlay}");
     }
 }
+
+#[test]
+fn a_scene_reads_its_markers_from_a_dictionary_file_of_the_users() {
+    use canopy_vision::synth::{marker_image, photograph_print};
+    use canopy_vision::{Intrinsics, Pose};
+    // As OpenCV 4.14's `extendDictionary(5, 4, randomSeed=7)` wrote it.
+    let text = "%YAML:1.0\n---\nnmarkers: 5\nmarkersize: 4\nmaxCorrectionBits: 2\n\
+        marker_0: \"1111010111000100\"\nmarker_1: \"1001101110110100\"\nmarker_2: \"0100101101001100\"\n\
+        marker_3: \"0110111000101001\"\nmarker_4: \"0011100101000000\"\n";
+    let folder = tempfile::tempdir().unwrap();
+    std::fs::write(folder.path().join("mine.yml"), text).unwrap();
+    let dictionary = canopy::ar::dictionary_file::read(&folder.path().join("mine.yml")).unwrap();
+    // Marker 2, 6 cells of 50 px with a margin of one, printed 6 cm across, photographed.
+    let print = marker_image(&dictionary, 2, 50, 1).unwrap();
+    let camera = Intrinsics::pinhole([640, 480], 50.0);
+    let (pixels_per_metre, margin_m) = (5000.0, 0.01);
+    let centre = DVec3::new(0.03, 0.03, 0.0);
+    let rotation = bevy::math::DMat3::from_rotation_x(-0.4);
+    let pose = Pose { rotation, translation: DVec3::new(0.0, 0.0, 0.4) - rotation * centre };
+    let frame = photograph_print(&print, pixels_per_metre, margin_m, &pose, &camera);
+    std::fs::create_dir(folder.path().join("clip")).unwrap();
+    image::GrayImage::from_raw(640, 480, frame.pixels).unwrap().save(folder.path().join("clip/0.png")).unwrap();
+    std::fs::write(folder.path().join("camera.yaml"), canopy::ar::calibration::to_yaml(&camera)).unwrap();
+    let scene = folder.path().join("scene.yaml");
+    std::fs::write(
+        &scene,
+        "entities:\n  - name: overlay\n    ar: {frames: clip, calibration: camera.yaml, dictionary: mine.yml, \
+         marker_id: 2, marker_side_m: 0.06}\n  - shape: {primitive: box, size: 2}\n",
+    )
+    .unwrap();
+    let dump = run(&scene, 0.05, UVec2::new(160, 120), false);
+    let overlay = entity(&dump, "overlay");
+    assert_eq!(overlay["dictionary"], "mine");
+    assert_eq!(overlay["poses"][0]["marker"], "found", "{overlay}");
+    // A marker the file does not hold is an error at its line.
+    std::fs::write(&scene, std::fs::read_to_string(&scene).unwrap().replace("marker_id: 2", "marker_id: 5")).unwrap();
+    let error = canopy::app::entity_kinds().load(&scene).unwrap_err();
+    assert!(error.message.contains("mine has markers 0 to 4, not 5") && error.location.is_some(), "{error}");
+}

@@ -3,18 +3,24 @@
 //! with error correction.
 
 use super::dictionaries as tables;
+use std::borrow::Cow;
 use std::fmt;
 
-/// A set of markers of `n x n` inner cells, OpenCV's predefined dictionary of the same name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The most markers a dictionary read from a file may hold.
+pub const MAX_CUSTOM_MARKERS: usize = 100_000;
+
+/// A set of markers of `n x n` inner cells: OpenCV's predefined dictionary of the same name,
+/// or one of the user's (OpenCV's `extendDictionary`, say).
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Dictionary {
-    /// The name as OpenCV writes it without `DICT_`, lower case: `4x4_50`, `aruco_original`.
-    pub name: &'static str,
+    /// The name as OpenCV writes it without `DICT_`, lower case: `4x4_50`, `aruco_original`;
+    /// for a dictionary of the user's, the name it was given.
+    pub name: Cow<'static, str>,
     /// Inner cells a side.
     pub cells: u32,
     /// Each marker's cells, unrotated, row by row from the top-left (the first cell in the
     /// highest of the `cells * cells` low bits, 1 = white).
-    codes: &'static [u64],
+    codes: Cow<'static, [u64]>,
     /// The most wrong cells that can be corrected without confusing two markers (OpenCV's
     /// `maxCorrectionBits`).
     pub max_correction_bits: u32,
@@ -39,9 +45,9 @@ pub struct Match {
 macro_rules! dictionary {
     ($name:literal, $cells:literal, $table:ident, $count:literal, $correction:literal) => {
         Dictionary {
-            name: $name,
+            name: Cow::Borrowed($name),
             cells: $cells,
-            codes: tables::$table.split_at($count).0,
+            codes: Cow::Borrowed(tables::$table.split_at($count).0),
             max_correction_bits: $correction,
         }
     };
@@ -76,7 +82,36 @@ impl Dictionary {
 
     /// The names [`Dictionary::named`] accepts.
     pub fn names() -> Vec<&'static str> {
-        Self::ALL.iter().map(|d| d.name).collect()
+        Self::ALL
+            .iter()
+            .map(|d| match d.name {
+                Cow::Borrowed(name) => name,
+                Cow::Owned(_) => "",
+            })
+            .collect()
+    }
+
+    /// A dictionary of the user's: `codes` are its markers' cells (row by row from the
+    /// top-left, the first cell in the highest of the `cells * cells` low bits, 1 = white), up
+    /// to `max_correction_bits` of which are corrected; or what is wrong with it.
+    pub fn custom(name: String, cells: u32, codes: Vec<u64>, max_correction_bits: u32) -> Result<Self, String> {
+        if !(2..=8).contains(&cells) {
+            return Err(format!("expected markers of 2 to 8 cells a side, found {cells}"));
+        }
+        if codes.is_empty() || codes.len() > MAX_CUSTOM_MARKERS {
+            return Err(format!("expected 1 to {MAX_CUSTOM_MARKERS} markers, found {}", codes.len()));
+        }
+        let count = cells * cells;
+        if let Some(id) = codes.iter().position(|&code| count < 64 && code >> count != 0) {
+            return Err(format!("marker {id} has more than {count} cells"));
+        }
+        if max_correction_bits > count / 2 {
+            return Err(format!(
+                "expected at most {} correction bits for {count} cells, found {max_correction_bits}",
+                count / 2
+            ));
+        }
+        Ok(Self { name: Cow::Owned(name), cells, codes: Cow::Owned(codes), max_correction_bits })
     }
 
     /// The dictionary called `name`, case-insensitively, with or without OpenCV's `DICT_`
@@ -84,7 +119,7 @@ impl Dictionary {
     pub fn named(name: &str) -> Result<Dictionary, UnknownDictionary> {
         let lower = name.trim().to_ascii_lowercase();
         let bare = lower.strip_prefix("dict_").unwrap_or(&lower);
-        Self::ALL.iter().find(|d| d.name == bare).copied().ok_or_else(|| UnknownDictionary(name.to_string()))
+        Self::ALL.iter().find(|d| d.name == bare).cloned().ok_or_else(|| UnknownDictionary(name.to_string()))
     }
 
     /// Markers in the dictionary.
@@ -127,7 +162,7 @@ impl Dictionary {
 
 impl fmt::Display for Dictionary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name)
+        f.write_str(&self.name)
     }
 }
 
