@@ -809,6 +809,9 @@ fn real_photographs_of_a_charuco_board_calibrate_as_well_as_opencv() {
         let image = image::open(charuco_file(&format!("img_0{photo}.jpg"))).unwrap().to_rgba8();
         let gray = Gray::from_rgba(image.width(), image.height(), image.as_raw());
         let markers = detect(&gray, &dictionary, &Settings::default(), None, &mut Scratch::default());
+        // All 17 of the board's markers, as OpenCV finds them, the small steep ones of the far
+        // row included.
+        assert_eq!(markers.len(), 17, "photo {photo}");
         let ours = board.find_corners(&gray, &markers);
         let theirs = opencv_charuco_corners(photo);
         assert_eq!(ours.len(), theirs.len(), "photo {photo}: every corner OpenCV finds");

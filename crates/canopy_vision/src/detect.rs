@@ -112,7 +112,11 @@ pub fn detect(
     let max_wrong = (dictionary.max_correction_bits as f32 * settings.error_correction_rate) as u32;
     let mut markers: Vec<(Marker, f32)> = Vec::new();
     for quad in candidates {
-        let Some((id, rotation, corrected_cells)) = read(image, &quad, dictionary, max_wrong, settings) else {
+        // The outline runs through the outermost dark pixels' centres, half a pixel inside the
+        // marker's edge: on a marker of two or three pixels a cell, reading the cells within it
+        // misreads the far ones.
+        let Some((id, rotation, corrected_cells)) = read(image, &outward(&quad, 0.5), dictionary, max_wrong, settings)
+        else {
             continue;
         };
         let mut corners = [0; 4].map(|_| Vec2::ZERO);
@@ -191,6 +195,20 @@ fn candidates(image: &Gray, settings: &Settings, scratch: &mut Scratch) -> Vec<[
         }
     }
     found.into_iter().map(|(quad, _)| quad).collect()
+}
+
+/// `quad` (clockwise on the image) with each side moved `by` pixels outwards.
+fn outward(quad: &[Vec2; 4], by: f32) -> [Vec2; 4] {
+    // The outward normal of side i (from corner i to corner i + 1), clockwise with y down.
+    let normal = |i: usize| {
+        let side = (quad[(i + 1) % 4] - quad[i]).normalize_or_zero();
+        Vec2::new(side.y, -side.x)
+    };
+    std::array::from_fn(|i| {
+        let (before, after) = (normal((i + 3) % 4), normal(i));
+        let bend = 1.0 + before.dot(after);
+        if bend < 0.1 { quad[i] } else { quad[i] + (before + after) * (by / bend) }
+    })
 }
 
 fn is_convex(quad: &[Vec2; 4]) -> bool {
@@ -425,5 +443,16 @@ mod tests {
         let p = intersect((Vec2::new(0.0, 1.0), Vec2::X), (Vec2::new(3.0, 0.0), Vec2::Y)).unwrap();
         assert!(p.distance(Vec2::new(3.0, 1.0)) < 1e-6);
         assert_eq!(intersect((Vec2::ZERO, Vec2::X), (Vec2::Y, Vec2::X)), None);
+    }
+
+    #[test]
+    fn an_outline_moved_outwards_keeps_its_sides_parallel() {
+        // Clockwise on the image (y down).
+        let square = [Vec2::new(0.0, 0.0), Vec2::new(10.0, 0.0), Vec2::new(10.0, 10.0), Vec2::new(0.0, 10.0)];
+        let moved = outward(&square, 0.5);
+        let expected = [Vec2::new(-0.5, -0.5), Vec2::new(10.5, -0.5), Vec2::new(10.5, 10.5), Vec2::new(-0.5, 10.5)];
+        for (got, want) in moved.iter().zip(expected) {
+            assert!(got.distance(want) < 1e-5, "{moved:?}");
+        }
     }
 }
