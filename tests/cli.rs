@@ -888,3 +888,27 @@ fn a_dictionary_of_the_users_prints_and_reads_its_markers() {
     assert_eq!(broken.status.code(), Some(2));
     assert!(stderr(&broken).contains("mine.yml:8") && stderr(&broken).contains("marker_2"), "{}", stderr(&broken));
 }
+
+#[test]
+fn the_detector_sweep_writes_its_table_json_plot_and_frames() {
+    let folder = tempfile::tempdir().unwrap();
+    let out = folder.path().to_str().unwrap();
+    let output = canopy(&["ar", "sweep", "--out", out, "--frames", "1", "--write-frames"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let said = String::from_utf8_lossy(&output.stdout);
+    assert!(said.contains("| distance_m | 0.6 | 1/1 | 0 |"), "the baseline is found\n{said}");
+    let steps: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.path().join("sweep.json")).unwrap()).unwrap();
+    let conditions: std::collections::BTreeSet<&str> =
+        steps.as_array().unwrap().iter().map(|s| s["condition"].as_str().unwrap()).collect();
+    assert_eq!(conditions.len(), 7, "{conditions:?}");
+    assert_eq!(image::image_dimensions(folder.path().join("sweep.png")).unwrap(), (1200, 1210));
+    let frames: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.path().join("frames/frames.json")).unwrap()).unwrap();
+    let first = &frames[0];
+    assert!(folder.path().join("frames").join(first["file"].as_str().unwrap()).is_file(), "{first}");
+    assert_eq!(first["corners"].as_array().unwrap().len(), 4);
+    // Run again, it does not replace what it wrote unless told to.
+    let again = canopy(&["ar", "sweep", "--out", out, "--frames", "1"]);
+    assert_eq!(again.status.code(), Some(1), "{}", stderr(&again));
+}

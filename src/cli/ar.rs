@@ -2,6 +2,7 @@
 //! detector on images.
 
 use super::ar_calibrate::CalibrateArgs;
+use super::ar_sweep::SweepArgs;
 use super::board_layout::BoardLayout;
 use super::{dictionary_of, parse_size, refuse_to_replace};
 use crate::ar::calibration as calib;
@@ -49,6 +50,10 @@ pub enum ArCommand {
     /// five distortion coefficients; prints each view's reprojection error and writes the
     /// calibration file.
     Calibrate(CalibrateArgs),
+    /// Measure the marker detector on harder and harder synthetic frames, one condition at a
+    /// time (distance, angle, motion blur, defocus, noise, contrast, uneven light): detection
+    /// rate and pose error at each step, as a table, JSON and a plot.
+    Sweep(SweepArgs),
     /// Write a synthetic camera sequence of a marker on a table under known poses, with noise,
     /// blur, changing light and occlusions: frames, `calibration.yaml` and `truth.json`.
     Sequence(SequenceArgs),
@@ -163,6 +168,7 @@ impl ArCommand {
             ArCommand::Board(args) => write_board(&args),
             ArCommand::Calibrate(args) => args.run(),
             ArCommand::Sequence(args) => sequence(&args),
+            ArCommand::Sweep(args) => args.run(),
             ArCommand::Detect { images, calibration, dictionary, side } => {
                 detect_markers(&images, calibration.as_deref(), &dictionary, side)
             }

@@ -10,7 +10,7 @@
 //! | [`sloth`] | `sloth gait` |
 //! | [`terrain`] | `terrain generate`, `terrain stats`, `terrain textures` |
 //! | [`mesh`] | `mesh sample`, `deform`, with [`deform_batch`] |
-//! | [`ar`] | `ar marker`, `ar sequence`, `ar detect` |
+//! | [`ar`] | `ar marker`, `ar board`, `ar sequence`, `ar detect`, with [`ar_calibrate`] (`ar calibrate`), [`ar_sweep`] (`ar sweep`) and [`board_layout`] |
 //! | [`bench`] | `bench terrain`, with [`section_timing`] |
 //!
 //! Handlers print what they made and exit 0; bad input is 1 (a file that cannot be read or
@@ -18,6 +18,7 @@
 
 pub mod ar;
 pub mod ar_calibrate;
+pub mod ar_sweep;
 pub mod bench;
 pub mod board_layout;
 pub mod deform_batch;

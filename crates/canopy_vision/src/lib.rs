@@ -17,6 +17,7 @@
 //! | [`board`] | either board, and its pose from every point of it found |
 //! | [`steady`] | poses followed from frame to frame without flipping between the two solutions |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
+//! | [`sweep`] | harder frames swept one condition at a time: detection rate and pose error at each step |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
 //!
 //! Pixel coordinates are OpenCV's throughout: pixel `(x, y)`'s centre is at `(x, y)`.
@@ -37,6 +38,7 @@ mod linear;
 pub mod pose;
 pub mod saddle;
 pub mod steady;
+pub mod sweep;
 pub mod synth;
 
 pub use camera::{Distortion, Intrinsics};

@@ -320,7 +320,7 @@ const CLUTTER: [([f64; 2], f64, bool); 3] =
     [([2.2, 0.4], 0.35, false), ([-1.9, -1.6], 0.45, true), ([0.3, 2.4], 0.25, false)];
 
 /// A separable Gaussian blur with standard deviation `sigma` pixels, edges clamped.
-fn gaussian_blur(values: &mut [f32], width: usize, height: usize, sigma: f32) {
+pub(crate) fn gaussian_blur(values: &mut [f32], width: usize, height: usize, sigma: f32) {
     let radius = (3.0 * sigma).ceil() as isize;
     let mut kernel: Vec<f32> = (-radius..=radius).map(|i| (-0.5 * (i as f32 / sigma).powi(2)).exp()).collect();
     let total: f32 = kernel.iter().sum();
@@ -348,7 +348,7 @@ fn gaussian_blur(values: &mut [f32], width: usize, height: usize, sigma: f32) {
 }
 
 /// SplitMix64 with Gaussian draws (Box–Muller): the same frames on every machine.
-struct Random(u64);
+pub(crate) struct Random(pub(crate) u64);
 
 impl Random {
     fn next(&mut self) -> u64 {
@@ -360,11 +360,11 @@ impl Random {
     }
 
     /// In `(0, 1]`.
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         ((self.next() >> 11) + 1) as f64 / (1u64 << 53) as f64
     }
 
-    fn gaussian(&mut self) -> f64 {
+    pub(crate) fn gaussian(&mut self) -> f64 {
         let (a, b) = (self.unit(), self.unit());
         (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
     }
