@@ -94,7 +94,7 @@ pub fn overlay_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
         if !source.live() {
             row(ui, source.kind(), source.location());
         }
-        let of = source.len().map_or(String::new(), |frames| format!(" of {frames}"));
+        let of = source.frame_count().map_or(String::new(), |frames| format!(" of {frames}"));
         row(
             ui,
             "frame",

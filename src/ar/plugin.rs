@@ -475,7 +475,7 @@ fn lay_over_frame(
 impl DumpState for ArView {
     fn dump(&self, out: &mut Map<String, Value>) {
         out.insert("source".into(), json!(self.source.kind()));
-        out.insert("frames".into(), json!(self.source.len()));
+        out.insert("frames".into(), json!(self.source.frame_count()));
         out.insert("frame_size".into(), json!(self.source.size()));
         out.insert("fps".into(), json!(self.fps));
         out.insert("dictionary".into(), json!(self.dictionary.name.as_ref()));

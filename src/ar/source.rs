@@ -64,7 +64,7 @@ impl Source {
     }
 
     /// The frames it holds, where that is known.
-    pub fn len(&self) -> Option<u64> {
+    pub fn frame_count(&self) -> Option<u64> {
         match self {
             Source::Folder { frames, .. } => Some(frames.len() as u64),
             Source::Video(video) => video.frames,

@@ -69,7 +69,7 @@ fn main() {
     for size in [[640, 480], [1280, 720]] {
         let settings = SequenceSettings {
             camera: Intrinsics::pinhole(size, 50.0),
-            dictionary,
+            dictionary: dictionary.clone(),
             id: ID,
             side_m: 0.1,
             frames: FRAMES,

@@ -74,7 +74,7 @@ impl CharucoBoard {
 
     /// Whether square `[x, y]` (from the top-left) is white and holds a marker.
     pub fn holds_marker(&self, [x, y]: [u32; 2]) -> bool {
-        if self.legacy && self.squares[1] % 2 == 0 { y % 2 == x % 2 } else { y % 2 != x % 2 }
+        if self.legacy && self.squares[1].is_multiple_of(2) { y % 2 == x % 2 } else { y % 2 != x % 2 }
     }
 
     /// The markers on the board.
