@@ -912,3 +912,39 @@ fn the_detector_sweep_writes_its_table_json_plot_and_frames() {
     let again = canopy(&["ar", "sweep", "--out", out, "--frames", "1"]);
     assert_eq!(again.status.code(), Some(1), "{}", stderr(&again));
 }
+
+#[test]
+fn a_printed_charuco_board_is_laid_out_as_opencv_draws_it() {
+    use canopy_vision::{Dictionary, Gray, Scratch, Settings, detect};
+    let folder = tempfile::tempdir().unwrap();
+    let out = folder.path().join("board.png");
+    let args = ["ar", "board", "--board", "charuco", "--squares", "5x7", "--square-m", "0.04", "--marker-m", "0.02"];
+    let sizes = ["--pixels-per-metre", "2500", "--margin-m", "0", "--out", out.to_str().unwrap()];
+    let output = canopy(&[&args[..], &sizes].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("markers 0 to 16"));
+    let ours = image::open(&out).unwrap().to_luma8();
+    let theirs = image::open(charuco_file("opencv_board_5x7.png")).unwrap().to_luma8();
+    assert_eq!(ours.dimensions(), theirs.dimensions());
+    // The same squares black: each square's middle.
+    for y in 0..7 {
+        for x in 0..5 {
+            let (px, py) = (x * 100 + 5, y * 100 + 5);
+            assert_eq!(ours.get_pixel(px, py), theirs.get_pixel(px, py), "square {x}, {y}");
+        }
+    }
+    // The same markers in the same places (cells' edges may round to the other pixel).
+    let dictionary = Dictionary::named("6x6_250").unwrap();
+    let found = |image: &image::GrayImage| {
+        let gray = Gray { width: image.width(), height: image.height(), pixels: image.as_raw().clone() };
+        detect(&gray, &dictionary, &Settings::default(), None, &mut Scratch::default())
+    };
+    let (mine, opencvs) = (found(&ours), found(&theirs));
+    assert_eq!(mine.len(), 17);
+    for (a, b) in mine.iter().zip(&opencvs) {
+        assert_eq!(a.id, b.id);
+        for (p, q) in a.corners_f64().iter().zip(b.corners_f64()) {
+            assert!(p.distance(q) < 1.0, "marker {}: {p} against {q}", a.id);
+        }
+    }
+}

@@ -222,6 +222,12 @@ distortion_coefficients: !!opencv-matrix
         let skewed = OPENCV_YAML.replace("6.1e+02, 0., 3.195e+02", "6.1e+02, 2., 3.195e+02");
         assert!(parse_text(&skewed).unwrap_err().to_string().contains("no skew"));
         assert!(parse_text("[1, 2").unwrap_err().to_string().contains("not valid YAML"));
+        // Not a number where a number must be: YAML's `.nan` and `.inf`.
+        let focal = parse_text(&OPENCV_YAML.replace("6.1e+02, 0., 3.195e+02", ".nan, 0., 3.195e+02")).unwrap_err();
+        assert!(focal.to_string().contains("camera_matrix: fx and fy must be positive"), "{focal}");
+        assert!(focal.location.is_some(), "{focal}");
+        let distortion = parse_text(&OPENCV_YAML.replace("data: [ -0.1, 0.02,", "data: [ .inf, 0.02,")).unwrap_err();
+        assert!(distortion.to_string().contains("distortion_coefficients: expected 4, 5 or 8 finite"), "{distortion}");
     }
 
     #[test]
