@@ -864,13 +864,10 @@ fn real_photographs_of_a_charuco_board_calibrate_as_well_as_opencv() {
 
 #[test]
 fn a_dictionary_of_the_users_prints_and_reads_its_markers() {
-    // As OpenCV 4.14's `extendDictionary(5, 4, randomSeed=7)` wrote it.
-    let dictionary = "%YAML:1.0\n---\nnmarkers: 5\nmarkersize: 4\nmaxCorrectionBits: 2\n\
-        marker_0: \"1111010111000100\"\nmarker_1: \"1001101110110100\"\nmarker_2: \"0100101101001100\"\n\
-        marker_3: \"0110111000101001\"\nmarker_4: \"0011100101000000\"\n";
+    let dictionary = std::fs::read_to_string(charuco_file("opencv_dictionary.yml")).unwrap();
     let folder = tempfile::tempdir().unwrap();
     let file = folder.path().join("mine.yml");
-    std::fs::write(&file, dictionary).unwrap();
+    std::fs::write(&file, &dictionary).unwrap();
     let (file, marker) = (file.to_str().unwrap(), folder.path().join("marker.png"));
     let printed = canopy(&["ar", "marker", "--dictionary", file, "--id", "2", "--out", marker.to_str().unwrap()]);
     assert!(printed.status.success(), "{}", stderr(&printed));

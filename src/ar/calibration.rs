@@ -3,7 +3,7 @@
 //! `distortion_coefficients` (4, 5 or 8 numbers: `k1 k2 p1 p2 [k3 [k4 k5 k6]]`), with
 //! `image_width` and `image_height` when the file has them.
 
-use super::opencv_file::{read_mapping, untag};
+use super::opencv_file::{read_bounded, read_mapping, untag};
 use crate::foundation::yaml::{FileError, locate_key};
 use canopy_vision::camera::{Distortion, Intrinsics};
 use serde_yaml::Value;
@@ -43,15 +43,7 @@ impl Calibration {
 
 /// Reads a calibration file.
 pub fn read(path: &Path) -> Result<Calibration, FileError> {
-    let metadata = std::fs::metadata(path).map_err(|error| FileError::unreadable(path, error))?;
-    if metadata.len() > MAX_CALIBRATION_BYTES as u64 {
-        return Err(FileError::whole_file(
-            path,
-            format!("{} bytes: a calibration file is at most 1 MiB", metadata.len()),
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|error| FileError::unreadable(path, error))?;
-    parse(path, &bytes)
+    parse(path, &read_bounded(path, MAX_CALIBRATION_BYTES, "a calibration file")?)
 }
 
 /// Parses a calibration file's bytes; `path` names it in errors.

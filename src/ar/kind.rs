@@ -14,7 +14,24 @@ use crate::foundation::panel::RegisterPanel;
 use crate::foundation::yaml::FileError;
 use bevy::app::App;
 use bevy::ecs::world::{EntityRef, EntityWorldMut};
+use canopy_vision::board::Board;
+use canopy_vision::dictionary::Dictionary;
 use std::sync::Arc;
+
+/// The board the scene stands on, if it stands on one, checked against `dictionary`, or the
+/// marker's id checked against it.
+fn target_board(def: &ArDef, dictionary: &Dictionary, cx: &EntityContext) -> Result<Option<Board>, FileError> {
+    if let Some(id) = def.marker_id
+        && id >= dictionary.len()
+    {
+        let message = format!("{} has markers 0 to {}, not {id}", dictionary.name, dictionary.len() - 1);
+        return Err(cx.field_error("marker_id", 0, "marker_id", message));
+    }
+    def.board
+        .map(|board| board.board(dictionary))
+        .transpose()
+        .map_err(|error| cx.field_error("board", 0, "board", error))
+}
 
 /// The `ar` kind.
 pub struct ArKind;
@@ -26,11 +43,14 @@ impl EntityKind for ArKind {
     type Plugin = ArPlugin;
 
     fn validate(def: &ArDef, cx: &EntityContext) -> Result<(), FileError> {
-        // The marker's id and the board are checked against the dictionary when it is built:
-        // a dictionary file is read after this.
         if !matches!((def.marker_id, def.marker_side_m, def.board), (Some(_), Some(_), None) | (None, None, Some(_))) {
             let message = "expected `marker_id` and `marker_side_m`, or a `board`, to stand the scene on";
             return Err(cx.locate(ArKind::KEY, cx.kind_index, format!("{}: {message}", cx.field("marker_id"))));
+        }
+        // Against a predefined dictionary now; against a dictionary file when it has been read,
+        // as the entity is built.
+        if let Some(dictionary) = def.dictionary.dictionary() {
+            target_board(def, dictionary, cx)?;
         }
         let sources = [def.frames.is_some(), def.video.is_some(), def.camera.is_some()];
         if sources.iter().filter(|&&given| given).count() != 1 {
@@ -107,17 +127,7 @@ impl EntityKind for ArKind {
             .dictionary()
             .ok_or_else(|| entity.field_error("dictionary", 0, "dictionary", "the dictionary file was not read"))?
             .clone();
-        if let Some(id) = def.marker_id
-            && id >= dictionary.len()
-        {
-            let message = format!("{} has markers 0 to {}, not {id}", dictionary.name, dictionary.len() - 1);
-            return Err(entity.field_error("marker_id", 0, "marker_id", message));
-        }
-        let board = def
-            .board
-            .map(|board| board.board(&dictionary))
-            .transpose()
-            .map_err(|error| entity.field_error("board", 0, "board", error))?;
+        let board = target_board(def, &dictionary, &entity)?;
         Ok(ArBuilt { source, camera, calibration: calibration.clone(), board, dictionary })
     }
 

@@ -5,6 +5,17 @@ use crate::foundation::yaml::FileError;
 use serde_yaml::{Mapping, Value};
 use std::path::Path;
 
+/// The bytes of the file at `path`, refused (without reading them) if there are more than
+/// `max_bytes`; `what` names the kind of file in that message.
+pub fn read_bounded(path: &Path, max_bytes: usize, what: &str) -> Result<Vec<u8>, FileError> {
+    let metadata = std::fs::metadata(path).map_err(|error| FileError::unreadable(path, error))?;
+    if metadata.len() > max_bytes as u64 {
+        let limit = format!("{} KiB", max_bytes >> 10);
+        return Err(FileError::whole_file(path, format!("{} bytes: {what} is at most {limit}", metadata.len())));
+    }
+    std::fs::read(path).map_err(|error| FileError::unreadable(path, error))
+}
+
 /// The top-level mapping of an OpenCV file's bytes, and its text for locating keys; `what`
 /// says what the file should hold, for errors.
 pub fn read_mapping(path: &Path, bytes: &[u8], what: &str) -> Result<(String, Mapping), FileError> {

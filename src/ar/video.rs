@@ -53,7 +53,7 @@ struct ProbedStream {
 impl VideoFile {
     /// Reads `path`'s first picture stream's description; errors name the file.
     pub fn probe(path: &Path) -> Result<Self, String> {
-        let name = path.display();
+        let name = path.display().to_string();
         if !path.is_file() {
             return Err(format!("{name}: no such file"));
         }
@@ -64,10 +64,7 @@ impl VideoFile {
             .arg(path)
             .stdin(Stdio::null())
             .output()
-            .map_err(|error| match error.kind() {
-                ErrorKind::NotFound => format!("{name}: {INSTALL_FFMPEG}"),
-                _ => format!("{name}: cannot run ffprobe: {error}"),
-            })?;
+            .map_err(|error| cannot_run(&name, "ffprobe", &error))?;
         if !output.status.success() {
             let message = String::from_utf8_lossy(&output.stderr);
             let reason = message.lines().rev().find(|line| !line.trim().is_empty()).unwrap_or("unknown error");
@@ -114,6 +111,15 @@ fn parse_rate(rate: &str) -> Option<f64> {
     (value.is_finite() && value > 0.0 && value <= 1000.0).then_some(value)
 }
 
+/// Why `program` could not be started for the file `name`: FFmpeg missing, or the system's
+/// reason.
+fn cannot_run(name: &str, program: &str, error: &std::io::Error) -> String {
+    match error.kind() {
+        ErrorKind::NotFound => format!("{name}: {INSTALL_FFMPEG}"),
+        _ => format!("{name}: cannot run {program}: {error}"),
+    }
+}
+
 /// FFmpeg's message with the file's path (which the caller names already) left out.
 fn without_path(message: &str, path: &Path) -> String {
     message.replace(&format!("{}: ", path.display()), "").trim().to_string()
@@ -141,10 +147,7 @@ impl VideoReader {
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
-            .map_err(|error| match error.kind() {
-                ErrorKind::NotFound => format!("{name}: {INSTALL_FFMPEG}"),
-                _ => format!("{name}: cannot run ffmpeg: {error}"),
-            })?;
+            .map_err(|error| cannot_run(&name, "ffmpeg", &error))?;
         let (Some(pixels), Some(errors)) = (child.stdout.take(), child.stderr.take()) else {
             let _ = child.kill();
             return Err(format!("{name}: ffmpeg's output could not be read"));

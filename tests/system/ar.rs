@@ -313,12 +313,8 @@ fn a_scene_stands_on_a_grid_or_charuco_board_found_from_all_of_it() {
 fn a_scene_reads_its_markers_from_a_dictionary_file_of_the_users() {
     use canopy_vision::synth::{marker_image, photograph_print};
     use canopy_vision::{Intrinsics, Pose};
-    // As OpenCV 4.14's `extendDictionary(5, 4, randomSeed=7)` wrote it.
-    let text = "%YAML:1.0\n---\nnmarkers: 5\nmarkersize: 4\nmaxCorrectionBits: 2\n\
-        marker_0: \"1111010111000100\"\nmarker_1: \"1001101110110100\"\nmarker_2: \"0100101101001100\"\n\
-        marker_3: \"0110111000101001\"\nmarker_4: \"0011100101000000\"\n";
     let folder = tempfile::tempdir().unwrap();
-    std::fs::write(folder.path().join("mine.yml"), text).unwrap();
+    std::fs::copy(path("tests/charuco/opencv_dictionary.yml"), folder.path().join("mine.yml")).unwrap();
     let dictionary = canopy::ar::dictionary_file::read(&folder.path().join("mine.yml")).unwrap();
     // Marker 2, 6 cells of 50 px with a margin of one, printed 6 cm across, photographed.
     let print = marker_image(&dictionary, 2, 50, 1).unwrap();

@@ -14,7 +14,7 @@ use crate::calibrate::homography;
 use crate::detect::Marker;
 use crate::dictionary::Dictionary;
 use crate::gray::Gray;
-use crate::grid::marker_white;
+use crate::grid::{ids_fit, marker_white};
 use crate::saddle;
 use bevy_math::{DMat3, DVec2, DVec3};
 
@@ -61,14 +61,7 @@ impl CharucoBoard {
             ));
         }
         let board = Self { squares, square_m, marker_m, first_id, legacy };
-        let count = board.marker_count();
-        if u64::from(first_id) + u64::from(count) > u64::from(dictionary.len()) {
-            return Err(format!(
-                "{count} markers from id {first_id} need ids up to {}, but {dictionary} has {}",
-                u64::from(first_id) + u64::from(count) - 1,
-                dictionary.len()
-            ));
-        }
+        ids_fit(first_id, board.marker_count(), dictionary)?;
         Ok(board)
     }
 

@@ -45,14 +45,7 @@ impl GridBoard {
         if !(separation_m.is_finite() && (0.0..=10.0).contains(&separation_m)) {
             return Err(format!("expected a separation from 0 to 10 m, found {separation_m}"));
         }
-        let count = markers[0] * markers[1];
-        if u64::from(first_id) + u64::from(count) > u64::from(dictionary.len()) {
-            return Err(format!(
-                "{count} markers from id {first_id} need ids up to {}, but {dictionary} has {}",
-                u64::from(first_id) + u64::from(count) - 1,
-                dictionary.len()
-            ));
-        }
+        ids_fit(first_id, markers[0] * markers[1], dictionary)?;
         Ok(Self { markers, marker_m, separation_m, first_id })
     }
 
@@ -110,6 +103,18 @@ impl GridBoard {
         }
         Some(image)
     }
+}
+
+/// Whether `count` markers from id `first_id` are all in `dictionary`, or what is wrong.
+pub(crate) fn ids_fit(first_id: u32, count: u32, dictionary: &Dictionary) -> Result<(), String> {
+    let last = u64::from(first_id) + u64::from(count) - 1;
+    if last >= u64::from(dictionary.len()) {
+        return Err(format!(
+            "{count} markers from id {first_id} need ids up to {last}, but {dictionary} has {}",
+            dictionary.len()
+        ));
+    }
+    Ok(())
 }
 
 /// Whether a marker of `cells` (its inner cells row by row, `bits` a side) is white at
