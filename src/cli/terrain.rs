@@ -5,7 +5,7 @@ use crate::terrain::bands::{Band, band_texture};
 use crate::terrain::def::draw_seed;
 use crate::terrain::heightmap::Heightmap;
 use crate::terrain::image_io::{self, Encoding};
-use crate::terrain::recipe::{DiamondSquareLayer, HillsLayer, Layer, PerlinLayer, Recipe};
+use crate::terrain::recipe::{DiamondSquareLayer, HillCentres, HillsLayer, Layer, PerlinLayer, Recipe};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -83,6 +83,12 @@ pub struct TerrainGenerateArgs {
     /// Hills: smallest and largest radius in samples.
     #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], default_values_t = [4.0, 32.0])]
     radius: Vec<f32>,
+    /// Hills: where their centres fall: inside, beyond_edges or island.
+    #[arg(long, default_value = "inside", value_parser = parse_hill_centres)]
+    hill_centres: HillCentres,
+    /// Hills: dug down as lakes from a plateau instead of raised.
+    #[arg(long)]
+    lakes: bool,
     /// Replace `--out` if it exists (otherwise an existing file is never overwritten).
     #[arg(long)]
     force: bool,
@@ -97,6 +103,11 @@ impl TerrainCommand {
             TerrainCommand::Textures { out } => write_band_textures(&out),
         }
     }
+}
+
+/// A hill placement by the name a recipe gives it.
+fn parse_hill_centres(text: &str) -> Result<HillCentres, String> {
+    serde_yaml::from_str(text).map_err(|_| format!("expected inside, beyond_edges or island, found \"{text}\""))
 }
 
 impl TerrainGenerateArgs {
@@ -117,7 +128,8 @@ impl TerrainGenerateArgs {
             }
             GeneratorName::Hills => {
                 let radius = [self.radius[0], self.radius[1]];
-                Layer { hills: Some(HillsLayer { count: self.hills, radius }), ..Layer::default() }
+                let hills = HillsLayer { count: self.hills, radius, centres: self.hill_centres, lakes: self.lakes };
+                Layer { hills: Some(hills), ..Layer::default() }
             }
         };
         Recipe { size: [self.width, self.height], seed: self.seed, layers: vec![layer], apply: Vec::new() }

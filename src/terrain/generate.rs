@@ -3,7 +3,7 @@
 
 use super::heightmap::{Heightmap, SizeError, check_size};
 use super::noise::{Fbm, FbmSettings};
-use super::recipe::{DiamondSquareLayer, Generator, HillsLayer, Layer, PerlinLayer, Recipe};
+use super::recipe::{DiamondSquareLayer, Generator, HillCentres, HillsLayer, Layer, PerlinLayer, Recipe};
 use crate::foundation::random::Random;
 
 impl Recipe {
@@ -155,14 +155,32 @@ pub fn diamond_square(layer: DiamondSquareLayer, seed: u64, width: u32, height: 
     Ok(map)
 }
 
-/// The hill algorithm on `width x height` samples: summed paraboloids, normalised, squared.
+/// The hill algorithm on `width x height` samples: summed paraboloids, normalised, squared;
+/// their centres inside the map, beyond its edges too, or kept to an island, and dug down as
+/// lakes instead of raised if the layer says.
 pub fn hills(layer: HillsLayer, seed: u64, width: u32, height: u32) -> Result<Heightmap, SizeError> {
     let mut map = Heightmap::filled(width, height, 0.0)?;
     let mut random = Random::new(seed);
     let [low, high] = layer.radius;
+    let (w, h) = (width as f32, height as f32);
     for _ in 0..layer.count {
-        let (cx, cz) = (random.between(0.0, width as f32), random.between(0.0, height as f32));
-        let radius = random.between(low, high.max(low));
+        let (cx, cz, radius) = match layer.centres {
+            HillCentres::Inside => {
+                let (cx, cz) = (random.between(0.0, w), random.between(0.0, h));
+                (cx, cz, random.between(low, high.max(low)))
+            }
+            HillCentres::BeyondEdges => {
+                let (cx, cz) = (random.between(-high, w + high), random.between(-high, h + high));
+                (cx, cz, random.between(low, high.max(low)))
+            }
+            HillCentres::Island => {
+                // The disc of the hill within the circle inscribed in the map's samples.
+                let radius = random.between(low, high.max(low));
+                let room = ((w.min(h) - 1.0) * 0.5 - radius).max(0.0);
+                let (angle, distance) = (random.between(0.0, std::f32::consts::TAU), random.between(0.0, room));
+                ((w - 1.0) * 0.5 + distance * angle.cos(), (h - 1.0) * 0.5 + distance * angle.sin(), radius)
+            }
+        };
         let r2 = radius * radius;
         let span = |c: f32, size: u32| {
             let first = (c - radius).floor().max(0.0) as u32;
@@ -182,7 +200,12 @@ pub fn hills(layer: HillsLayer, seed: u64, width: u32, height: u32) -> Result<He
         }
     }
     map.normalize();
-    map.apply(|h| h * h);
+    if layer.lakes {
+        // Dug down from a plateau, then squared: the lakes' beds flatten as the valleys do.
+        map.apply(|h| (1.0 - h) * (1.0 - h));
+    } else {
+        map.apply(|h| h * h);
+    }
     Ok(map)
 }
 

@@ -55,6 +55,31 @@ pub struct HillsLayer {
     /// Smallest and largest radius, in samples; `[4, 32]` by default.
     #[serde(default = "default_radius")]
     pub radius: [f32; 2],
+    /// Where the hills' centres may fall; inside the map by default.
+    #[serde(default, skip_serializing_if = "HillCentres::is_inside")]
+    pub centres: HillCentres,
+    /// Hills dug down instead of raised: a plateau with flat-bottomed lakes; no by default.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub lakes: bool,
+}
+
+/// Where the hill algorithm's centres fall (the variants the source analysed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HillCentres {
+    /// Anywhere on the map: its edges are lower, the hills cut off there.
+    #[default]
+    Inside,
+    /// Up to the largest radius beyond the map's edges too, so the edges are not flat.
+    BeyondEdges,
+    /// Each hill wholly within the circle inscribed in the map: an island, its edges at 0.
+    Island,
+}
+
+impl HillCentres {
+    fn is_inside(&self) -> bool {
+        *self == HillCentres::Inside
+    }
 }
 
 fn default_scale() -> f32 {

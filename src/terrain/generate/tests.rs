@@ -36,7 +36,8 @@ fn layers_combine_by_their_ops_weights_and_functions() {
     // first layer minus another map.
     let two = recipe("{size: [32, 32], seed: 1, layers: [{perlin: {scale: 8}}, {hills: {count: 5}, op: max}]}");
     two.check().unwrap();
-    let hills_alone = hills(HillsLayer { count: 5, radius: [4.0, 32.0] }, 1 + 0x1_0000, 32, 32).unwrap();
+    let hills_alone =
+        hills(HillsLayer { count: 5, radius: [4.0, 32.0], ..hills_layer() }, 1 + 0x1_0000, 32, 32).unwrap();
     let combined = two.generate(1).unwrap();
     for ((a, b), c) in single.values().iter().zip(hills_alone.values()).zip(combined.values()) {
         assert_eq!(a.max(*b), *c);
@@ -63,12 +64,71 @@ fn functions_give_hand_computed_values() {
 fn hills_are_paraboloids() {
     // One hill: the normalised, squared paraboloid peaks at 1 at its centre and is zero
     // beyond its radius.
-    let map = hills(HillsLayer { count: 1, radius: [5.0, 5.0] }, 9, 64, 64).unwrap();
+    let map = hills(HillsLayer { count: 1, radius: [5.0, 5.0], ..hills_layer() }, 9, 64, 64).unwrap();
     let stats = map.stats();
     assert_eq!((stats.min, stats.max), (0.0, 1.0));
     let raised = map.values().iter().filter(|&&h| h > 0.0).count() as f32;
     // The disc of radius 5 holds about 78.5 samples (fewer when cut by the border).
     assert!(raised <= 90.0 && raised > 20.0, "{raised}");
+}
+
+/// Hills inside the map, raised.
+fn hills_layer() -> HillsLayer {
+    HillsLayer { count: 200, radius: [4.0, 32.0], centres: HillCentres::Inside, lakes: false }
+}
+
+#[test]
+fn islands_leave_the_edges_at_zero_and_hills_beyond_the_edges_raise_them() {
+    let (w, h) = (48, 40);
+    let island =
+        hills(HillsLayer { count: 60, radius: [3.0, 12.0], centres: HillCentres::Island, ..hills_layer() }, 5, w, h)
+            .unwrap();
+    let border = |map: &Heightmap| -> Vec<f32> {
+        let (w, h) = (map.width(), map.height());
+        (0..w)
+            .flat_map(|x| [(x, 0), (x, h - 1)])
+            .chain((0..h).flat_map(|z| [(0, z), (w - 1, z)]))
+            .map(|(x, z)| map.values()[(z * w + x) as usize])
+            .collect()
+    };
+    assert!(border(&island).iter().all(|&v| v == 0.0), "an island's shore is at sea level");
+    assert_eq!(island.stats().max, 1.0);
+    // One hill a map: beyond the edges, its highest point is on the edge in some maps; inside,
+    // where its centre is, a sample's width from the edge at most.
+    let on_edge = |centres: HillCentres| {
+        (0..40u64)
+            .filter(|&seed| {
+                let map =
+                    hills(HillsLayer { count: 1, radius: [6.0, 6.0], centres, ..hills_layer() }, seed, 32, 32).unwrap();
+                let peak = map.values().iter().position(|&v| v == 1.0).unwrap_or(0) as u32;
+                let (x, z) = (peak % 32, peak / 32);
+                x == 0 || z == 0 || x == 31 || z == 31
+            })
+            .count()
+    };
+    let (beyond, inside) = (on_edge(HillCentres::BeyondEdges), on_edge(HillCentres::Inside));
+    assert!(beyond >= 10 && beyond > 3 * inside, "{beyond} maps peak on the edge beyond, {inside} inside");
+    // Many hills: the edges as high as the rest beyond, lower inside (cut-off hills).
+    let edge_share = |centres| {
+        let map = hills(HillsLayer { centres, ..hills_layer() }, 3, 64, 64).unwrap();
+        let edge = border(&map).iter().sum::<f32>() / border(&map).len() as f32;
+        edge / (map.values().iter().sum::<f32>() / map.values().len() as f32)
+    };
+    let (beyond, inside) = (edge_share(HillCentres::BeyondEdges), edge_share(HillCentres::Inside));
+    assert!(beyond > 0.6 && beyond > inside * 1.5, "edges {beyond} of the mean beyond, {inside} inside");
+}
+
+#[test]
+fn lakes_are_the_same_hills_dug_down() {
+    // The same seed draws the same hills: raised, `s^2`; dug down, `(1 - s)^2`.
+    let raised = hills(hills_layer(), 11, 40, 40).unwrap();
+    let lakes = hills(HillsLayer { lakes: true, ..hills_layer() }, 11, 40, 40).unwrap();
+    for (a, b) in raised.values().iter().zip(lakes.values()) {
+        assert!((a.sqrt() + b.sqrt() - 1.0).abs() < 1e-5, "{a} and {b}");
+    }
+    assert_eq!(lakes.stats().max, 1.0, "the plateau");
+    // And the same every time.
+    assert_eq!(lakes, hills(HillsLayer { lakes: true, ..hills_layer() }, 11, 40, 40).unwrap());
 }
 
 #[test]
