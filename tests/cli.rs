@@ -332,7 +332,12 @@ fn deform_shrinks_a_region_of_a_mesh_file_and_prints_its_report() {
     assert_eq!(report["facts"]["fixed_unchanged"], true);
     let ratio = report["facts"]["edge_sum_ratio"].as_f64().unwrap();
     assert!((ratio - 0.97).abs() < 1e-4, "{ratio}");
-    assert!(mesh_io::read(std::path::Path::new(out)).is_ok());
+    // The volume between the surface before and after, as the shrunk file and the original
+    // give it.
+    let volume = report["facts"]["volume_between_m3"].as_f64().unwrap();
+    let (shrunk, _) = mesh_io::read(std::path::Path::new(out)).unwrap();
+    let measured = belly.volume_between(&belly.positions, &shrunk.positions);
+    assert!(volume > 0.0 && (volume - measured).abs() < 1e-3 * volume, "{volume} reported, {measured} measured");
     // The result is never overwritten unasked; settings out of range are usage errors.
     let again = canopy(&args);
     assert_eq!(again.status.code(), Some(1));

@@ -156,6 +156,7 @@ fn report(ui: &mut egui::Ui, report: &ShrinkReport) {
             ("error", format!("{:.3e}", report.error)),
             ("time", format!("{:.1} ms", report.time_ms)),
             ("area ratio", format!("{:.5}", facts.area_ratio)),
+            ("volume between", format!("{:.3} cm³", facts.volume_between_m3 * 1e6)),
             ("edge sum ratio", format!("{:.5}", facts.edge_sum_ratio)),
             ("edge error", format!("max {:.4}, mean {:.4}", facts.max_edge_error, facts.mean_edge_error)),
             ("inverted", facts.inverted.to_string()),

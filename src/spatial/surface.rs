@@ -2,7 +2,7 @@
 //! (unique undirected pairs) and each vertex's neighbours derived once, and the measurable
 //! facts a deformation is judged by.
 
-use bevy::math::Vec3;
+use bevy::math::{DVec3, Vec3};
 
 /// Why a surface cannot be deformed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -129,6 +129,24 @@ impl Surface {
     pub fn area(&self, positions: &[Vec3]) -> f64 {
         self.triangles.iter().map(|&t| f64::from(triangle_cross(positions, t).length()) * 0.5).sum()
     }
+
+    /// The net volume between the surface at `before` and at `after`, cubic metres, where its
+    /// border is the same in both: the two then close a solid (or several), whose volume is the
+    /// difference of their cones from any point by the divergence theorem. What a shrink of a
+    /// region with its outline held removes; parts moved outwards count against parts moved in.
+    pub fn volume_between(&self, before: &[Vec3], after: &[Vec3]) -> f64 {
+        let origin = before.first().map_or(DVec3::ZERO, |p| p.as_dvec3());
+        let cone = |positions: &[Vec3]| -> f64 {
+            self.triangles
+                .iter()
+                .map(|&[a, b, c]| {
+                    let [a, b, c] = [a, b, c].map(|v| positions[v as usize].as_dvec3() - origin);
+                    a.dot(b.cross(c)) / 6.0
+                })
+                .sum()
+        };
+        (cone(before) - cone(after)).abs()
+    }
 }
 
 /// Twice the area vector of triangle `t` at `positions`: its normal times twice its area.
@@ -155,6 +173,9 @@ pub struct Facts {
     pub has_nan: bool,
     /// Triangles whose normal turned against the one they had.
     pub inverted: usize,
+    /// The net volume between the surface before and after, cubic metres (see
+    /// [`Surface::volume_between`]; meaningful while the fixed vertices are held).
+    pub volume_between_m3: f64,
 }
 
 impl Facts {
@@ -190,6 +211,7 @@ impl Facts {
                 .iter()
                 .filter(|&&t| triangle_cross(before, t).dot(triangle_cross(after, t)) < 0.0)
                 .count(),
+            volume_between_m3: surface.volume_between(before, after),
         }
     }
 }
@@ -240,5 +262,25 @@ mod tests {
         let mut flipped = square.positions.clone();
         flipped[3] = Vec3::new(-1.0, 0.0, -1.0);
         assert_eq!(Facts::of(&square, &flipped, 1.0).inverted, 1);
+    }
+
+    #[test]
+    fn the_volume_between_a_patch_and_its_pressed_centre_is_a_pyramid() {
+        // A unit square of four triangles round its centre, the centre pressed 0.3 m down: a
+        // pyramid of base 1 and height 0.3 lies between, 0.1 cubic metres.
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z, Vec3::new(0.5, 0.0, 0.5)];
+        let triangles = vec![[0, 4, 1], [1, 4, 2], [2, 4, 3], [3, 4, 0]];
+        let movable = vec![false, false, false, false, true];
+        let patch = Surface::new(positions.clone(), triangles, movable).unwrap();
+        let mut pressed = positions.clone();
+        pressed[4].y -= 0.3;
+        let facts = Facts::of(&patch, &pressed, 1.0);
+        assert!((facts.volume_between_m3 - 0.1).abs() < 1e-6, "{}", facts.volume_between_m3);
+        // Wherever the patch lies.
+        let moved = |p: &Vec3| *p + Vec3::new(40.0, -7.0, 3.0);
+        let (far, far_pressed): (Vec<Vec3>, Vec<Vec3>) =
+            (positions.iter().map(moved).collect(), pressed.iter().map(moved).collect());
+        assert!((patch.volume_between(&far, &far_pressed) - 0.1).abs() < 1e-6);
+        assert_eq!(patch.volume_between(&positions, &positions), 0.0);
     }
 }
