@@ -41,10 +41,11 @@ fn camera_controls(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
         ui.add(egui::DragValue::new(&mut draft.fps).range(1.0..=240.0));
         if ui.button("Open").on_hover_text("open the camera with these settings").clicked() {
             let opened = entity_mut.get_mut::<ArView>().map(|mut view| view.use_camera(draft.clone()));
+            // A camera refused (a calibration of another shape) leaves the one playing alone.
             if let (Some(result), Some(mut state)) = (opened, entity_mut.get_mut::<ArState>()) {
-                state.restart();
-                if let Err(why) = result {
-                    state.source_error = Some(format!("{}: {why}", draft.device));
+                match result {
+                    Ok(()) => state.restart(),
+                    Err(why) => state.source_error = Some(format!("{}: {why}", draft.device)),
                 }
             }
         }

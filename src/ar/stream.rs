@@ -142,15 +142,13 @@ impl FrameStream {
         let (sender, frames) = sync_channel(FRAMES_AHEAD);
         let backdrop = SharedBackdrop::default();
         let work = Work { dictionary, camera, board, repeat, backdrop: backdrop.clone() };
-        let (frames, status) = match std::thread::Builder::new()
+        // A thread that could not start dropped its end of the queue: nothing will come.
+        let status = match std::thread::Builder::new()
             .name("canopy-frames".into())
             .spawn(move || read_frames(reader, work, sender))
         {
-            Ok(_) => (frames, StreamStatus::Reading),
-            Err(error) => {
-                let (_, frames) = sync_channel(0);
-                (frames, StreamStatus::Failed(format!("cannot start the thread that reads frames: {error}")))
-            }
+            Ok(_) => StreamStatus::Reading,
+            Err(error) => StreamStatus::Failed(format!("cannot start the thread that reads frames: {error}")),
         };
         Self { frames: Mutex::new(frames), early: None, status, backdrop }
     }

@@ -72,7 +72,13 @@ impl CharucoBoard {
 
     /// The markers on the board.
     pub fn marker_count(&self) -> u32 {
-        (0..self.squares[1]).map(|y| (0..self.squares[0]).filter(|&x| self.holds_marker([x, y])).count() as u32).sum()
+        (0..self.squares[1]).map(|y| self.row_markers(y)).sum()
+    }
+
+    /// The markers in row `y`: every other square, from the first or the second.
+    fn row_markers(&self, y: u32) -> u32 {
+        let across = self.squares[0];
+        if self.holds_marker([0, y]) { across.div_ceil(2) } else { across / 2 }
     }
 
     /// The board's width and height, metres.
@@ -96,19 +102,30 @@ impl CharucoBoard {
 
     /// The square marker `id` is in; `None` for an id not on the board.
     fn square_of(&self, id: u32) -> Option<[u32; 2]> {
-        let index = id.checked_sub(self.first_id)?;
-        let position = self.marker_indices().iter().position(|&m| m == Some(index))? as u32;
-        Some([position % self.squares[0], position / self.squares[0]])
+        let mut index = id.checked_sub(self.first_id)?;
+        for y in 0..self.squares[1] {
+            let in_row = self.row_markers(y);
+            if index < in_row {
+                let first = u32::from(!self.holds_marker([0, y]));
+                return Some([first + 2 * index, y]);
+            }
+            index -= in_row;
+        }
+        None
     }
 
     /// The corners of marker `id` in the board frame, in OpenCV's order; `None` for an id not
     /// on the board.
     pub fn corners(&self, id: u32) -> Option<[DVec3; 4]> {
-        let [x, y] = self.square_of(id)?;
+        self.square_of(id).map(|square| self.marker_corners(square))
+    }
+
+    /// The corners of the marker in `square`, in the board frame, in OpenCV's order.
+    fn marker_corners(&self, [x, y]: [u32; 2]) -> [DVec3; 4] {
         let inset = (self.square_m - self.marker_m) * 0.5;
         let top_left = DVec3::new(f64::from(x) * self.square_m + inset, f64::from(y) * self.square_m + inset, 0.0);
         let l = self.marker_m;
-        Some([top_left, top_left + DVec3::X * l, top_left + DVec3::new(l, l, 0.0), top_left + DVec3::Y * l])
+        [top_left, top_left + DVec3::X * l, top_left + DVec3::new(l, l, 0.0), top_left + DVec3::Y * l]
     }
 
     /// The inner chessboard corners: `(squares across - 1) x (squares down - 1)`.
@@ -172,16 +189,18 @@ impl CharucoBoard {
         let indices = self.marker_indices();
         let seen_once = |id: u32| markers.iter().filter(|m| m.id == id).count() == 1;
         // Each square's marker found, with the homography from the board's plane to the image.
+        let across = self.squares[0];
         let found: Vec<Option<(&Marker, DMat3)>> = indices
             .iter()
-            .map(|index| {
+            .enumerate()
+            .map(|(square, index)| {
                 let id = self.first_id + (*index)?;
                 let marker = markers.iter().find(|m| m.id == id && seen_once(id))?;
-                let object: Vec<DVec2> = self.corners(id)?.iter().map(|c| c.truncate()).collect();
+                let square = [square as u32 % across, square as u32 / across];
+                let object: Vec<DVec2> = self.marker_corners(square).iter().map(|c| c.truncate()).collect();
                 Some((marker, homography(&object, &marker.corners_f64())?))
             })
             .collect();
-        let across = self.squares[0];
         let mut corners = Vec::new();
         for index in 0..self.corner_count() {
             let (x, y) = (index % (across - 1), index / (across - 1));
@@ -252,6 +271,17 @@ mod tests {
         let legacy = CharucoBoard { squares: [5, 6], legacy: true, ..board };
         assert!(legacy.holds_marker([0, 0]) && !legacy.holds_marker([1, 0]));
         assert!(CharucoBoard { squares: [5, 7], ..legacy }.holds_marker([1, 0]), "odd rows: no change");
+        // Every id's square, counted along the rows, for either layout and width.
+        for (squares, legacy) in [([5, 7], false), ([6, 4], false), ([5, 6], true), ([4, 6], true)] {
+            let board = CharucoBoard { squares, legacy, ..board };
+            let holding = (0..squares[1]).flat_map(|y| (0..squares[0]).map(move |x| [x, y]));
+            let holding: Vec<[u32; 2]> = holding.filter(|&square| board.holds_marker(square)).collect();
+            assert_eq!(holding.len() as u32, board.marker_count(), "{squares:?}");
+            for (id, &square) in holding.iter().enumerate() {
+                assert_eq!(board.square_of(id as u32), Some(square), "{squares:?}, legacy {legacy}");
+            }
+            assert_eq!(board.square_of(holding.len() as u32), None);
+        }
         assert!(CharucoBoard::new([1, 7], 0.04, 0.02, 0, false, &dictionary).unwrap_err().contains("2 to 64"));
         assert!(CharucoBoard::new([5, 7], 0.04, 0.04, 0, false, &dictionary).unwrap_err().contains("less than"));
         assert!(CharucoBoard::new([30, 30], 0.04, 0.02, 0, false, &dictionary).unwrap_err().contains("has 250"));

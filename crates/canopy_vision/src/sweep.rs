@@ -129,6 +129,11 @@ pub struct SweepFrame {
     pub corners: [DVec2; 4],
 }
 
+/// The sweep's dictionary, `6x6_250` (the predefined set of that name, always there).
+pub fn dictionary() -> Dictionary {
+    Dictionary::ALL.iter().find(|d| d.name == "6x6_250").cloned().unwrap_or_else(|| Dictionary::ALL[0].clone())
+}
+
 /// The sweep's camera.
 pub fn camera() -> Intrinsics {
     Intrinsics::pinhole([640, 480], 60.0)
@@ -139,7 +144,7 @@ pub fn frame(condition: Condition, value: f64, index: u32) -> SweepFrame {
     let conditions = Conditions::with(condition, value);
     let camera = camera();
     let mut random = Random(0x5eed_0000 + u64::from(index) * 7919 + (value * 1000.0) as u64);
-    let dictionary = Dictionary::named("6x6_250").unwrap_or_else(|_| Dictionary::ALL[10].clone());
+    let dictionary = dictionary();
     // The print: 8 cells of 40 px with a white margin of one cell, its contrast about mid-grey.
     let mut print = marker_image(&dictionary, ID, 40, 1).unwrap_or_else(|| Gray::filled(400, 400, 255));
     for value in &mut print.pixels {
@@ -236,7 +241,7 @@ pub struct Step {
 /// Runs `frames` frames at each step of `condition`.
 pub fn sweep(condition: Condition, frames: u32) -> Vec<Step> {
     let camera = camera();
-    let dictionary = Dictionary::named("6x6_250").unwrap_or_else(|_| Dictionary::ALL[10].clone());
+    let dictionary = dictionary();
     let mut scratch = Scratch::default();
     condition
         .steps()
@@ -310,13 +315,7 @@ mod tests {
         // The truth's corners are where the frame shows them: the detector's lie within a
         // pixel of them.
         let frame = frame(Condition::Noise, 2.0, 1);
-        let markers = detect(
-            &frame.image,
-            &Dictionary::named("6x6_250").unwrap(),
-            &Settings::default(),
-            None,
-            &mut Scratch::default(),
-        );
+        let markers = detect(&frame.image, &dictionary(), &Settings::default(), None, &mut Scratch::default());
         let corners = markers.iter().find(|m| m.id == ID).unwrap().corners_f64();
         for (found, truth) in corners.iter().zip(&frame.corners) {
             assert!(found.distance(*truth) < 1.0, "{found} against {truth}");
