@@ -171,8 +171,8 @@ pub struct CameraReader {
     stream: ReadStream,
     fourcc: [u8; 4],
     size: [u32; 2],
-    /// Set once the device has gone: the stream ends.
-    gone: bool,
+    /// Why the device stopped giving frames, once it has (unplugged, say): the stream ends.
+    gone: Option<String>,
 }
 
 impl CameraReader {
@@ -206,28 +206,32 @@ impl CameraReader {
         // A driver that cannot set the rate keeps its own; the frames then come at that rate.
         let _ = capture.set_frame_interval(Fract::new(1000, (fps * 1000.0).round() as u32));
         let stream = capture.into_stream().map_err(|error| format!("{device}: cannot start streaming: {error}"))?;
-        Ok(Self { device: device.to_string(), stream, fourcc, size, gone: false })
+        Ok(Self { device: device.to_string(), stream, fourcc, size, gone: None })
     }
 }
 
 impl FrameReader for CameraReader {
     fn next_frame(&mut self) -> Option<Result<RgbaImage, String>> {
-        if self.gone {
+        if self.gone.is_some() {
             return None;
         }
         let (fourcc, size) = (self.fourcc, self.size);
         let frame = self.stream.dequeue(|buffer| Ok(to_rgba(fourcc, &buffer, size)));
-        Some(match frame {
-            Ok(converted) => converted.map_err(|why| format!("{}: {why}", self.device)),
+        match frame {
+            Ok(converted) => Some(converted.map_err(|why| format!("{}: {why}", self.device))),
             Err(error) => {
-                self.gone = true;
-                Err(format!("{}: the camera stopped: {error}", self.device))
+                self.gone = Some(format!("{}: the camera stopped: {error}", self.device));
+                None
             }
-        })
+        }
     }
 
     fn rewind(&mut self) -> Result<(), String> {
         Ok(())
+    }
+
+    fn stopped(&mut self) -> Option<String> {
+        self.gone.clone()
     }
 }
 

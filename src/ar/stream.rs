@@ -33,6 +33,12 @@ pub trait FrameReader: Send + 'static {
 
     /// Starts again from the first frame, for a source that loops.
     fn rewind(&mut self) -> Result<(), String>;
+
+    /// Why the frames stopped before the source's end, once [`next_frame`](Self::next_frame)
+    /// has returned `None`: a camera unplugged while it played, say.
+    fn stopped(&mut self) -> Option<String> {
+        None
+    }
 }
 
 /// A frame read and searched.
@@ -230,14 +236,17 @@ fn read_frames(mut reader: Box<dyn FrameReader>, work: Work, sender: SyncSender<
                 index += 1;
                 Message::Frame(frame)
             }
-            None if work.repeat && index > 0 => match reader.rewind() {
-                Ok(()) => {
-                    index = 0;
-                    continue;
-                }
-                Err(why) => Message::Failed(why),
+            None => match reader.stopped() {
+                Some(why) => Message::Failed(why),
+                None if work.repeat && index > 0 => match reader.rewind() {
+                    Ok(()) => {
+                        index = 0;
+                        continue;
+                    }
+                    Err(why) => Message::Failed(why),
+                },
+                None => Message::Ended(index),
             },
-            None => Message::Ended(index),
         };
         let last = !matches!(message, Message::Frame(_));
         if sender.send(message).is_err() || last {
@@ -250,17 +259,19 @@ fn read_frames(mut reader: Box<dyn FrameReader>, work: Work, sender: SyncSender<
 mod tests {
     use super::*;
 
-    /// Frames of one grey level each, from 0; `failing` names a frame that cannot be read.
+    /// Frames of one grey level each, from 0; `failing` names a frame that cannot be read,
+    /// `vanishing` the frame before which the source goes away, as an unplugged camera does.
     struct Counting {
         frames: usize,
         next: usize,
         failing: Option<usize>,
+        vanishing: Option<usize>,
     }
 
     impl FrameReader for Counting {
         fn next_frame(&mut self) -> Option<Result<RgbaImage, String>> {
             let index = self.next;
-            (index < self.frames).then(|| {
+            (index < self.frames && self.vanishing != Some(index)).then(|| {
                 self.next += 1;
                 match self.failing == Some(index) {
                     true => Err(format!("frame {index} is damaged")),
@@ -273,12 +284,20 @@ mod tests {
             self.next = 0;
             Ok(())
         }
+
+        fn stopped(&mut self) -> Option<String> {
+            self.vanishing.filter(|&index| index == self.next).map(|index| format!("gone before frame {index}"))
+        }
+    }
+
+    fn reading(reader: Counting, repeat: bool) -> FrameStream {
+        let camera = Intrinsics::pinhole([8, 6], 60.0);
+        let dictionary = Dictionary::named("4x4_50").unwrap();
+        FrameStream::start(Box::new(reader), dictionary, camera, None, repeat)
     }
 
     fn stream(frames: usize, failing: Option<usize>, repeat: bool) -> FrameStream {
-        let camera = Intrinsics::pinhole([8, 6], 60.0);
-        let dictionary = Dictionary::named("4x4_50").unwrap();
-        FrameStream::start(Box::new(Counting { frames, next: 0, failing }), dictionary, camera, None, repeat)
+        reading(Counting { frames, next: 0, failing, vanishing: None }, repeat)
     }
 
     fn level(frame: &ReadFrame) -> u8 {
@@ -302,6 +321,14 @@ mod tests {
         assert_eq!(level(&frames.take(Taking::Wait(2)).unwrap()), 2);
         assert!(frames.take(Taking::Wait(3)).is_none(), "no frame after the last");
         assert_eq!(frames.status, StreamStatus::Ended(3));
+    }
+
+    #[test]
+    fn a_source_that_goes_away_keeps_what_it_gave_and_says_why_it_stopped() {
+        let mut frames = reading(Counting { frames: 10, next: 0, failing: None, vanishing: Some(2) }, true);
+        assert_eq!(level(&frames.take(Taking::Wait(1)).unwrap()), 1);
+        assert!(frames.take(Taking::Wait(2)).is_none(), "nothing comes after it went");
+        assert_eq!(frames.status, StreamStatus::Failed("gone before frame 2".into()), "and it is not rewound");
     }
 
     #[test]
