@@ -950,3 +950,27 @@ fn a_printed_charuco_board_is_laid_out_as_opencv_draws_it() {
         }
     }
 }
+
+#[test]
+fn muscle_table_prints_the_sources_tables_and_the_fitted_growth() {
+    let output = canopy(&["muscle", "table", "scenes/biceps_real.yaml"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = String::from_utf8(output.stdout).unwrap();
+    // Node 5's row: real, model and fitted radii at each flexion; the real ones are Table 4.1's.
+    let row = text.lines().find(|line| line.trim_start().starts_with("5 |")).unwrap();
+    let cells: Vec<f64> = row.split(['|', ' ']).filter_map(|cell| cell.parse().ok()).skip(1).collect();
+    assert_eq!(cells.len(), 12, "{row}");
+    assert_eq!([cells[0], cells[3], cells[6], cells[9]], [21.7, 27.5, 32.4, 35.2], "{row}");
+    assert_eq!(cells[1], 21.7, "at 0 degrees the model is at rest: {row}");
+    assert!(cells[4] < cells[7] && cells[7] < cells[10], "the model's node grows with flexion: {row}");
+    assert!(text.contains("Growth from 0 to 90 degrees (Table 4.3)"), "{text}");
+    let closes = text.lines().find(|line| line.contains("the fit closes")).unwrap();
+    assert!(closes.contains("% of the gap"), "{closes}");
+
+    let output = canopy(&["muscle", "table", "scenes/biceps_real.yaml", "--muscle", "triceps"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr(&output).contains("no muscle is named `triceps` (muscles: biceps)"), "{}", stderr(&output));
+    let output = canopy(&["muscle", "table", "scenes/sloth.yaml"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr(&output).contains("the scene has no muscle"), "{}", stderr(&output));
+}

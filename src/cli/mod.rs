@@ -9,6 +9,7 @@
 //! | [`tree`] | `tree generate` |
 //! | [`sloth`] | `sloth gait` |
 //! | [`terrain`] | `terrain generate`, `terrain stats`, `terrain textures` |
+//! | [`muscle`] | `muscle table`: the source's tables of radii and growth, and the fitted growth |
 //! | [`mesh`] | `mesh sample`, `deform`, with [`deform_batch`] |
 //! | [`ar`] | `ar marker`, `ar board`, `ar sequence`, `ar detect`, with [`ar_calibrate`] (`ar calibrate`), [`ar_sweep`] (`ar sweep`) and [`board_layout`] |
 //! | [`bench`] | `bench terrain`, with [`section_timing`] |
@@ -23,6 +24,7 @@ pub mod bench;
 pub mod board_layout;
 pub mod deform_batch;
 pub mod mesh;
+pub mod muscle;
 pub mod play;
 pub mod section_timing;
 pub mod sloth;
@@ -60,6 +62,11 @@ enum Command {
     Tree {
         #[command(subcommand)]
         action: tree::TreeCommand,
+    },
+    /// Muscle tools: the model beside the real biceps.
+    Muscle {
+        #[command(subcommand)]
+        action: muscle::MuscleCommand,
     },
     /// Sloth tools: the gait measured beside the study's.
     Sloth {
@@ -99,6 +106,7 @@ pub fn main() -> ExitCode {
         Command::Check(args) => args.check(),
         Command::Test(args) => args.test(),
         Command::Tree { action } => action.run(),
+        Command::Muscle { action } => action.run(),
         Command::Sloth { action } => action.run(),
         Command::Terrain { action } => action.run(),
         Command::Deform(args) => args.deform(),

@@ -5,14 +5,22 @@
 use super::carcass::Carcass;
 use super::model::Muscle;
 
+/// The nodes measured: nodes 1 to 9 of a model laid out as the measurements are, between
+/// its two end nodes.
+pub const MEASURED_NODES: usize = 9;
+
 /// Node radii of a real biceps (ultrasound, OpenArm 2.0) at 0, 30, 60 and 90 degrees of
 /// elbow flexion: the nine measured nodes, which are nodes 1 to 9 of the eleven-node config.
-pub const REAL_BICEPS_RADII: [(f64, [f64; 9]); 4] = [
+pub const REAL_BICEPS_RADII: [(f64, [f64; MEASURED_NODES]); 4] = [
     (0.0, [7.6, 18.2, 20.7, 21.2, 21.7, 24.3, 25.7, 20.7, 13.2]),
     (30.0, [16.2, 18.7, 22.5, 26.2, 27.5, 31.3, 28.7, 26.6, 20.8]),
     (60.0, [7.8, 16.2, 24.9, 32.4, 32.4, 32.0, 29.8, 22.0, 12.7]),
     (90.0, [9.5, 15.2, 23.4, 27.7, 35.2, 35.8, 36.6, 24.2, 16.7]),
 ];
+
+/// Growth below which a node is taken not to grow (config units): a ratio to it would say
+/// nothing.
+pub const LEAST_GROWTH: f64 = 1e-3;
 
 /// One row of Table 4.3.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,7 +31,7 @@ pub struct GrowthRow {
     pub real: f64,
     /// The model's radius at 90 degrees less the one at 0.
     pub model: f64,
-    /// `real / model`; `None` where the model does not grow.
+    /// `real / model`; `None` where the model grows less than [`LEAST_GROWTH`].
     pub ratio: Option<f64>,
 }
 
@@ -50,19 +58,24 @@ pub fn growth_table(model: &Muscle, carcass: &Carcass) -> Option<Vec<GrowthRow>>
         (0..9)
             .map(|i| {
                 let (real, grown) = (real_flexed[i] - real_straight[i], flexed[i + 1] - straight[i + 1]);
-                GrowthRow { node: i + 1, real, model: grown, ratio: (grown.abs() > 1e-9).then(|| real / grown) }
+                GrowthRow {
+                    node: i + 1,
+                    real,
+                    model: grown,
+                    ratio: (grown.abs() >= LEAST_GROWTH).then(|| real / grown),
+                }
             })
             .collect(),
     )
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The source's second configuration, after the real biceps, with the scene kind's
     /// default spacing bounds.
-    fn real_config() -> (Muscle, Carcass) {
+    pub(crate) fn real_config() -> (Muscle, Carcass) {
         let radii = vec![5.0, 7.6, 18.2, 20.7, 21.2, 21.7, 24.3, 25.7, 20.7, 13.2, 5.0];
         let mults = vec![0.0, 1.9, -3.0, 2.7, 5.5, 13.5, 11.5, 10.9, 3.5, 3.5, 0.0];
         let model = Muscle::new(radii, mults, 250.0, 0.5, 1.5).unwrap();

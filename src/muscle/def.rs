@@ -2,6 +2,8 @@
 //! from a file), its checks, and the kind that reads, builds, spawns and saves it.
 
 use super::carcass::Carcass;
+use super::comparison::MEASURED_NODES;
+use super::fit::{GrowthFit, fit_growth};
 use super::model::{self, Muscle};
 use crate::foundation::values::{Angles, Color, FileType, FolderFile, Point, checked_number};
 use crate::foundation::yaml::{FileError, locate_key, parse_yaml};
@@ -162,15 +164,29 @@ pub struct MuscleDef {
     /// Metres per config unit (default 0.004: a 250-unit muscle is 1 m long).
     #[serde(default = "default_scale")]
     pub scale: Scale,
+    /// Grows the muscle with multipliers fitted to the real biceps' radii at 0, 30, 60 and 90
+    /// degrees rather than `grow_mults` (see [`super::fit`]); the model must have the
+    /// measurements' eleven nodes. `grow_mults` is kept as written.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fit_growth: bool,
 }
 
 impl MuscleDef {
-    /// The model and carcass this definition describes, or why it describes none.
-    pub fn build(&self) -> Result<(Muscle, Carcass), model::ConfigError> {
+    /// The model and carcass this definition describes, with the growth fitted to the
+    /// measurements when it asks for that, or why it describes none.
+    pub fn build(&self) -> Result<BuiltMuscle, model::ConfigError> {
         let (Some(config), Some(arm)) = (&self.muscle_config, &self.carcass_config) else {
             return Err(model::ConfigError::Missing);
         };
-        Ok((config.model(self.min_part.0, self.max_part.0)?, arm.carcass()))
+        let (model, carcass) = (config.model(self.min_part.0, self.max_part.0)?, arm.carcass());
+        let fit = fit_growth(&model, &carcass);
+        if self.fit_growth && fit.is_none() {
+            return Err(match model.nodes() {
+                nodes if nodes == MEASURED_NODES + 2 => model::ConfigError::NoFitFrom,
+                nodes => model::ConfigError::NotMeasuredLayout(nodes),
+            });
+        }
+        Ok(BuiltMuscle { model, carcass, fit })
     }
 
     /// Takes the configurations from a referenced file's contents.
@@ -178,6 +194,17 @@ impl MuscleDef {
         self.muscle_config = Some(file.muscle_config);
         self.carcass_config = Some(file.carcass_config);
     }
+}
+
+/// A muscle as its definition describes it, before it is spawned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuiltMuscle {
+    /// The node model with its configured multipliers, at rest.
+    pub model: Muscle,
+    /// The arm.
+    pub carcass: Carcass,
+    /// Its growth fitted to the measurements, for a model laid out as they are.
+    pub fit: Option<GrowthFit>,
 }
 
 /// A file holding exactly the source program's configuration.

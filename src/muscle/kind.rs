@@ -1,9 +1,8 @@
 //! The `muscle` entity kind: how its entries are checked, built, spawned and saved, and what
 //! the app offers for its entities beside its plugin.
 
-use super::carcass::Carcass;
-use super::def::{ConfigFile, MuscleDef};
-use super::model::Muscle;
+use super::def::{BuiltMuscle, ConfigFile, MuscleDef};
+use super::model::ConfigError;
 use super::panel;
 use super::plugin::{self, MusclePlugin};
 use crate::foundation::keys::RegisterKeys;
@@ -21,7 +20,7 @@ pub struct MuscleKind;
 impl EntityKind for MuscleKind {
     const KEY: &'static str = "muscle";
     type Def = MuscleDef;
-    type Built = (Muscle, Carcass);
+    type Built = BuiltMuscle;
     type Plugin = MusclePlugin;
 
     /// A file whose top level is the source program's configuration (`muscle_config` and
@@ -57,10 +56,13 @@ impl EntityKind for MuscleKind {
 
     /// Builds the model; an error in an inline configuration is located at its
     /// `muscle_config` key (the nth inline muscle has the nth of the file).
-    fn build(def: &MuscleDef, cx: &BuildContext) -> Result<(Muscle, Carcass), FileError> {
+    fn build(def: &MuscleDef, cx: &BuildContext) -> Result<BuiltMuscle, FileError> {
         let entity = &cx.entity;
         def.build().map_err(|error| {
-            if def.file.is_some() {
+            if let ConfigError::NotMeasuredLayout(_) | ConfigError::NoFitFrom = error {
+                let nth = cx.earlier::<MuscleKind>().filter(|earlier| earlier.fit_growth).count();
+                entity.locate("fit_growth", nth, format!("{}: {error}", entity.field("fit_growth")))
+            } else if def.file.is_some() {
                 entity.whole_file(format!("entities[{}].muscle: {error}", entity.index))
             } else {
                 let nth = cx.earlier::<MuscleKind>().filter(|earlier| earlier.file.is_none()).count();
@@ -69,7 +71,7 @@ impl EntityKind for MuscleKind {
         })
     }
 
-    fn spawn(def: &MuscleDef, built: &(Muscle, Carcass), entity: &mut EntityWorldMut) {
+    fn spawn(def: &MuscleDef, built: &BuiltMuscle, entity: &mut EntityWorldMut) {
         plugin::spawn_muscle(entity, def, built.clone());
     }
 

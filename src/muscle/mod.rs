@@ -9,6 +9,7 @@
 //! | [`model`] | the node model: frusta-chain volume, exact volume-preserving length changes |
 //! | [`carcass`] | the arm: flexion from muscle length and back (law of cosines) |
 //! | [`comparison`] | the real biceps' measurements, the model's radii at the same flexions, the source's Table 4.3 |
+//! | [`fit`] | growth multipliers fitted to the real biceps in least squares, the volume still exact |
 //! | [`surface`] | the revolved surface with smooth profile normals |
 //! | [`panel`] | the window's muscle section: figures, node editor, model vs real plot, Table 4.3 |
 //!
@@ -23,12 +24,13 @@
 pub mod carcass;
 pub mod comparison;
 pub mod def;
+pub mod fit;
 pub mod kind;
 pub mod model;
 pub mod panel;
 pub mod plugin;
 pub mod surface;
 
-pub use def::{CarcassConfig, ConfigFile, MuscleConfig, MuscleDef};
+pub use def::{BuiltMuscle, CarcassConfig, ConfigFile, MuscleConfig, MuscleDef};
 pub use kind::MuscleKind;
 pub use plugin::{MuscleBody, MuscleParams, MusclePlugin, MuscleSystems, Placement};

@@ -71,6 +71,17 @@ pub enum ConfigError {
     /// The muscle has no configuration, inline or from a file.
     #[error("a muscle needs muscle_config and carcass_config, inline or from a `file`")]
     Missing,
+    /// Growth is to be fitted to the measurements, and the model is not laid out as they are.
+    #[error(
+        "fit_growth fits the real biceps' nine measured nodes between two end nodes: the model needs 11 nodes, found {0}"
+    )]
+    NotMeasuredLayout(usize),
+    /// Growth is to be fitted, and the configured multipliers cannot reach every flexion
+    /// measured to start from.
+    #[error(
+        "fit_growth starts from grow_mults, and with them the arm cannot reach all of 0, 30, 60 and 90 degrees of flexion"
+    )]
+    NoFitFrom,
     /// The bounds on the node spacing are not `0 < min_part <= 1 <= max_part`.
     #[error("min_part and max_part must satisfy 0 < min_part <= 1 <= max_part, found {0} and {1}")]
     BadBounds(f64, f64),
@@ -127,6 +138,11 @@ impl Muscle {
             return Err(ConfigError::BadBounds(min_part, max_part));
         }
         Ok(Self { radii: radii.clone(), rest_radii: radii, mults, rest_length: length, min_part, max_part, length })
+    }
+
+    /// The same muscle at rest with other growth multipliers, one per node.
+    pub fn with_mults(&self, mults: Vec<f64>) -> Result<Self, ConfigError> {
+        Self::new(self.rest_radii.clone(), mults, self.rest_length, self.min_part, self.max_part)
     }
 
     /// Number of nodes.

@@ -3,6 +3,7 @@
 //! Table 4.3 of their growth.
 
 use super::comparison::{REAL_BICEPS_RADII, growth_table, model_radii};
+use super::fit::fit_growth;
 use super::plugin::{MuscleBody, MuscleParams};
 use bevy::prelude::*;
 use bevy_egui::egui;
@@ -62,8 +63,27 @@ pub fn muscle_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
         ui.label("multiplier");
         edited |= ui.add(egui::DragValue::new(&mut mult).speed(0.05)).changed();
     });
-    if edited && let Err(error) = body.model.edit_node(node, radius, mult) {
-        body.message = Some(error.to_string());
+    if edited {
+        match body.model.edit_node(node, radius, mult) {
+            // The edited multipliers are the ones a fit starts from now.
+            Ok(()) => (body.fit, body.fitted) = (fit_growth(&body.model, &body.carcass), false),
+            Err(error) => body.message = Some(error.to_string()),
+        }
+    }
+    if let Some(fit) = &body.fit {
+        let mut fitted = body.fitted;
+        ui.checkbox(&mut fitted, "growth fitted to the real biceps")
+            .on_hover_text("multipliers chosen to bring the radii at 0, 30, 60 and 90 degrees nearest the measurements; the volume stays exact");
+        ui.label(format!(
+            "radii from the real: {:.2} rms with the configured multipliers, {:.2} fitted ({:.0} % of the gap closed)",
+            fit.rms_before,
+            fit.rms_after,
+            fit.gap_closed() * 100.0
+        ));
+        if fitted != body.fitted {
+            body.use_fit(fitted);
+            edited = true;
+        }
     }
     let curves = model_radii(&body.model, &body.carcass);
     let table = growth_table(&body.model, &body.carcass);

@@ -2,8 +2,9 @@
 //! fixed step, the write-back of its surface and rods, and its dump.
 
 use super::carcass::Carcass;
-use super::comparison::growth_table;
-use super::def::{MuscleDef, Scale};
+use super::comparison::{REAL_BICEPS_RADII, growth_table, model_radii};
+use super::def::{BuiltMuscle, MuscleDef, Scale};
+use super::fit::GrowthFit;
 use super::model::Muscle;
 use super::surface;
 use crate::foundation::dump::{DumpState, RegisterDump};
@@ -31,6 +32,24 @@ pub struct MuscleBody {
     applied: (f64, f64),
     /// Why the last requested change was refused or clamped.
     pub message: Option<String>,
+    /// Its growth fitted to the real biceps, for a model laid out as the measurements are.
+    pub fit: Option<GrowthFit>,
+    /// Whether the model grows with the fitted multipliers rather than the configured ones.
+    pub fitted: bool,
+}
+
+impl MuscleBody {
+    /// Grows the model with the fitted multipliers or the configured ones, at its current
+    /// flexion when it can keep it (else at rest); nothing changes without a fit.
+    pub fn use_fit(&mut self, fitted: bool) {
+        let Some(fit) = &self.fit else { return };
+        let mults = if fitted { &fit.mults } else { &fit.configured };
+        let length = self.model.length();
+        if let Ok(mut model) = self.model.with_mults(mults.clone()) {
+            self.message = model.set_length(length).err().map(|refusal| refusal.to_string());
+            (self.model, self.fitted) = (model, fitted);
+        }
+    }
 }
 
 /// The muscle's editable parameters.
@@ -77,8 +96,13 @@ struct MuscleSurface;
 struct Rod(u8);
 
 /// Brings `def` up to date with where the arm was moved, turned and scaled to, each kept within
-/// what a scene file holds.
+/// what a scene file holds, and with whether it grows with the fitted multipliers.
 pub(super) fn save_live(def: &mut MuscleDef, entity: EntityRef) {
+    if let Some(body) = entity.get::<MuscleBody>()
+        && body.fit.is_some()
+    {
+        def.fit_growth = body.fitted;
+    }
     let Some(placement) = entity.get::<Placement>() else { return };
     def.position = Point::nearest(placement.position);
     def.rotation_deg = Angles::nearest(placement.rotation_deg);
@@ -86,26 +110,35 @@ pub(super) fn save_live(def: &mut MuscleDef, entity: EntityRef) {
 }
 
 /// Spawns a muscle entity of `def`, whose model and carcass are `built`, and its drawn parts.
-pub(super) fn spawn_muscle(entity: &mut EntityWorldMut, def: &MuscleDef, (model, carcass): (Muscle, Carcass)) {
+pub(super) fn spawn_muscle(entity: &mut EntityWorldMut, def: &MuscleDef, built: BuiltMuscle) {
+    let BuiltMuscle { model, carcass, fit } = built;
+    let mut body = MuscleBody {
+        model,
+        carcass,
+        segments: def.segments.count(),
+        applied: (f64::NAN, f64::NAN),
+        message: None,
+        fit,
+        fitted: false,
+    };
+    if def.fit_growth {
+        body.use_fit(true);
+    }
+    let (model, carcass) = (&body.model, &body.carcass);
     let length = model.length();
     let flexion_deg = carcass.flexion_from_length(length).value.to_degrees();
     let color = srgb_channels(def.color.0);
     let cylinder = entity.world().resource::<PrimitiveMeshes>().get(Primitive::Cylinder).clone();
     let placement = Placement { position: def.position.0, rotation_deg: def.rotation_deg.0, scale: def.scale.0 };
-    entity
-        .insert((
-            placement.transform(),
-            placement,
-            MuscleParams { flexion_deg, length },
-            MuscleBody { model, carcass, segments: def.segments.count(), applied: (f64::NAN, f64::NAN), message: None },
-        ))
-        .with_children(|children| {
+    entity.insert((placement.transform(), placement, MuscleParams { flexion_deg, length }, body)).with_children(
+        |children| {
             children.spawn((MuscleSurface, RasterMesh::colored(Arc::new(MeshData::default()), color)));
             for index in 0..2 {
                 let rod = RasterMesh::colored(cylinder.clone(), Vec3::splat(0.85));
                 children.spawn((Rod(index), rod));
             }
-        });
+        },
+    );
 }
 
 /// Every system of the muscle kind, in whichever phase it runs: a handle for ordering other
@@ -286,6 +319,27 @@ impl DumpState for MuscleBody {
                 .map(|row| json!({"node": row.node, "real": row.real, "model": row.model, "ratio": row.ratio}))
                 .collect();
             out.insert("growth_table".into(), Value::Array(rows));
+        }
+        // Tables 4.1 and 4.2: the real radii of the measured nodes and the model's radii of
+        // every node (null where the arm cannot reach the flexion), at each flexion measured.
+        let radius_table: Vec<Value> = REAL_BICEPS_RADII
+            .iter()
+            .zip(model_radii(model, &self.carcass))
+            .map(|((flexion, real), radii)| json!({"flexion_deg": flexion, "real": real, "model": radii}))
+            .collect();
+        out.insert("radius_table".into(), Value::Array(radius_table));
+        if let Some(fit) = &self.fit {
+            out.insert(
+                "growth_fit".into(),
+                json!({
+                    "fitted": self.fitted,
+                    "configured_mults": fit.configured,
+                    "fitted_mults": fit.mults,
+                    "rms_configured": fit.rms_before,
+                    "rms_fitted": fit.rms_after,
+                    "gap_closed": fit.gap_closed(),
+                }),
+            );
         }
     }
 }

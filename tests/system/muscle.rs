@@ -87,3 +87,66 @@ fn the_real_biceps_scene_dumps_the_sources_growth_table() {
     let first = run("scenes/biceps.yaml", 1, None, SMALL);
     assert!(entity(&first.dump, "biceps").get("growth_table").is_none());
 }
+
+#[test]
+fn growth_fitted_to_the_real_biceps_keeps_the_volume_is_saved_and_asks_for_the_measured_layout() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("fitted.yaml");
+    let text = std::fs::read_to_string(path("scenes/biceps_real.yaml")).unwrap();
+    std::fs::write(&scene, format!("{text}      fit_growth: true\n")).unwrap();
+    let flex = "- { at: 0.0, set: { biceps.flexion_deg: 90 } }\n";
+    let output = run(scene.to_str().unwrap(), 5, Some(flex), SMALL);
+    let muscle = entity(&output.dump, "biceps");
+    let fit = &muscle["growth_fit"];
+    assert_eq!(fit["fitted"], true, "{fit}");
+    let numbers = |value: &serde_json::Value| -> Vec<f64> {
+        value.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+    };
+    let configured = numbers(&fit["configured_mults"]);
+    assert_eq!(configured, [0.0, 1.9, -3.0, 2.7, 5.5, 13.5, 11.5, 10.9, 3.5, 3.5, 0.0], "the scene's own");
+    let (before, after) = (fit["rms_configured"].as_f64().unwrap(), fit["rms_fitted"].as_f64().unwrap());
+    assert!(after < before && (fit["gap_closed"].as_f64().unwrap() - (1.0 - after / before)).abs() < 1e-12);
+    // The model grows with the fitted multipliers: every radius moves by its multiplier times
+    // one root...
+    let mults = numbers(&fit["fitted_mults"]);
+    let rest = [5.0, 7.6, 18.2, 20.7, 21.2, 21.7, 24.3, 25.7, 20.7, 13.2, 5.0];
+    let radii = numbers(&muscle["radii"]);
+    let root = (radii[5] - rest[5]) / mults[5];
+    for ((radius, rest), mult) in radii.iter().zip(rest).zip(&mults) {
+        assert!((radius - (rest + mult * root)).abs() < 1e-9, "{radii:?} from {mults:?}");
+    }
+    // ...and keeps the volume.
+    let spacing = muscle["node_spacing"].as_f64().unwrap();
+    let volume: f64 = radii.windows(2).map(|w| (w[0] * w[0] + w[0] * w[1] + w[1] * w[1]) / 3.0).sum::<f64>()
+        * std::f64::consts::PI
+        * spacing;
+    let rest_volume = muscle["rest_volume"].as_f64().unwrap();
+    assert!(((volume - rest_volume) / rest_volume).abs() < 1e-12);
+    // Tables 4.1 and 4.2 in the dump: the measurements, and the model's radii at 90 degrees
+    // are the radii it has there.
+    let table = muscle["radius_table"].as_array().unwrap();
+    assert_eq!(table.len(), 4);
+    assert_eq!(numbers(&table[2]["real"]), [7.8, 16.2, 24.9, 32.4, 32.4, 32.0, 29.8, 22.0, 12.7]);
+    for (model, radius) in numbers(&table[3]["model"]).iter().zip(&radii) {
+        assert!((model - radius).abs() < 1e-9);
+    }
+
+    // Saved, the option stays and grow_mults stays as written.
+    let mut app = small_app(&scene);
+    canopy::scene::save_live_scene(app.world_mut()).unwrap();
+    let saved = std::fs::read_to_string(&scene).unwrap();
+    assert!(saved.contains("fit_growth: true"), "{saved}");
+    let saved: serde_yaml::Value = serde_yaml::from_str(&saved).unwrap();
+    let written: Vec<f64> =
+        serde_yaml::from_value(saved["entities"][0]["muscle"]["muscle_config"]["grow_mults"].clone()).unwrap();
+    assert_eq!(written, configured, "grow_mults stays as written");
+
+    // Ten nodes are not the measurements' layout: an error at the option.
+    let first = folder.path().join("first.yaml");
+    let text = std::fs::read_to_string(path("scenes/biceps.yaml")).unwrap();
+    std::fs::write(&first, format!("{text}      fit_growth: true\n")).unwrap();
+    let error = canopy::app::entity_kinds().load(&first).err().expect("a ten-node model cannot be fitted");
+    let lines = text.lines().count() + 1;
+    assert_eq!(error.location.map(|(line, _)| line), Some(lines), "{error}");
+    assert!(error.message.contains("fit_growth") && error.message.contains("found 10"), "{error}");
+}
