@@ -974,3 +974,26 @@ fn muscle_table_prints_the_sources_tables_and_the_fitted_growth() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr(&output).contains("the scene has no muscle"), "{}", stderr(&output));
 }
+
+#[test]
+fn the_figures_timeline_saves_the_biceps_at_four_flexions() {
+    let folder = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let output = Command::new(env!("CARGO_BIN_EXE_canopy"))
+        .current_dir(folder.path())
+        .args(["run", "--seconds", "2", "--size", "96x72", "--input"])
+        .arg(root.join("timelines/biceps_figures.yaml"))
+        .arg(root.join("scenes/biceps_real.yaml"))
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr(&output));
+    let shots: Vec<Vec<u8>> = (1..=4)
+        .map(|n| {
+            image::open(folder.path().join(format!("screenshots/canopy-{n:04}.png"))).unwrap().to_rgba8().into_raw()
+        })
+        .collect();
+    // Each flexion is a different picture: the forearm turns up.
+    for pair in shots.windows(2) {
+        assert_ne!(pair[0], pair[1]);
+    }
+}
