@@ -110,15 +110,15 @@ pub fn run(
     Ok(Report { vertices, triangles, mesh: read, shrink: shrunk.report, time_ms })
 }
 
-/// The method named on the command line: `edge`, `edge-sum` or `area`, with `variant`
-/// `projection` or `source` for the last two.
+/// The method named on the command line: `edge`, `edge-sum` or `area`, with `variant` one of
+/// [`Variant`]'s names for the last two.
 pub fn method(name: &str, variant: &str) -> Result<Method, BatchError> {
-    let variant = match variant {
-        "projection" => Variant::Projection,
-        "source" => Variant::Source,
-        other => {
-            return Err(BatchError::Settings(format!("--variant: expected projection or source, found `{other}`")));
-        }
+    let Some(variant) = Variant::ALL.into_iter().find(|known| known.name() == variant) else {
+        let names: Vec<&str> = Variant::ALL.iter().map(|known| known.name()).collect();
+        return Err(BatchError::Settings(format!(
+            "--variant: expected one of {}, found `{variant}`",
+            names.join(", ")
+        )));
     };
     match name {
         "edge" => Ok(Method::EdgeLengths),

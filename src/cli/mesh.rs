@@ -56,8 +56,9 @@ pub struct DeformArgs {
     /// The deformer: edge (a length constraint per edge), edge-sum or area.
     #[arg(long, default_value = "edge")]
     method: String,
-    /// For edge-sum and area: projection (the constraint's projection) or source (the
-    /// source's step).
+    /// For edge-sum and area: projection (the constraint's projection), source (the
+    /// source's step), or a step rule of the source's theory: constant, decreasing, steepest
+    /// or coordinate.
     #[arg(long, default_value = "projection")]
     variant: String,
     /// The coefficient, in (0, 1] (below 1 for area).

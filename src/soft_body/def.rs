@@ -7,7 +7,7 @@
 //!     # sample: { shape: torso, size: 80 }
 //!     position: [0, 0.7, 0]
 //!     method: area                  # edge_lengths, edge_sum or area
-//!     variant: projection           # or source, for edge_sum and area
+//!     variant: projection           # or source, constant, decreasing, steepest, coordinate
 //!     k: 0.9
 //! ```
 

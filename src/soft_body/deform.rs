@@ -4,7 +4,10 @@
 //!
 //! - [`Method::EdgeLengths`]: every edge its own length constraint, `d_e = k |p1 - p2|`,
 //!   projected in turn as in position-based dynamics (Mueller et al. 2006); the error is the
-//!   sum of the shifts' lengths in an iteration.
+//!   sum of the shifts' lengths in an iteration. With vertices fixed the constraints cannot
+//!   all be met and the error tends to a bound above zero: it stops when the error has
+//!   settled ([`Stop::Settled`]). Over-relaxing the projections does not help: it settles
+//!   higher, or never, and folds triangles.
 //! - [`Method::EdgeSum`]: one constraint on the sum of edge lengths, `C = sum |e| - k sum |e0|`,
 //!   whose gradient at a vertex is the sum of the unit vectors from its neighbours. The
 //!   projection of that one constraint moves vertex `i` by `-w_i C n_i / sum_j w_j |n_j|^2`;
@@ -22,8 +25,11 @@
 //! Neither global constraint is linear: their projections search back along the step (halving
 //! it while `|C|` does not fall), where the source's edge-sum step goes as it is.
 
-use crate::spatial::surface::{Surface, triangle_cross};
+mod descent;
+
+use crate::spatial::surface::Surface;
 use bevy::math::Vec3;
+use descent::{Area, Descent, EdgeSum, GlobalConstraint, Rule};
 
 /// Which deformer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -37,15 +43,71 @@ pub enum Method {
     Area(Variant),
 }
 
-/// How a single global constraint is stepped.
+/// How a single global constraint is stepped: by its projection (with a halving line
+/// search), by the source program's own step, or by one of the step rules of the source's
+/// theory (see [`descent`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, bevy::reflect::Reflect)]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
-    /// The projection of the constraint.
+    /// The projection of the constraint, its step halved while `|C|` does not fall.
     Projection,
     /// The source's step: for the edge sum, each vertex by `C` over its neighbour count along
     /// the gradient; for the area, every edge's ends drawn together along it.
     Source,
+    /// Descent on `C^2 / 2` by a constant step.
+    Constant,
+    /// Descent by a step divided by a factor whenever it does not lower `|C|`.
+    Decreasing,
+    /// Steepest descent: the best step along the gradient, by line search.
+    Steepest,
+    /// Descent coordinate by coordinate.
+    Coordinate,
+}
+
+impl Variant {
+    /// Every variant, in the panel's order.
+    pub const ALL: [Variant; 6] = [
+        Variant::Projection,
+        Variant::Source,
+        Variant::Constant,
+        Variant::Decreasing,
+        Variant::Steepest,
+        Variant::Coordinate,
+    ];
+
+    /// Its name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Projection => "projection",
+            Variant::Source => "source",
+            Variant::Constant => "constant",
+            Variant::Decreasing => "decreasing",
+            Variant::Steepest => "steepest",
+            Variant::Coordinate => "coordinate",
+        }
+    }
+
+    /// Its name in the panel.
+    pub fn label(self) -> &'static str {
+        match self {
+            Variant::Source => "source's step",
+            Variant::Decreasing => "decreasing step",
+            Variant::Steepest => "steepest descent",
+            Variant::Coordinate => "by coordinate",
+            other => other.name(),
+        }
+    }
+
+    /// The step rule of the source's theory it is, if it is one.
+    fn rule(self) -> Option<Rule> {
+        match self {
+            Variant::Projection | Variant::Source => None,
+            Variant::Constant => Some(Rule::Constant),
+            Variant::Decreasing => Some(Rule::Decreasing),
+            Variant::Steepest => Some(Rule::Steepest),
+            Variant::Coordinate => Some(Rule::Coordinate),
+        }
+    }
 }
 
 /// How far to go.
@@ -69,6 +131,10 @@ pub enum Stop {
     Converged,
     /// The error stopped falling.
     Stalled,
+    /// The per-edge constraints' error, which the fixed vertices keep above zero (they
+    /// cannot all be met), fell by less than [`SETTLED`] of itself over the last iterations:
+    /// it has come near the bound they put on it.
+    Settled,
     /// The iteration cap was reached.
     Cap,
 }
@@ -122,15 +188,23 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
     let mut stepper: Box<dyn Step + '_> = match method {
         Method::EdgeLengths => Box::new(edge_lengths(surface, settings.k)),
         Method::EdgeSum(variant) => Box::new(edge_sum(surface, settings.k, variant)),
-        Method::Area(Variant::Projection) => Box::new(area(surface, settings.k)),
         Method::Area(Variant::Source) => Box::new(area_by_edges(surface, settings.k, settings.eps)),
+        Method::Area(variant) => Box::new(area(surface, settings.k, variant)),
     };
     // The positions with the least error so far: a solver that stalls, or whose steps run
     // away (the source's edge-sum step can), returns those.
     let (mut best, mut best_error, mut since_best) = (positions.clone(), f64::INFINITY, 0);
     let patience = PATIENCE.max((surface.positions.len() as f64).sqrt() as u32);
+    // The per-edge error over the last `patience` iterations, to tell when it has settled.
+    let settles = method == Method::EdgeLengths;
+    let mut recent = std::collections::VecDeque::with_capacity(patience as usize + 1);
     for iteration in 1..=settings.max_iterations {
         let error = stepper(&mut positions);
+        if settles {
+            recent.push_back(error);
+        }
+        let settled = recent.len() > patience as usize
+            && recent.pop_front().is_some_and(|earlier| earlier - error < SETTLED * error);
         let finite = error.is_finite() && positions.iter().all(|p| p.is_finite());
         if finite && error < best_error {
             best.clone_from(&positions);
@@ -142,6 +216,8 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
             Some(Stop::Converged)
         } else if !finite || since_best >= patience {
             Some(Stop::Stalled)
+        } else if settled {
+            Some(Stop::Settled)
         } else {
             None
         };
@@ -157,6 +233,11 @@ pub fn deform(surface: &Surface, method: Method, settings: Settings) -> Deformed
 /// while as corrections cross the surface, which takes about as many iterations as it is edges
 /// across (the square root of its vertex count, when that is more).
 const PATIENCE: u32 = 32;
+
+/// The share of itself by which the per-edge error must fall over `patience` iterations not to
+/// have settled. On the belly patch of 33 x 33 vertices at k = 0.97 that is after 2,876
+/// iterations, 8 % above the error it tends to (docs/performance.md has the figures).
+pub const SETTLED: f64 = 1e-3;
 
 /// The inverse masses: 1 for a vertex that may move, 0 for a fixed one.
 fn weights(surface: &Surface) -> Vec<f32> {
@@ -214,34 +295,25 @@ fn edge_lengths(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 
     }
 }
 
-/// The gradient of the sum of edge lengths at each vertex: the sum of the unit vectors from
-/// its neighbours to it.
-fn edge_sum_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
-    (0..positions.len())
-        .map(|v| {
-            surface.neighbours(v).iter().map(|&n| (positions[v] - positions[n as usize]).normalize_or_zero()).sum()
-        })
-        .collect()
-}
-
 /// One step of the edge-sum constraint; returns `|C|` over its target.
 fn edge_sum(surface: &Surface, k: f32, variant: Variant) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
-    let target = f64::from(k) * surface.edge_sum(&surface.positions);
-    move |positions| {
-        let gradient = edge_sum_gradient(surface, positions);
-        match variant {
-            Variant::Projection => project(positions, &gradient, &w, target, |p| surface.edge_sum(p)),
-            Variant::Source => {
-                let c = surface.edge_sum(positions) - target;
-                for (v, p) in positions.iter_mut().enumerate() {
-                    if w[v] > 0.0 {
-                        *p -= gradient[v] * (c / surface.neighbours(v).len().max(1) as f64) as f32;
-                    }
+    let constraint = EdgeSum(surface);
+    let target = f64::from(k) * constraint.measure(&surface.positions);
+    let mut descent = variant.rule().map(Descent::new);
+    move |positions| match (&mut descent, variant) {
+        (Some(descent), _) => descent.iterate(&constraint, positions, &w, target),
+        (None, Variant::Source) => {
+            let gradient = constraint.gradient(positions);
+            let c = constraint.measure(positions) - target;
+            for (v, p) in positions.iter_mut().enumerate() {
+                if w[v] > 0.0 {
+                    *p -= gradient[v] * (c / surface.neighbours(v).len().max(1) as f64) as f32;
                 }
-                relative(surface.edge_sum(positions) - target, target)
             }
+            relative(constraint.measure(positions) - target, target)
         }
+        (None, _) => project(positions, &constraint, &w, target),
     }
 }
 
@@ -253,17 +325,13 @@ fn relative(difference: f64, target: f64) -> f64 {
 /// Step halvings a projection's line search tries before it gives the step up.
 const HALVINGS: u32 = 30;
 
-/// Projects the constraint `measure(positions) = target`, of `gradient` (per vertex), with
-/// inverse masses `w`: every vertex moved by `-w_i C g_i / sum_j w_j |g_j|^2`, the step halved
-/// while the constraint's relative error does not fall, as the constraint is not linear.
-/// Returns that error at the positions kept.
-fn project(
-    positions: &mut Vec<Vec3>,
-    gradient: &[Vec3],
-    w: &[f32],
-    target: f64,
-    measure: impl Fn(&[Vec3]) -> f64,
-) -> f64 {
+/// Projects `constraint = target` with inverse masses `w`: every vertex moved by
+/// `-w_i C g_i / sum_j w_j |g_j|^2` (`g` the constraint's gradient), the step halved while the
+/// constraint's relative error does not fall, as the constraint is not linear. Returns that
+/// error at the positions kept.
+fn project(positions: &mut Vec<Vec3>, constraint: &impl GlobalConstraint, w: &[f32], target: f64) -> f64 {
+    let measure = |p: &[Vec3]| constraint.measure(p);
+    let gradient = constraint.gradient(positions);
     let c = measure(positions) - target;
     let before = relative(c, target);
     let norm: f64 = gradient.iter().zip(w).map(|(g, &w)| f64::from(w * g.length_squared())).sum();
@@ -323,28 +391,16 @@ fn area_by_edges(surface: &Surface, k: f32, eps: f64) -> impl FnMut(&mut Vec<Vec
     }
 }
 
-/// The gradient of the area at each vertex: over its triangles `1/2 n x (c - b)` for the
-/// corner `a` of the counter-clockwise triangle `a b c` with unit normal `n`.
-fn area_gradient(surface: &Surface, positions: &[Vec3]) -> Vec<Vec3> {
-    let mut gradient = vec![Vec3::ZERO; positions.len()];
-    for &t in &surface.triangles {
-        let n = triangle_cross(positions, t).normalize_or_zero();
-        for k in 0..3 {
-            let (a, b, c) = (t[k] as usize, t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
-            gradient[a] += n.cross(positions[c] - positions[b]) * 0.5;
-        }
-    }
-    gradient
-}
-
-/// One step of the area constraint, projected along the area's gradient; returns `|C|` over
-/// its target.
-fn area(surface: &Surface, k: f32) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
+/// One step of the area constraint along the area's gradient, projected or by a step rule;
+/// returns `|C|` over its target.
+fn area(surface: &Surface, k: f32, variant: Variant) -> impl FnMut(&mut Vec<Vec3>) -> f64 + '_ {
     let w = weights(surface);
-    let target = f64::from(k) * surface.area(&surface.positions);
-    move |positions| {
-        let gradient = area_gradient(surface, positions);
-        project(positions, &gradient, &w, target, |p| surface.area(p))
+    let constraint = Area::new(surface);
+    let target = f64::from(k) * constraint.measure(&surface.positions);
+    let mut descent = variant.rule().map(Descent::new);
+    move |positions| match &mut descent {
+        Some(descent) => descent.iterate(&constraint, positions, &w, target),
+        None => project(positions, &constraint, &w, target),
     }
 }
 

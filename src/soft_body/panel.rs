@@ -131,9 +131,10 @@ fn settings(ui: &mut egui::Ui, params: &mut ShrinkParams) {
         }
     });
     if params.method != Deformer::EdgeLengths {
-        ui.horizontal(|ui| {
-            ui.radio_value(&mut params.variant, Variant::Projection, "projection");
-            ui.radio_value(&mut params.variant, Variant::Source, "source's step");
+        ui.horizontal_wrapped(|ui| {
+            for variant in Variant::ALL {
+                ui.radio_value(&mut params.variant, variant, variant.label());
+            }
         });
     }
     // Values from the file or a timeline outside a slider's range stay as they are until the

@@ -2,7 +2,7 @@
 //! region, a deformer shrinks it, and every result is kept as a model of a collection, to be
 //! compared with the original and with each other, and saved.
 
-use super::deform::{Method, Settings, SettingsError, Stop, Variant, deform};
+use super::deform::{Method, Settings, SettingsError, Stop, deform};
 use super::region::{Mark, Region, RegionError, select, vertex_of};
 use crate::spatial::mesh_io::TriangleMesh;
 use crate::spatial::surface::{Facts, Surface};
@@ -110,14 +110,10 @@ fn region_on(original: &Surface, positions: &[Vec3], marks: &[Mark]) -> Result<R
 
 /// The name of a deformer as people read it: `edge lengths`, `area (source)`.
 pub fn method_name(method: Method) -> String {
-    let variant = |v: Variant| match v {
-        Variant::Projection => "projection",
-        Variant::Source => "source",
-    };
     match method {
         Method::EdgeLengths => "edge lengths".into(),
-        Method::EdgeSum(v) => format!("edge sum ({})", variant(v)),
-        Method::Area(v) => format!("area ({})", variant(v)),
+        Method::EdgeSum(v) => format!("edge sum ({})", v.name()),
+        Method::Area(v) => format!("area ({})", v.name()),
     }
 }
 

@@ -145,7 +145,7 @@ fn growth_fitted_to_the_real_biceps_keeps_the_volume_is_saved_and_asks_for_the_m
     let first = folder.path().join("first.yaml");
     let text = std::fs::read_to_string(path("scenes/biceps.yaml")).unwrap();
     std::fs::write(&first, format!("{text}      fit_growth: true\n")).unwrap();
-    let error = canopy::app::entity_kinds().load(&first).err().expect("a ten-node model cannot be fitted");
+    let Err(error) = canopy::app::entity_kinds().load(&first) else { panic!("a ten-node model cannot be fitted") };
     let lines = text.lines().count() + 1;
     assert_eq!(error.location.map(|(line, _)| line), Some(lines), "{error}");
     assert!(error.message.contains("fit_growth") && error.message.contains("found 10"), "{error}");
