@@ -26,6 +26,9 @@ pub enum BatchError {
     /// The region.
     #[error("--region: {0}")]
     Region(#[from] RegionError),
+    /// The points to measure between.
+    #[error("--measure: {0}")]
+    Measure(String),
     /// The settings.
     #[error("{0}")]
     Settings(String),
@@ -58,6 +61,16 @@ pub fn parse_marks(text: &str) -> Result<Vec<Mark>, BatchError> {
         .collect()
 }
 
+/// The two points of `text` to measure between, written as the marks of [`parse_marks`].
+pub fn parse_measure(text: &str) -> Result<[Mark; 2], BatchError> {
+    let marks = parse_marks(text).map_err(|error| match error {
+        BatchError::Marks(message) => BatchError::Measure(message),
+        other => other,
+    })?;
+    <[Mark; 2]>::try_from(marks)
+        .map_err(|marks| BatchError::Measure(format!("expected two points to measure between, found {}", marks.len())))
+}
+
 /// What a batch deformation did, as the command prints it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Report {
@@ -75,13 +88,14 @@ pub struct Report {
 }
 
 /// Deforms the region of the mesh at `input` outlined by `marks` with `method` and
-/// `settings`, writes the whole mesh to `output` (OBJ or PLY) and reports. Written in the
+/// `settings`, measuring between the two points of `measure` before and after, writes the whole mesh to `output` (OBJ or PLY) and reports. Written in the
 /// input's own format, the output is the input with only the moved vertices' positions (and
 /// their normals) changed: the same vertices in the same order, faces, texture coordinates,
 /// groups and materials.
 pub fn run(
     input: &Path,
     marks: &[Mark],
+    measure: Option<[Mark; 2]>,
     method: Method,
     settings: Settings,
     output: &Path,
@@ -94,8 +108,9 @@ pub fn run(
     let (mesh, read, source) = mesh_io::read_source(input).map_err(located(input))?;
     let movable = vec![true; mesh.positions.len()];
     let whole = Surface::new(mesh.positions, mesh.triangles, movable)?;
-    let shrunk = shrink(&whole, marks, method, settings).map_err(|error| match error {
+    let shrunk = shrink(&whole, marks, measure, method, settings).map_err(|error| match error {
         ShrinkError::Region(error) => BatchError::Region(error),
+        ShrinkError::Measure(error) => BatchError::Measure(error.to_string()),
         ShrinkError::Settings(error) => BatchError::Settings(format!("--k/--eps: {error}")),
     })?;
     let (vertices, triangles) = (whole.positions.len(), whole.triangles.len());
@@ -156,8 +171,16 @@ mod tests {
         };
         let marks = parse_marks(&[(6, 6), (18, 6), (18, 18), (6, 18)].map(corner).join(",")).unwrap();
         let settings = Settings { k: 0.95, eps: 1e-5, max_iterations: 2000 };
-        let report = run(&input, &marks, Method::Area(Variant::Projection), settings, &output).unwrap();
+        // Two landmarks either side of the region, measured across it.
+        let measure = parse_measure(&[(2, 12), (22, 12)].map(corner).join(",")).unwrap();
+        let report = run(&input, &marks, Some(measure), Method::Area(Variant::Projection), settings, &output).unwrap();
         let shrink = &report.shrink;
+        let measured = shrink.measure.unwrap();
+        // They do not move, and the way between them over the shrunk belly is shorter.
+        assert_eq!(measured.before.straight_m, measured.after.straight_m);
+        let (before, after) = (measured.before.along_m.unwrap(), measured.after.along_m.unwrap());
+        assert!(after < before && before > measured.before.straight_m, "{measured:?}");
+        assert!(parse_measure("1,2,3").unwrap_err().to_string().contains("two points"));
         assert_eq!((shrink.region_vertices, shrink.outline_vertices), (11 * 11, 48));
         assert!(shrink.facts.fixed_unchanged && (shrink.facts.area_ratio - 0.95).abs() < 1e-4, "{report:?}");
         let (written, _) = mesh_io::read(&output).unwrap();
@@ -194,7 +217,7 @@ mod tests {
         let deform = |method: Method, k: f32, name: &str| {
             let output = folder.path().join(name);
             let settings = Settings { k, eps: 1e-5, max_iterations: 2000 };
-            run(&input, &corners, method, settings, &output).unwrap();
+            run(&input, &corners, None, method, settings, &output).unwrap();
             std::fs::read_to_string(output).unwrap()
         };
         // Edges kept at their length (k = 1): the file back, byte for byte.
@@ -225,10 +248,10 @@ mod tests {
         let marks = parse_marks("0,1,2").unwrap();
         let settings = Settings { k: 0.9, eps: 1e-5, max_iterations: 10 };
         let out = folder.path().join("out.obj");
-        let error = run(&missing, &marks, Method::EdgeLengths, settings, &out).unwrap_err().to_string();
+        let error = run(&missing, &marks, None, Method::EdgeLengths, settings, &out).unwrap_err().to_string();
         assert!(error.contains("missing.obj"), "{error}");
         let k = Settings { k: 1.0, ..settings };
-        let error = run(&missing, &marks, Method::Area(Variant::Projection), k, &out).unwrap_err().to_string();
+        let error = run(&missing, &marks, None, Method::Area(Variant::Projection), k, &out).unwrap_err().to_string();
         assert!(error.contains("--k") && error.contains("below 1"), "{error}");
         assert!(method("bend", "projection").is_err() && method("area", "guess").is_err());
         assert_eq!(method("edge-sum", "source").unwrap(), Method::EdgeSum(Variant::Source));

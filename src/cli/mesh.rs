@@ -53,6 +53,10 @@ pub struct DeformArgs {
     /// an OBJ's numbered by first use in its faces), joined along the surface.
     #[arg(long, allow_hyphen_values = true)]
     region: String,
+    /// Two points to measure between before and after, along the surface and straight,
+    /// written as the outline's (`0.1:0.05:0,-0.1:0.05:0` or `12,40`).
+    #[arg(long, allow_hyphen_values = true)]
+    measure: Option<String>,
     /// The deformer: edge (a length constraint per edge), edge-sum or area.
     #[arg(long, default_value = "edge")]
     method: String,
@@ -113,9 +117,12 @@ impl DeformArgs {
             return refused;
         }
         let settings = Settings { k: self.k, eps: self.eps, max_iterations: self.max_iterations };
+        let measure = self.measure.as_deref().map(deform_batch::parse_measure).transpose();
         let result = deform_batch::method(&self.method, &self.variant)
-            .and_then(|method| Ok((method, deform_batch::parse_marks(&self.region)?)))
-            .and_then(|(method, marks)| deform_batch::run(&self.input, &marks, method, settings, &self.out));
+            .and_then(|method| Ok((method, deform_batch::parse_marks(&self.region)?, measure?)))
+            .and_then(|(method, marks, measure)| {
+                deform_batch::run(&self.input, &marks, measure, method, settings, &self.out)
+            });
         match result {
             Ok(report) => {
                 println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());

@@ -3,7 +3,7 @@
 //! each model's report, the comparison, and saving a model.
 
 use super::deform::{Deformer, Variant};
-use super::plugin::{Compare, ShrinkParams, SoftBody, SoftBodyAction, perform_on};
+use super::plugin::{Compare, ShrinkParams, SoftBody, SoftBodyAction, Tool, perform_on};
 use super::workbench::ShrinkReport;
 use crate::foundation::entity::SceneEntity;
 use bevy::prelude::*;
@@ -42,6 +42,7 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
             action = Some(SoftBodyAction::ClearMarks);
         }
     });
+    measure(ui, body, &mut action);
     ui.separator();
     settings(ui, &mut params);
     ui.horizontal(|ui| {
@@ -104,6 +105,34 @@ pub(super) fn soft_body_section(ui: &mut egui::Ui, world: &mut World, entity: En
     }
 }
 
+/// The measure tool: what a click does, and the two points' distances on the surface shown.
+fn measure(ui: &mut egui::Ui, body: &SoftBody, action: &mut Option<SoftBodyAction>) {
+    ui.horizontal(|ui| {
+        ui.label("a click");
+        for (tool, label) in [(Tool::Outline, "marks the outline"), (Tool::Measure, "measures")] {
+            if ui.radio(body.tool == tool, label).clicked() {
+                *action = Some(SoftBodyAction::UseTool(tool));
+            }
+        }
+    });
+    let distances = body.bench.distances(body.bench.shown());
+    let text = match (body.bench.measured().len(), distances) {
+        (_, Some(distances)) => format!(
+            "between the two points: {} along the surface, {:.1} mm straight",
+            distances.along_m.map_or("no way".to_string(), |m| format!("{:.1} mm", m * 1e3)),
+            distances.straight_m * 1e3
+        ),
+        (1, None) => "one point measured from: click the second".to_string(),
+        _ => "no points measured".to_string(),
+    };
+    ui.horizontal(|ui| {
+        ui.label(text);
+        if ui.add_enabled(!body.bench.measured().is_empty(), egui::Button::new("Clear")).clicked() {
+            *action = Some(SoftBodyAction::ClearMeasure);
+        }
+    });
+}
+
 /// The surface's counts and what reading its file found.
 fn figures(ui: &mut egui::Ui, body: &SoftBody) {
     let surface = body.bench.original();
@@ -164,7 +193,15 @@ fn report(ui: &mut egui::Ui, report: &ShrinkReport) {
             ("outline held", if facts.fixed_unchanged { "bit for bit" } else { "NO" }.to_string()),
             ("NaN", if facts.has_nan { "YES" } else { "none" }.to_string()),
         ];
-        for (label, value) in rows {
+        let measured = report.measure.map(|measured| {
+            let along = |m: Option<f64>| m.map_or("no way".to_string(), |m| format!("{:.1}", m * 1e3));
+            let (before, after) = (measured.before, measured.after);
+            [
+                ("along the surface", format!("{} -> {} mm", along(before.along_m), along(after.along_m))),
+                ("straight", format!("{:.1} -> {:.1} mm", before.straight_m * 1e3, after.straight_m * 1e3)),
+            ]
+        });
+        for (label, value) in rows.into_iter().chain(measured.into_iter().flatten()) {
             ui.label(label);
             ui.label(value);
             ui.end_row();

@@ -44,6 +44,17 @@ impl Compare {
         [(Compare::Alone, "alone"), (Compare::Overlay, "overlay"), (Compare::SideBySide, "side by side")];
 }
 
+/// What a click on the surface does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Tool {
+    /// Adds a mark to the region's outline.
+    #[default]
+    Outline,
+    /// Measures between two points: the first click, the second, then again from the first.
+    Measure,
+}
+
 /// The deformer, its settings and the comparison, as parameters (`torso.k`, ...).
 #[derive(Component, Reflect, Debug, Clone, PartialEq)]
 #[reflect(Component)]
@@ -98,6 +109,8 @@ pub struct SoftBody {
     pub message: Option<String>,
     /// A shrink is under way off the main thread.
     pub shrinking: bool,
+    /// What a click on the surface does.
+    pub tool: Tool,
     /// The triangles of a surface for picking, and which surface (0 the original).
     picking: (Arc<SurfaceBvh>, usize),
 }
@@ -114,6 +127,7 @@ impl SoftBody {
             file: built.file.clone(),
             message: None,
             shrinking: false,
+            tool: Tool::Outline,
             picking,
         }
     }
@@ -136,6 +150,10 @@ impl SoftBody {
                 self.bench.undo_mark();
             }
             SoftBodyAction::ClearMarks => self.bench.clear_marks(),
+            SoftBodyAction::Measure(point) => self.measure_at(Mark::Point(point.0)),
+            SoftBodyAction::MeasureVertex(vertex) => self.measure_at(Mark::Vertex(vertex)),
+            SoftBodyAction::ClearMeasure => self.bench.clear_measure(),
+            SoftBodyAction::UseTool(tool) => self.tool = tool,
             SoftBodyAction::Apply if self.shrinking => {
                 self.message = Some("not applied: a shrink is under way".into());
             }
@@ -159,6 +177,13 @@ impl SoftBody {
         }
         self.follow_shown();
         job
+    }
+
+    /// Measures from or to `mark`; a point off the surface is refused with why.
+    fn measure_at(&mut self, mark: Mark) {
+        if let Err(error) = self.bench.measure_at(mark) {
+            self.message = Some(format!("not measured: {error}"));
+        }
     }
 
     /// The picking hierarchy and the region again for the surface shown, after the marks or
@@ -229,6 +254,7 @@ impl SoftBody {
 /// - { at: 0.2, set: { torso.method: edge_sum, torso.k: 0.85 } }
 /// - { at: 0.3, act: { torso: apply } }
 /// - { at: 0.4, act: { torso: { show: 0 } } }
+/// - { at: 0.5, act: { torso: [{ measure_vertex: 1203 }, { measure_vertex: 1250 }] } }
 /// ```
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
@@ -241,6 +267,15 @@ pub enum SoftBodyAction {
     UndoMark,
     /// Takes back every mark.
     ClearMarks,
+    /// Measures from or to a point on the surface, metres in the body's own coordinates: the
+    /// first point, the second, then again from the first.
+    Measure(Point),
+    /// Measures from or to a vertex, by its index in the surface.
+    MeasureVertex(u32),
+    /// Takes back the measured points.
+    ClearMeasure,
+    /// Chooses what a click on the surface does.
+    UseTool(Tool),
     /// Shrinks the marked region of the surface shown into a new model of the collection.
     Apply,
     /// Shows the original (0) or the collection's `n`-th model.
@@ -343,6 +378,11 @@ impl DumpState for SoftBody {
             .collect();
         out.insert("models".into(), json!(models));
         out.insert("shown".into(), json!(self.bench.shown()));
+        let shown = self.bench.shown();
+        out.insert(
+            "measure".into(),
+            json!({ "vertices": self.bench.measured(), "distances": self.bench.distances(shown) }),
+        );
         out.insert("message".into(), json!(self.message));
         out.insert("shrinking".into(), json!(self.shrinking));
     }
@@ -351,6 +391,10 @@ impl DumpState for SoftBody {
 /// Marks the child entity drawing the marks.
 #[derive(Component)]
 struct Markers;
+
+/// Marks the child entity drawing the measured points.
+#[derive(Component)]
+struct MeasureMarkers;
 
 /// Marks the child entity drawing the original beside the model.
 #[derive(Component)]
@@ -376,6 +420,7 @@ pub(super) fn spawn_soft_body(entity: &mut EntityWorldMut, def: &SoftBodyDef, bu
         ))
         .with_children(|children| {
             children.spawn((Markers, RasterMesh::colored(Arc::default(), Vec3::new(0.9, 0.1, 0.1))));
+            children.spawn((MeasureMarkers, RasterMesh::colored(Arc::default(), Vec3::new(0.1, 0.35, 0.95))));
             children.spawn((OriginalBeside, Transform::IDENTITY, RasterMesh::colored(Arc::default(), color)));
         });
 }
@@ -429,7 +474,8 @@ impl Plugin for SoftBodyPlugin {
     }
 }
 
-/// Marks the vertex nearest a click that picked a soft body, and selects the body.
+/// Marks (or measures from) the vertex nearest a click that picked a soft body, and selects
+/// the body.
 fn mark_clicked_points(
     mut picks: MessageReader<Picked>,
     mut bodies: Query<(&mut SoftBody, &ShrinkParams, &SceneEntity)>,
@@ -440,8 +486,12 @@ fn mark_clicked_points(
         else {
             continue;
         };
-        // A mark starts no shrink.
-        let _ = body.perform(SoftBodyAction::MarkVertex(vertex), params);
+        let action = match body.tool {
+            Tool::Outline => SoftBodyAction::MarkVertex(vertex),
+            Tool::Measure => SoftBodyAction::MeasureVertex(vertex),
+        };
+        // A mark or a measure starts no shrink.
+        let _ = body.perform(action, params);
         selections.write(SelectEntity(scene.name.clone()));
     }
 }
@@ -491,8 +541,8 @@ fn act_on_keys(
 type Parts<'w, 's> = Query<
     'w,
     's,
-    (&'static mut RasterMesh, &'static mut Transform, Has<Markers>),
-    (Or<(With<Markers>, With<OriginalBeside>)>, Without<SoftBody>),
+    (&'static mut RasterMesh, &'static mut Transform, Has<Markers>, Has<MeasureMarkers>),
+    (Or<(With<Markers>, With<MeasureMarkers>, With<OriginalBeside>)>, Without<SoftBody>),
 >;
 
 /// Soft bodies whose state or parameters changed, with their drawn parts.
@@ -500,11 +550,17 @@ type ChangedBodies<'w, 's> = Query<
     'w,
     's,
     (&'static SoftBody, &'static ShrinkParams, &'static mut RasterMesh, &'static Children),
-    (Or<(Changed<SoftBody>, Changed<ShrinkParams>)>, Without<Markers>, Without<OriginalBeside>),
+    (
+        Or<(Changed<SoftBody>, Changed<ShrinkParams>)>,
+        Without<Markers>,
+        Without<MeasureMarkers>,
+        Without<OriginalBeside>,
+    ),
 >;
 
 /// Meshes soft bodies whose surface, marks or comparison changed: the surface shown (its
-/// region tinted, or its shift from the original), the marks as balls, the original beside.
+/// region tinted, or its shift from the original), the marks and the measured points as
+/// balls, the original beside.
 fn write_back_soft_bodies(mut bodies: ChangedBodies, mut parts: Parts) {
     for (body, params, mut raster, children) in &mut bodies {
         let bench = &body.bench;
@@ -518,10 +574,14 @@ fn write_back_soft_bodies(mut bodies: ChangedBodies, mut parts: Parts) {
         raster.mesh = Arc::new(surface_mesh(shown, triangles, tints));
         let (low, high) = bench.original().bounds();
         let marks: Vec<Vec3> = bench.marks().iter().filter_map(|&mark| bench.mark_position(mark)).collect();
+        let measured: Vec<Vec3> = bench.measured().iter().filter_map(|&v| shown.get(v as usize).copied()).collect();
+        let ball = MARKER_SHARE * (high - low).length();
         for &child in children {
-            let Ok((mut part, mut transform, markers)) = parts.get_mut(child) else { continue };
+            let Ok((mut part, mut transform, markers, measure_markers)) = parts.get_mut(child) else { continue };
             if markers {
-                part.mesh = Arc::new(marker_mesh(&marks, MARKER_SHARE * (high - low).length()));
+                part.mesh = Arc::new(marker_mesh(&marks, ball));
+            } else if measure_markers {
+                part.mesh = Arc::new(marker_mesh(&measured, ball));
             } else if params.compare == Compare::SideBySide {
                 // The original to the model's left, a fifth of its width apart. It never
                 // changes: it is meshed when it is first shown, not with every mark.

@@ -3,6 +3,7 @@
 //! compared with the original and with each other, and saved.
 
 use super::deform::{Method, Settings, SettingsError, Stop, deform};
+use super::measure::{Distances, Measured};
 use super::region::{Mark, Region, RegionError, select, vertex_of};
 use crate::spatial::mesh_io::TriangleMesh;
 use crate::spatial::surface::{Facts, Surface};
@@ -37,6 +38,9 @@ pub struct ShrinkReport {
     pub stop: Stop,
     /// The facts of the region before and after.
     pub facts: Facts,
+    /// The measured points' distances before and after, when two were measured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measure: Option<Measured>,
     /// Wall-clock milliseconds the deformer took (not part of a deterministic dump).
     #[serde(skip)]
     pub time_ms: f64,
@@ -51,6 +55,9 @@ pub enum ShrinkError {
     /// The marks outline no region.
     #[error(transparent)]
     Region(#[from] RegionError),
+    /// A point to measure between is not on the surface.
+    #[error("measuring: {0}")]
+    Measure(RegionError),
 }
 
 /// A whole surface with its region shrunk.
@@ -62,16 +69,41 @@ pub struct Shrunk {
     pub report: ShrinkReport,
 }
 
-/// Shrinks the region of `whole` outlined by `marks` with `method` and `settings`.
-pub fn shrink(whole: &Surface, marks: &[Mark], method: Method, settings: Settings) -> Result<Shrunk, ShrinkError> {
+/// Shrinks the region of `whole` outlined by `marks` with `method` and `settings`, measuring
+/// the distances between the two points of `measure`, if given, before and after.
+pub fn shrink(
+    whole: &Surface,
+    marks: &[Mark],
+    measure: Option<[Mark; 2]>,
+    method: Method,
+    settings: Settings,
+) -> Result<Shrunk, ShrinkError> {
     settings.check(method)?;
     let region = region_on(whole, &whole.positions, marks)?;
-    Ok(shrink_region(&region, &whole.positions, method, settings))
+    let measure = measure
+        .map(|points| measured_vertices(whole, &whole.positions, points))
+        .transpose()
+        .map_err(ShrinkError::Measure)?;
+    Ok(shrink_region(&region, &whole.triangles, &whole.positions, measure, method, settings))
 }
 
-/// Shrinks `region` of a surface whose vertices are at `whole` with `method` and `settings`
-/// (checked).
-fn shrink_region(region: &Region, whole: &[Vec3], method: Method, settings: Settings) -> Shrunk {
+/// The vertices standing for two measured points on a model at `positions` of `original`.
+fn measured_vertices(original: &Surface, positions: &[Vec3], points: [Mark; 2]) -> Result<[u32; 2], RegionError> {
+    let [a, b] = points;
+    let vertex = |mark, index| vertex_of(positions, &original.triangles, mark, index, POINT_TOLERANCE_M);
+    Ok([vertex(a, 0)?, vertex(b, 1)?])
+}
+
+/// Shrinks `region` of a surface of `triangles` whose vertices are at `whole` with `method`
+/// and `settings` (checked), measuring between the vertices of `measure` before and after.
+fn shrink_region(
+    region: &Region,
+    triangles: &[[u32; 3]],
+    whole: &[Vec3],
+    measure: Option<[u32; 2]>,
+    method: Method,
+    settings: Settings,
+) -> Shrunk {
     let started = Instant::now();
     let done = deform(&region.surface, method, settings);
     let time_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -86,9 +118,12 @@ fn shrink_region(region: &Region, whole: &[Vec3], method: Method, settings: Sett
         error: done.error,
         stop: done.stop,
         facts: Facts::of(&region.surface, &done.positions, settings.k),
+        measure: None,
         time_ms,
     };
-    Shrunk { positions: region.put_back(whole, &done.positions), report }
+    let positions = region.put_back(whole, &done.positions);
+    let measure = measure.and_then(|vertices| Measured::of(whole, &positions, triangles, vertices));
+    Shrunk { report: ShrinkReport { measure, ..report }, positions }
 }
 
 /// The region `marks` outline on a model at `positions` of the surface `original`: the marks'
@@ -139,6 +174,7 @@ pub struct ShrinkJob {
     original: Surface,
     positions: Vec<Vec3>,
     marks: Vec<Mark>,
+    measure: Option<[u32; 2]>,
     method: Method,
     settings: Settings,
     base: usize,
@@ -148,7 +184,8 @@ impl ShrinkJob {
     /// Does the shrink.
     pub fn run(&self) -> Result<Shrunk, ShrinkError> {
         let region = region_on(&self.original, &self.positions, &self.marks)?;
-        Ok(shrink_region(&region, &self.positions, self.method, self.settings))
+        let triangles = &self.original.triangles;
+        Ok(shrink_region(&region, triangles, &self.positions, self.measure, self.method, self.settings))
     }
 }
 
@@ -160,6 +197,8 @@ pub struct Workbench {
     models: Vec<Model>,
     shown: usize,
     marks: Vec<Mark>,
+    /// Up to two vertices measured between.
+    measured: Vec<u32>,
 }
 
 impl Workbench {
@@ -169,7 +208,7 @@ impl Workbench {
         let movable = vec![true; original.positions.len()];
         let original = Surface::new(original.positions, original.triangles, movable)
             .expect("a valid surface stays valid with every vertex movable");
-        Self { original, models: Vec::new(), shown: 0, marks: Vec::new() }
+        Self { original, models: Vec::new(), shown: 0, marks: Vec::new(), measured: Vec::new() }
     }
 
     /// The original surface.
@@ -234,6 +273,40 @@ impl Workbench {
         self.marks.clear();
     }
 
+    /// Measures from or to a point: the vertex standing for it on the surface shown becomes
+    /// the first point, or the second; a third starts again. A point off the surface is
+    /// refused, with why.
+    pub fn measure_at(&mut self, mark: Mark) -> Result<(), RegionError> {
+        let (positions, triangles) = (self.shown_positions(), &self.original.triangles);
+        let vertex = vertex_of(positions, triangles, mark, self.measured.len() % 2, POINT_TOLERANCE_M)?;
+        if self.measured.len() == 2 {
+            self.measured.clear();
+        }
+        self.measured.push(vertex);
+        Ok(())
+    }
+
+    /// Takes back the measured points.
+    pub fn clear_measure(&mut self) {
+        self.measured.clear();
+    }
+
+    /// The measured vertices, none, one or two.
+    pub fn measured(&self) -> &[u32] {
+        &self.measured
+    }
+
+    /// The two measured vertices, once there are two.
+    fn measured_pair(&self) -> Option<[u32; 2]> {
+        self.measured.as_slice().try_into().ok()
+    }
+
+    /// The distances between the two measured vertices on surface `which` (0 the original),
+    /// once two are measured.
+    pub fn distances(&self, which: usize) -> Option<Distances> {
+        Distances::between(self.positions(which)?, &self.original.triangles, self.measured_pair()?)
+    }
+
     /// Where a mark lies on the surface shown: a vertex where that vertex is, a point where
     /// it was put; `None` for a vertex the surface does not have.
     pub fn mark_position(&self, mark: Mark) -> Option<Vec3> {
@@ -261,6 +334,7 @@ impl Workbench {
             original: self.original.clone(),
             positions: self.shown_positions().to_vec(),
             marks: self.marks.clone(),
+            measure: self.measured_pair(),
             method,
             settings,
             base: self.shown,

@@ -10,6 +10,7 @@
 //! | [`ground`] | [`GroundPatch`](ground::GroundPatch): a patch of a streamed ground, for what grows on it |
 //! | [`bvh`] | a bounding-volume hierarchy generic over its primitives: ray casts, nearest points, what lies within a ball |
 //! | [`segment`] | tapered segments (capsules with two radii): rays, nearest surface points |
+//! | [`geodesic`] | distances along a triangle surface, by fast marching |
 //! | [`surface`] | triangle surfaces: their edges, areas, volumes and facts |
 //! | [`surface_bvh`] | a surface's triangles in a hierarchy, for rays |
 //! | [`mesh_io`] | OBJ, PLY, STL and glTF files read into triangle meshes and written back |
@@ -23,6 +24,7 @@
 //! | `Update`, after input | [`SpatialSystems::Ground`] | streamed grounds bring their [`GroundPatch`](ground::GroundPatch)es in and out |
 
 pub mod bvh;
+pub mod geodesic;
 pub mod ground;
 pub mod mesh_io;
 pub mod pick;

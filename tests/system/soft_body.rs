@@ -325,3 +325,52 @@ fn a_body_read_from_a_gltf_file_is_saved_as_that_file_wherever_it_goes() {
     let (original, _) = canopy::spatial::mesh_io::read(&path("scenes/props/boulder.gltf")).unwrap();
     assert_eq!(read, original);
 }
+
+#[test]
+fn the_measure_tool_gives_two_clicked_points_distances_on_the_original_and_after_a_shrink() {
+    let mut app = small_app(&path("scenes/torso.yaml"));
+    let world = app.world_mut();
+    let click_at = clicker(world);
+    let (_, body) = torso(world);
+    let outline = belly_outline(&body);
+    let yaml = |text: &str| serde_yaml::from_str::<serde_yaml::Value>(text).unwrap();
+    act(world, "torso", &yaml("{ use_tool: measure }"), true).unwrap();
+    // Two opposite corners of the belly, clicked: measured, not marked.
+    let (a, b) = (outline[0], outline[2]);
+    for vertex in [a, b] {
+        world.write_message(click_at(body.bench.original().positions[vertex as usize]));
+    }
+    app.update();
+    let world = app.world_mut();
+    let (_, body) = torso(world);
+    assert!(body.bench.marks().is_empty());
+    assert_eq!(body.bench.measured(), [a, b]);
+    let original = body.bench.distances(0).unwrap();
+    let along = original.along_m.unwrap();
+    // Over the belly's curve the way is longer than the straight line, but not by a detour.
+    assert!(along > original.straight_m && along < original.straight_m * 1.3, "{original:?}");
+
+    // The belly outlined and shrunk: the corners hold, the way over it shortens.
+    let marks: Vec<String> = outline.iter().map(|v| format!("{{ mark_vertex: {v} }}")).collect();
+    act(world, "torso", &yaml(&format!("[{}]", marks.join(", "))), true).unwrap();
+    act(world, "torso", &yaml("apply"), true).unwrap();
+    for _ in 0..4 {
+        app.update();
+    }
+    let output = canopy::foundation::dump::dump_state(app.world_mut());
+    let dumped = entity(&output, "torso");
+    let report = &dumped["models"][0]["report"]["measure"];
+    assert_eq!(report["vertices"], serde_json::json!([a, b]));
+    let before = report["before"]["along_m"].as_f64().unwrap();
+    let after = report["after"]["along_m"].as_f64().unwrap();
+    assert!((before - along).abs() < 1e-12 && after < before, "{report}");
+    assert_eq!(report["before"]["straight_m"], report["after"]["straight_m"], "the outline holds");
+    // The dump measures on the surface shown, the model.
+    assert_eq!(dumped["measure"]["distances"]["along_m"].as_f64(), Some(after));
+    // A point off the surface is refused, with why, and the points measured stay.
+    let world = app.world_mut();
+    act(world, "torso", &yaml("{ measure: [5, 5, 5] }"), true).unwrap();
+    let (_, body) = torso(world);
+    assert!(body.message.as_deref().is_some_and(|m| m.starts_with("not measured:")), "{:?}", body.message);
+    assert_eq!(body.bench.measured(), [a, b]);
+}
