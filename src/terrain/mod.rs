@@ -10,6 +10,7 @@
 //! | [`heightmap`] | the grid of heights and the map algebra |
 //! | [`noise`] | Perlin noise and fBm: the reference formula and the fast row path |
 //! | [`recipe`] | the layered recipe of generated heights, as terrains and worlds hold it, and its checks |
+//! | [`recipe_editor`] | the whole recipe edited in the panel: size, seed, layers, generators, operations, weights, functions |
 //! | [`generate`] | the generators (fBm, diamond-square, hills) and a recipe's heights from them |
 //! | [`image_io`] | heightmaps as grayscale PNG and BMP files |
 //! | [`section`] | the visible section and its mesh, split by band |
@@ -34,6 +35,7 @@ pub mod noise;
 pub mod panel;
 pub mod plugin;
 pub mod recipe;
+pub mod recipe_editor;
 pub mod section;
 pub mod surfaces;
 

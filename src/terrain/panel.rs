@@ -5,6 +5,7 @@
 
 use super::bands::Band;
 use super::plugin::{TerrainBody, TerrainParams, save_heightmap};
+use super::recipe_editor::{GeneratorDraft, edit_recipe};
 use bevy::prelude::*;
 use bevy_egui::egui;
 
@@ -53,4 +54,30 @@ pub fn terrain_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
     if next_seed && let Some(mut params) = entity_mut.get_mut::<TerrainParams>() {
         params.noise.seed += 1.0;
     }
+    generator(ui, &mut entity_mut);
+}
+
+/// The generator's whole recipe, for a generated map: edits that pass the file's checks make
+/// the map again.
+fn generator(ui: &mut egui::Ui, entity_mut: &mut EntityWorldMut) {
+    let Some(body) = entity_mut.get::<TerrainBody>() else { return };
+    let Some(mut recipe) = body.recipe.clone() else { return };
+    recipe.seed = body.seed.map_or(recipe.seed, |seed| seed as i64);
+    let mut draft = match entity_mut.get::<GeneratorDraft>() {
+        // Kept while it follows the map's recipe or a map is being made; started again from
+        // a map made from another recipe.
+        Some(draft) if draft.based_on == recipe || body.remaking() => draft.clone(),
+        _ => GeneratorDraft { draft: recipe.clone(), based_on: recipe },
+    };
+    let changed = egui::CollapsingHeader::new("generator")
+        .show(ui, |ui| edit_recipe(ui, &mut draft.draft))
+        .body_returned
+        .unwrap_or(false);
+    if changed && let Some(mut body) = entity_mut.get_mut::<TerrainBody>() {
+        body.remake(draft.draft.clone());
+        if body.message.is_none() {
+            draft.based_on = draft.draft.clone();
+        }
+    }
+    entity_mut.insert(draft);
 }

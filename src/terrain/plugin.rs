@@ -219,7 +219,9 @@ pub(super) fn save_live(def: &mut TerrainDef, entity: EntityRef) {
     if body.regenerated
         && let Some(recipe) = &body.recipe
     {
+        def.height.size = Some(recipe.size);
         def.height.layers.clone_from(&recipe.layers);
+        def.height.apply.clone_from(&recipe.apply);
         def.height.seed = recipe.seed;
     }
 }
@@ -348,7 +350,7 @@ pub fn save_heightmap(map: &Heightmap) -> Option<PathBuf> {
 
 /// The recipe `params` asks for: `recipe` with its first Perlin layer's parameters and the
 /// seed replaced; `None` when they make no valid recipe (the message says why).
-fn edited_recipe(recipe: &Recipe, noise: &NoiseParams) -> Result<(Recipe, u64), String> {
+fn edited_recipe(recipe: &Recipe, noise: &NoiseParams) -> Result<Recipe, String> {
     let mut edited = recipe.clone();
     if let Some(layer) = edited.layers.iter_mut().find_map(|l| l.perlin.as_mut()) {
         *layer = PerlinLayer {
@@ -361,16 +363,50 @@ fn edited_recipe(recipe: &Recipe, noise: &NoiseParams) -> Result<(Recipe, u64), 
     if !(noise.seed.is_finite() && noise.seed >= 0.0 && noise.seed <= 9.0e15) {
         return Err(format!("seed: expected a whole number from 0 to 9e15, found {}", noise.seed));
     }
-    let seed = noise.seed.round() as u64;
-    edited.seed = seed as i64;
+    edited.seed = noise.seed.round() as i64;
     edited.check().map_err(|e| e.to_string())?;
-    Ok((edited, seed))
+    Ok(edited)
+}
+
+impl TerrainBody {
+    /// Makes the map again from `recipe` (its seed the one to use) off the main thread, after
+    /// the same checks as a scene file's; a recipe that fails them changes nothing, and the
+    /// message says why. A generated map only: an image's heights have no recipe to change.
+    pub fn remake(&mut self, recipe: Recipe) {
+        if self.recipe.is_none() {
+            self.message = Some("the heights come from an image: there is no generator to change".into());
+            return;
+        }
+        match recipe.check() {
+            Ok(()) if recipe.seed >= 0 => self.start(recipe),
+            Ok(()) => self.message = Some("seed: expected a seed of 0 or more to make the map with".into()),
+            Err(error) => self.message = Some(error.to_string()),
+        }
+    }
+
+    /// Whether a map is being made.
+    pub fn remaking(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// Starts generating `recipe` (checked, its seed not negative) on the async compute pool.
+    fn start(&mut self, recipe: Recipe) {
+        let (job, seed) = (recipe.clone(), recipe.seed as u64);
+        let task = AsyncComputeTaskPool::get().spawn(async move {
+            let started = Instant::now();
+            let map = job.generate(seed).map_err(|e| e.to_string());
+            (map, started.elapsed())
+        });
+        self.pending = Some(PendingMap { task, recipe, seed, frames_left: GENERATION_FRAMES });
+        self.message = None;
+    }
 }
 
 /// Starts making the map again when the generator's parameters changed, and takes a finished
-/// map in [`GENERATION_FRAMES`] frames after it was asked for.
-fn regenerate(mut terrains: Query<(&TerrainParams, &mut TerrainBody)>) {
-    for (params, mut body) in &mut terrains {
+/// map in [`GENERATION_FRAMES`] frames after it was asked for; the parameters then follow the
+/// recipe the map was made with (which the panel may have changed whole).
+fn regenerate(mut terrains: Query<(&mut TerrainParams, &mut TerrainBody)>) {
+    for (mut params, mut body) in &mut terrains {
         let body = &mut *body;
         if let Some(pending) = &mut body.pending {
             if pending.frames_left > 0 {
@@ -382,6 +418,10 @@ fn regenerate(mut terrains: Query<(&TerrainParams, &mut TerrainBody)>) {
             body.generation_time = time;
             match result {
                 Ok(map) => {
+                    body.generated = noise_params(Some(&pending.recipe), Some(pending.seed));
+                    if params.noise != body.generated {
+                        params.noise = body.generated;
+                    }
                     body.map = Arc::new(map);
                     body.recipe = Some(pending.recipe);
                     body.seed = Some(pending.seed);
@@ -398,15 +438,7 @@ fn regenerate(mut terrains: Query<(&TerrainParams, &mut TerrainBody)>) {
         }
         body.generated = params.noise;
         match edited_recipe(recipe, &params.noise) {
-            Ok((recipe, seed)) => {
-                let job = recipe.clone();
-                let task = AsyncComputeTaskPool::get().spawn(async move {
-                    let started = Instant::now();
-                    let map = job.generate(seed).map_err(|e| e.to_string());
-                    (map, started.elapsed())
-                });
-                body.pending = Some(PendingMap { task, recipe, seed, frames_left: GENERATION_FRAMES });
-            }
+            Ok(recipe) => body.start(recipe),
             Err(error) => body.message = Some(error),
         }
     }
@@ -499,7 +531,8 @@ mod tests {
             serde_yaml::from_str("{size: [16, 16], seed: 2, layers: [{hills: {count: 3}}, {perlin: {scale: 8}}]}")
                 .unwrap();
         let noise = NoiseParams { seed: 5.0, scale: 4.0, octaves: 3.2, lacunarity: 2.5, persistence: 0.4 };
-        let (edited, seed) = edited_recipe(&recipe, &noise).unwrap();
+        let edited = edited_recipe(&recipe, &noise).unwrap();
+        let seed = edited.seed;
         assert_eq!(seed, 5);
         assert_eq!(
             edited.layers[1].perlin,

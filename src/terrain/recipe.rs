@@ -45,6 +45,12 @@ pub struct DiamondSquareLayer {
     pub roughness: f32,
 }
 
+impl Default for DiamondSquareLayer {
+    fn default() -> Self {
+        Self { roughness: half() }
+    }
+}
+
 /// Random paraboloids `R^2 - d^2` (negative parts ignored), summed, normalised, squared.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -63,6 +69,12 @@ pub struct HillsLayer {
     pub lakes: bool,
 }
 
+impl Default for HillsLayer {
+    fn default() -> Self {
+        Self { count: default_hills(), radius: default_radius(), centres: HillCentres::Inside, lakes: false }
+    }
+}
+
 /// Where the hill algorithm's centres fall (the variants the source analysed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -77,8 +89,20 @@ pub enum HillCentres {
 }
 
 impl HillCentres {
+    /// Every variant, in the panel's order.
+    pub const ALL: [HillCentres; 3] = [HillCentres::Inside, HillCentres::BeyondEdges, HillCentres::Island];
+
     fn is_inside(&self) -> bool {
         *self == HillCentres::Inside
+    }
+
+    /// Its name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            HillCentres::Inside => "inside",
+            HillCentres::BeyondEdges => "beyond_edges",
+            HillCentres::Island => "island",
+        }
     }
 }
 
@@ -122,6 +146,20 @@ pub enum Op {
 }
 
 impl Op {
+    /// Every operation, in the panel's order.
+    pub const ALL: [Op; 5] = [Op::Add, Op::Subtract, Op::Multiply, Op::Min, Op::Max];
+
+    /// Its name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Op::Add => "add",
+            Op::Subtract => "subtract",
+            Op::Multiply => "multiply",
+            Op::Min => "min",
+            Op::Max => "max",
+        }
+    }
+
     /// `a` combined with `b` by this operation.
     pub fn apply(self, a: f32, b: f32) -> f32 {
         match self {
@@ -157,6 +195,40 @@ pub enum Function {
 }
 
 impl Function {
+    /// Every function's name in scene files, in the panel's order.
+    pub const NAMES: [&'static str; 8] =
+        ["normalize", "invert", "abs", "power", "terraces", "clamp", "scale", "offset"];
+
+    /// The function of that name with its numbers at their starting values (a square, four
+    /// terraces, `[0, 1]`, a scale of 1, an offset of 0).
+    pub fn named(name: &str) -> Option<Function> {
+        Some(match name {
+            "normalize" => Function::Normalize,
+            "invert" => Function::Invert,
+            "abs" => Function::Abs,
+            "power" => Function::Power(2.0),
+            "terraces" => Function::Terraces(4),
+            "clamp" => Function::Clamp([0.0, 1.0]),
+            "scale" => Function::Scale(1.0),
+            "offset" => Function::Offset(0.0),
+            _ => return None,
+        })
+    }
+
+    /// Its name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Function::Normalize => "normalize",
+            Function::Invert => "invert",
+            Function::Abs => "abs",
+            Function::Power(_) => "power",
+            Function::Terraces(_) => "terraces",
+            Function::Clamp(_) => "clamp",
+            Function::Scale(_) => "scale",
+            Function::Offset(_) => "offset",
+        }
+    }
+
     /// Applies the function to every height of `map`.
     pub fn apply(self, map: &mut Heightmap) {
         match self {
@@ -473,4 +545,34 @@ fn check_hills(h: HillsLayer, width: u32, height: u32) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_panels_names_are_the_scene_files() {
+        for name in Function::NAMES {
+            let function = Function::named(name).unwrap();
+            assert_eq!(function.name(), name);
+            function.check().unwrap();
+            let written = serde_yaml::to_string(
+                &serde_yaml::with::singleton_map_recursive::serialize(&vec![function], serde_yaml::value::Serializer)
+                    .unwrap(),
+            )
+            .unwrap();
+            assert!(written.trim_start_matches("- ").starts_with(name), "{written}");
+        }
+        assert_eq!(Function::named("sqrt"), None);
+        for op in Op::ALL {
+            assert_eq!(serde_yaml::to_string(&op).unwrap().trim(), op.name());
+        }
+        for centres in HillCentres::ALL {
+            assert_eq!(serde_yaml::to_string(&centres).unwrap().trim(), centres.name());
+        }
+        // A generator's defaults are the file's: an empty entry reads as them.
+        assert_eq!(serde_yaml::from_str::<HillsLayer>("{}").unwrap(), HillsLayer::default());
+        assert_eq!(serde_yaml::from_str::<DiamondSquareLayer>("{}").unwrap(), DiamondSquareLayer::default());
+    }
 }

@@ -148,3 +148,54 @@ fn a_heightmap_image_is_the_map_and_a_missing_one_is_an_error() {
     let error = run_headless(&options(missing)).err().unwrap().to_string();
     assert!(error.contains("none.png") && error.contains("cannot read"), "{error}");
 }
+
+#[test]
+fn the_whole_recipe_changed_in_the_panel_makes_the_map_again_and_is_saved() {
+    use canopy::terrain::TerrainBody;
+    use canopy::terrain::recipe::{Function, HillsLayer, Layer, Op};
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("terrain.yaml");
+    let text = "entities:\n  - name: land\n    terrain:\n      height: { size: [64, 64], seed: 7, layers: \
+                [{ perlin: { scale: 16 } }, { perlin: { scale: 4, octaves: 2 }, weight: 0.2 }] }\n      \
+                section: { origin: [0, 0], size: [32, 32] }\n";
+    std::fs::write(&scene, text).unwrap();
+    let mut app = small_app(&scene);
+    let world = app.world_mut();
+    let mut bodies = world.query::<&mut TerrainBody>();
+    let mut recipe = bodies.single(world).unwrap().recipe.clone().unwrap();
+    recipe.seed = 7;
+    // Another size, a hill layer moved to the front, the last layer's functions and the map's own.
+    recipe.size = [96, 80];
+    let hills = Layer { hills: Some(HillsLayer { count: 30, ..HillsLayer::default() }), ..Layer::default() };
+    recipe.layers.insert(0, hills);
+    recipe.layers[1].op = Op::Max;
+    recipe.layers.last_mut().unwrap().apply.push(Function::Terraces(6));
+    recipe.apply = vec![Function::Normalize, Function::Power(1.5)];
+    // A recipe that fails the file's checks changes nothing and says why.
+    let mut wrong = recipe.clone();
+    wrong.layers[0].hills.as_mut().unwrap().radius = [40.0, 4.0];
+    bodies.single_mut(world).unwrap().remake(wrong);
+    let message = bodies.single(world).unwrap().message.clone().unwrap_or_default();
+    assert!(message.starts_with("layers[0].hills"), "{message}");
+    bodies.single_mut(world).unwrap().remake(recipe.clone());
+    for _ in 0..5 {
+        app.update();
+    }
+    let world = app.world_mut();
+    let body = world.query::<&TerrainBody>().single(world).unwrap();
+    assert_eq!((body.map.width(), body.map.height()), (96, 80), "{:?}", body.message);
+    assert_eq!(body.recipe.as_ref(), Some(&recipe));
+    assert_eq!(*body.map, recipe.generate(7).unwrap(), "off the main thread, the same map");
+    canopy::scene::save_live_scene(app.world_mut()).unwrap();
+    // The saved scene reads and checks, and holds the recipe as made.
+    if let Err(error) = canopy::app::entity_kinds().load(&scene) {
+        panic!("{error}");
+    }
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(text.contains("terraces: 6") && text.contains("op: max"), "{text}");
+    let saved: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    let height = &saved["entities"][0]["terrain"]["height"];
+    assert_eq!(height["size"], serde_yaml::to_value([96, 80]).unwrap());
+    assert_eq!(height["layers"][0]["hills"]["count"], 30);
+    assert_eq!(height["seed"], 7);
+}
