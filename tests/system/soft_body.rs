@@ -201,7 +201,8 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
     let (_, body) = torso(world);
     assert_eq!((body.bench.models().len(), body.bench.shown()), (1, 1), "{:?}", body.message);
     let children: Vec<Entity> = world.get::<Children>(torso_entity).unwrap().iter().collect();
-    // The drawn parts' vertex counts: the marks' balls, and the original beside or nothing.
+    // The drawn parts' vertex counts: the marks' balls, the measured points' (none), and the
+    // original beside or nothing.
     let parts = |world: &World| {
         let mut counts: Vec<usize> =
             children.iter().map(|&c| world.get::<RasterMesh>(c).unwrap().mesh.positions.len()).collect();
@@ -209,11 +210,11 @@ fn clicks_mark_the_vertices_under_them_and_the_region_is_shown_compared_and_save
         counts
     };
     let balls = 4 * canopy::raster::MeshData::sphere(6, 10).positions.len();
-    assert_eq!(parts(world), [0, balls], "the model alone, with the marks");
+    assert_eq!(parts(world), [0, 0, balls], "the model alone, with the marks");
     tap(&mut app, KeyCode::KeyC);
     tap(&mut app, KeyCode::KeyC);
     let world = app.world_mut();
-    assert_eq!(parts(world), [balls, 64 * 128], "the original stands beside the model");
+    assert_eq!(parts(world), [0, balls, 64 * 128], "the original stands beside the model");
 
     // The model saved, read back: the whole surface with the shrunk region.
     let (_, body) = torso(world);
