@@ -118,19 +118,18 @@ fn measure(ui: &mut egui::Ui, body: &SoftBody, action: &mut Option<SoftBodyActio
     let distances = body.bench.distances(body.bench.shown());
     let text = match (body.bench.measured().len(), distances) {
         (_, Some(distances)) => format!(
-            "between the two points: {} along the surface, {:.1} mm straight",
+            "{} along the surface, {:.1} mm straight",
             distances.along_m.map_or("no way".to_string(), |m| format!("{:.1} mm", m * 1e3)),
             distances.straight_m * 1e3
         ),
         (1, None) => "one point measured from: click the second".to_string(),
         _ => "no points measured".to_string(),
     };
-    ui.horizontal(|ui| {
-        ui.label(text);
-        if ui.add_enabled(!body.bench.measured().is_empty(), egui::Button::new("Clear")).clicked() {
-            *action = Some(SoftBodyAction::ClearMeasure);
-        }
-    });
+    // On a line of its own, so that it wraps rather than widens the panel.
+    ui.label(text);
+    if ui.add_enabled(!body.bench.measured().is_empty(), egui::Button::new("Clear measure")).clicked() {
+        *action = Some(SoftBodyAction::ClearMeasure);
+    }
 }
 
 /// The surface's counts and what reading its file found.
