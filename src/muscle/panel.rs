@@ -95,6 +95,9 @@ pub fn muscle_section(ui: &mut egui::Ui, world: &mut World, entity: Entity) {
 
     ui.label("radii by node: model (lines) and real biceps (dots)");
     Plot::new("muscle-radii")
+        // The wheel scrolls the panel, not the plot.
+        .allow_scroll(false)
+        .allow_zoom(false)
         .legend(Legend::default().position(egui_plot::Corner::LeftTop))
         .height(180.0)
         .x_axis_label("node")
