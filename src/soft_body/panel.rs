@@ -115,8 +115,7 @@ fn measure(ui: &mut egui::Ui, body: &SoftBody, action: &mut Option<SoftBodyActio
             }
         }
     });
-    let distances = body.bench.distances(body.bench.shown());
-    let text = match (body.bench.measured().len(), distances) {
+    let text = match (body.bench.measured().len(), body.distances) {
         (_, Some(distances)) => format!(
             "{} along the surface, {:.1} mm straight",
             distances.along_m.map_or("no way".to_string(), |m| format!("{:.1} mm", m * 1e3)),

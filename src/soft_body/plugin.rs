@@ -5,6 +5,7 @@
 use super::def::{DecodedMesh, SoftBodyBuilt, SoftBodyDef};
 use super::deform::{Deformer, Method, Settings, Variant};
 use super::draw::{marker_mesh, region_tints, shift_tints, surface_mesh};
+use super::measure::Distances;
 use super::region::{Mark, RegionError};
 use super::workbench::{ShrinkError, ShrinkJob, Shrunk, Workbench};
 use crate::foundation::dump::{DumpState, RegisterDump};
@@ -111,6 +112,9 @@ pub struct SoftBody {
     pub shrinking: bool,
     /// What a click on the surface does.
     pub tool: Tool,
+    /// The measured points' distances on the surface shown, once two are measured: found when
+    /// the points or the surface shown change, not every frame.
+    pub distances: Option<Distances>,
     /// The triangles of a surface for picking, and which surface (0 the original).
     picking: (Arc<SurfaceBvh>, usize),
 }
@@ -128,6 +132,7 @@ impl SoftBody {
             message: None,
             shrinking: false,
             tool: Tool::Outline,
+            distances: None,
             picking,
         }
     }
@@ -186,14 +191,15 @@ impl SoftBody {
         }
     }
 
-    /// The picking hierarchy and the region again for the surface shown, after the marks or
-    /// the surface shown changed. Models never change once made: the hierarchy is stale only
-    /// when another is shown.
+    /// The picking hierarchy, the region and the measured distances again for the surface
+    /// shown, after the marks, the measured points or the surface shown changed. Models never
+    /// change once made: the hierarchy is stale only when another is shown.
     fn follow_shown(&mut self) {
         if self.picking.1 != self.bench.shown() {
             let bvh = SurfaceBvh::new(self.bench.shown_positions(), &self.bench.original().triangles);
             self.picking = (Arc::new(bvh), self.bench.shown());
         }
+        self.distances = self.bench.distances(self.bench.shown());
         self.region = self.bench.region().map(|region| RegionShown {
             inside: region.source.iter().zip(&region.surface.movable).filter(|(_, m)| **m).map(|(&v, _)| v).collect(),
             outline: region.outline,
@@ -378,11 +384,7 @@ impl DumpState for SoftBody {
             .collect();
         out.insert("models".into(), json!(models));
         out.insert("shown".into(), json!(self.bench.shown()));
-        let shown = self.bench.shown();
-        out.insert(
-            "measure".into(),
-            json!({ "vertices": self.bench.measured(), "distances": self.bench.distances(shown) }),
-        );
+        out.insert("measure".into(), json!({ "vertices": self.bench.measured(), "distances": self.distances }));
         out.insert("message".into(), json!(self.message));
         out.insert("shrinking".into(), json!(self.shrinking));
     }
