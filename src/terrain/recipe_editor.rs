@@ -2,7 +2,7 @@
 //! recipe (added, removed, moved; its generator and all of its parameters, its operation,
 //! weight and functions) and the recipe's own functions. Edits go to a draft; each draft that
 //! passes the scene file's checks makes the map again off the main thread, and one that does
-//! not says why and waits for the next edit.
+//! not says why and waits for the next edit. Rows wrap, so that the panel keeps its width.
 
 use super::heightmap::MAX_SIDE;
 use super::noise::MAX_OCTAVES;
@@ -24,7 +24,7 @@ pub struct GeneratorDraft {
 /// Draws the editor of `draft`; true when something changed.
 pub fn edit_recipe(ui: &mut egui::Ui, draft: &mut Recipe) -> bool {
     let mut changed = false;
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.label("size");
         changed |= ui.add(egui::DragValue::new(&mut draft.size[0]).range(1..=MAX_SIDE)).changed();
         ui.label("x");
@@ -37,7 +37,7 @@ pub fn edit_recipe(ui: &mut egui::Ui, draft: &mut Recipe) -> bool {
     for (index, layer) in draft.layers.iter_mut().enumerate() {
         ui.push_id(("layer", index), |ui| {
             ui.group(|ui| {
-                ui.horizontal(|ui| {
+                ui.horizontal_wrapped(|ui| {
                     ui.strong(format!("layer {}", index + 1));
                     changed |= generator_choice(ui, layer);
                     if ui.add_enabled(index > 0, egui::Button::new("up")).clicked() {
@@ -51,7 +51,7 @@ pub fn edit_recipe(ui: &mut egui::Ui, draft: &mut Recipe) -> bool {
                     }
                 });
                 changed |= generator_parameters(ui, layer);
-                ui.horizontal(|ui| {
+                ui.horizontal_wrapped(|ui| {
                     if index > 0 {
                         ui.label("joined by");
                         changed |= op_choice(ui, &mut layer.op);
