@@ -14,7 +14,7 @@ use crate::calibrate::homography;
 use crate::detect::Marker;
 use crate::dictionary::Dictionary;
 use crate::gray::Gray;
-use crate::grid::{ids_fit, marker_white};
+use crate::grid::{ids_fit, marker_cells, marker_white, print_board};
 use crate::saddle;
 use bevy_math::{DMat3, DVec2, DVec3};
 
@@ -143,40 +143,28 @@ impl CharucoBoard {
     /// `margin_m` round it; `None` if the image would be empty or larger than 16,384 pixels a
     /// side.
     pub fn image(&self, dictionary: &Dictionary, pixels_per_metre: f64, margin_m: f64) -> Option<Gray> {
-        let extent = (self.size_m() + DVec2::splat(2.0 * margin_m)) * pixels_per_metre;
-        if !(extent.x >= 1.0 && extent.y >= 1.0 && extent.max_element() <= 16_384.0) {
-            return None;
-        }
-        let (width, height) = (extent.x.round() as u32, extent.y.round() as u32);
-        let mut image = Gray::filled(width, height, 255);
         let indices = self.marker_indices();
-        let cells: Vec<Vec<bool>> =
-            (0..self.marker_count()).map(|i| dictionary.cells_of(self.first_id + i).unwrap_or_default()).collect();
+        let cells = marker_cells(dictionary, self.first_id, self.marker_count());
         let inset = (self.square_m - self.marker_m) * 0.5;
-        for y in 0..height {
-            for x in 0..width {
-                let p = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5) / pixels_per_metre - DVec2::splat(margin_m);
-                let square = (p / self.square_m).floor();
-                if square.x < 0.0
-                    || square.y < 0.0
-                    || square.x >= f64::from(self.squares[0])
-                    || square.y >= f64::from(self.squares[1])
-                {
-                    continue;
-                }
-                let (sx, sy) = (square.x as u32, square.y as u32);
-                let white = match indices[(sy * self.squares[0] + sx) as usize] {
-                    None => false,
-                    Some(marker) => {
-                        let within = (p - square * self.square_m - DVec2::splat(inset)) / self.marker_m;
-                        let in_marker = within.min_element() >= 0.0 && within.max_element() < 1.0;
-                        !in_marker || marker_white(&cells[marker as usize], dictionary.cells, within)
-                    }
-                };
-                image.pixels[(y * width + x) as usize] = if white { 255 } else { 0 };
+        print_board(self.size_m(), pixels_per_metre, margin_m, |p| {
+            let square = (p / self.square_m).floor();
+            if square.x < 0.0
+                || square.y < 0.0
+                || square.x >= f64::from(self.squares[0])
+                || square.y >= f64::from(self.squares[1])
+            {
+                return None;
             }
-        }
-        Some(image)
+            let (sx, sy) = (square.x as u32, square.y as u32);
+            Some(match indices[(sy * self.squares[0] + sx) as usize] {
+                None => false,
+                Some(marker) => {
+                    let within = (p - square * self.square_m - DVec2::splat(inset)) / self.marker_m;
+                    let in_marker = within.min_element() >= 0.0 && within.max_element() < 1.0;
+                    !in_marker || marker_white(&cells[marker as usize], dictionary.cells, within)
+                }
+            })
+        })
     }
 
     /// The chessboard corners between the board's `markers` found in `image`, each placed to

@@ -70,39 +70,54 @@ impl GridBoard {
     /// `margin_m` round it; `None` if the image would be empty or larger than 16,384 pixels a
     /// side.
     pub fn image(&self, dictionary: &Dictionary, pixels_per_metre: f64, margin_m: f64) -> Option<Gray> {
-        let extent = (self.size_m() + DVec2::splat(2.0 * margin_m)) * pixels_per_metre;
-        if !(extent.x >= 1.0 && extent.y >= 1.0 && extent.max_element() <= 16_384.0) {
-            return None;
-        }
-        let (width, height) = (extent.x.round() as u32, extent.y.round() as u32);
-        let mut image = Gray::filled(width, height, 255);
-        let cells: Vec<Vec<bool>> = (0..self.markers[0] * self.markers[1])
-            .map(|i| dictionary.cells_of(self.first_id + i).unwrap_or_default())
-            .collect();
-        for y in 0..height {
-            for x in 0..width {
-                // The board point at the pixel's centre.
-                let p = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5) / pixels_per_metre - DVec2::splat(margin_m);
-                let pitch = self.marker_m + self.separation_m;
-                let (column, row) = ((p.x / pitch).floor(), (p.y / pitch).floor());
-                if column < 0.0
-                    || row < 0.0
-                    || column >= f64::from(self.markers[0])
-                    || row >= f64::from(self.markers[1])
-                {
-                    continue;
-                }
-                let within = (p - DVec2::new(column, row) * pitch) / self.marker_m;
-                if within.x >= 1.0 || within.y >= 1.0 {
-                    continue; // in the gap between markers
-                }
-                let marker = &cells[(row as u32 * self.markers[0] + column as u32) as usize];
-                let white = marker_white(marker, dictionary.cells, within);
+        let cells = marker_cells(dictionary, self.first_id, self.markers[0] * self.markers[1]);
+        let pitch = self.marker_m + self.separation_m;
+        print_board(self.size_m(), pixels_per_metre, margin_m, |p| {
+            let (column, row) = ((p.x / pitch).floor(), (p.y / pitch).floor());
+            if column < 0.0 || row < 0.0 || column >= f64::from(self.markers[0]) || row >= f64::from(self.markers[1]) {
+                return None;
+            }
+            let within = (p - DVec2::new(column, row) * pitch) / self.marker_m;
+            if within.x >= 1.0 || within.y >= 1.0 {
+                return None; // in the gap between markers
+            }
+            let marker = &cells[(row as u32 * self.markers[0] + column as u32) as usize];
+            Some(marker_white(marker, dictionary.cells, within))
+        })
+    }
+}
+
+/// A board of `size_m` printed at `pixels_per_metre` with a white margin of `margin_m` round
+/// it: each pixel black or white as `shade` says of the board point at its centre (metres
+/// from the board's top-left corner; `None` leaves it white); `None` if the image would be
+/// empty or larger than 16,384 pixels a side.
+pub(crate) fn print_board(
+    size_m: DVec2,
+    pixels_per_metre: f64,
+    margin_m: f64,
+    shade: impl Fn(DVec2) -> Option<bool>,
+) -> Option<Gray> {
+    let extent = (size_m + DVec2::splat(2.0 * margin_m)) * pixels_per_metre;
+    if !(extent.x >= 1.0 && extent.y >= 1.0 && extent.max_element() <= 16_384.0) {
+        return None;
+    }
+    let (width, height) = (extent.x.round() as u32, extent.y.round() as u32);
+    let mut image = Gray::filled(width, height, 255);
+    for y in 0..height {
+        for x in 0..width {
+            let p = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5) / pixels_per_metre - DVec2::splat(margin_m);
+            if let Some(white) = shade(p) {
                 image.pixels[(y * width + x) as usize] = if white { 255 } else { 0 };
             }
         }
-        Some(image)
     }
+    Some(image)
+}
+
+/// The inner cells of `count` markers from id `first_id` (empty for an id the dictionary
+/// does not have).
+pub(crate) fn marker_cells(dictionary: &Dictionary, first_id: u32, count: u32) -> Vec<Vec<bool>> {
+    (0..count).map(|i| dictionary.cells_of(first_id + i).unwrap_or_default()).collect()
 }
 
 /// Whether `count` markers from id `first_id` are all in `dictionary`, or what is wrong.
