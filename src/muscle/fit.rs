@@ -16,13 +16,11 @@
 use super::carcass::Carcass;
 use super::comparison::{MEASURED_NODES, REAL_BICEPS_RADII, model_radii};
 use super::model::Muscle;
-use canopy_vision::linear::solve;
+use canopy_vision::least_squares::{Settings, minimise};
 
-/// Levenberg-Marquardt steps at most.
-const MAX_STEPS: usize = 200;
-
-/// The fit stops when a step lowers the squared error by less than this share.
-const CONVERGED: f64 = 1e-12;
+/// How the multipliers are stepped: Levenberg-Marquardt's steps at most, and each central
+/// difference a millionth of its multiplier (of 1 for a multiplier below that).
+const SETTINGS: Settings = Settings { max_steps: 200, step_rate: 1e-6, least_step: 1.0 };
 
 /// Multipliers fitted to the measurements, and how near they bring the model.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,8 +34,6 @@ pub struct GrowthFit {
     pub rms_before: f64,
     /// The same with the fitted multipliers.
     pub rms_after: f64,
-    /// Levenberg-Marquardt steps taken.
-    pub steps: usize,
 }
 
 impl GrowthFit {
@@ -58,8 +54,9 @@ fn residuals(model: &Muscle, carcass: &Carcass) -> Option<Vec<f64>> {
     Some(out)
 }
 
-fn squared(residuals: &[f64]) -> f64 {
-    residuals.iter().map(|r| r * r).sum()
+/// The root-mean-square of `residuals`.
+fn rms(residuals: &[f64]) -> f64 {
+    (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt()
 }
 
 /// The multipliers of a model laid out as the measurements are (eleven nodes) fitted to
@@ -69,96 +66,41 @@ pub fn fit_growth(model: &Muscle, carcass: &Carcass) -> Option<GrowthFit> {
     if model.nodes() != MEASURED_NODES + 2 {
         return None;
     }
-    let with = |free: &[f64]| -> Option<Muscle> {
-        let mut mults = model.mults().to_vec();
+    let configured = model.mults().to_vec();
+    // The measured nodes' multipliers in, the whole model's out: the ends keep theirs.
+    let with = |free: &[f64; MEASURED_NODES]| {
+        let mut mults = configured.clone();
         mults[1..=MEASURED_NODES].copy_from_slice(free);
-        model.with_mults(mults).ok()
+        mults
     };
-    let evaluate = |free: &[f64]| with(free).and_then(|candidate| residuals(&candidate, carcass));
-    let mut free = model.mults()[1..=MEASURED_NODES].to_vec();
-    let size = free.iter().map(|m| m * m).sum::<f64>().sqrt();
-    let mut current = evaluate(&free)?;
-    let rms = |residuals: &[f64]| (squared(residuals) / residuals.len() as f64).sqrt();
-    let rms_before = rms(&current);
+    let evaluate = |free: &[f64; MEASURED_NODES]| {
+        model.with_mults(with(free)).ok().and_then(|candidate| residuals(&candidate, carcass))
+    };
+    let start: [f64; MEASURED_NODES] = std::array::from_fn(|i| configured[i + 1]);
+    let rms_before = rms(&evaluate(&start)?);
+    let size = start.iter().map(|m| m * m).sum::<f64>().sqrt();
     if size == 0.0 {
         // No node grows: there are no proportions to fit.
-        let mults = model.mults().to_vec();
-        return Some(GrowthFit { configured: mults.clone(), mults, rms_before, rms_after: rms_before, steps: 0 });
+        return Some(GrowthFit { mults: configured.clone(), configured, rms_before, rms_after: rms_before });
     }
-    let mut damping = 1e-3;
-    let mut steps = 0;
-    while steps < MAX_STEPS {
-        steps += 1;
-        let jacobian = jacobian(&free, &current, size * 1e-6, &evaluate);
-        let n = free.len();
-        let mut normal = vec![vec![0.0; n]; n];
-        let mut gradient = vec![0.0; n];
-        for (k, residual) in current.iter().enumerate() {
-            for i in 0..n {
-                gradient[i] -= jacobian[i][k] * residual;
-                for j in 0..n {
-                    normal[i][j] += jacobian[i][k] * jacobian[j][k];
-                }
-            }
-        }
-        let mut improved = None;
-        while damping < 1e12 {
-            let mut damped = normal.clone();
-            for (i, row) in damped.iter_mut().enumerate() {
-                // Marquardt's scaling, with a floor for the direction that changes nothing.
-                row[i] += damping * (row[i] + 1e-9);
-            }
-            let trial = solve(&mut damped, &mut gradient.clone(), 1e-300).map(|step| {
-                let moved: Vec<f64> = free.iter().zip(&step).map(|(m, s)| m + s).collect();
-                let norm = moved.iter().map(|m| m * m).sum::<f64>().sqrt();
-                moved.iter().map(|m| m * size / norm).collect::<Vec<f64>>()
-            });
-            if let Some(trial) = trial
-                && let Some(residuals) = evaluate(&trial)
-                && squared(&residuals) < squared(&current)
-            {
-                improved = Some((trial, residuals));
-                damping = (damping / 3.0).max(1e-12);
-                break;
-            }
-            damping *= 4.0;
-        }
-        let Some((trial, residuals)) = improved else { break };
-        let gain = (squared(&current) - squared(&residuals)) / squared(&current).max(f64::MIN_POSITIVE);
-        (free, current) = (trial, residuals);
-        if gain < CONVERGED {
-            break;
-        }
-    }
-    let mut mults = model.mults().to_vec();
-    mults[1..=MEASURED_NODES].copy_from_slice(&free);
-    Some(GrowthFit { configured: model.mults().to_vec(), mults, rms_before, rms_after: rms(&current), steps })
-}
-
-/// Each multiplier's column of residual derivatives, by central differences where both sides
-/// are models that reach every flexion, else by the side that is.
-fn jacobian(free: &[f64], current: &[f64], step: f64, evaluate: &impl Fn(&[f64]) -> Option<Vec<f64>>) -> Vec<Vec<f64>> {
-    (0..free.len())
-        .map(|i| {
-            let moved = |by: f64| {
-                let mut moved = free.to_vec();
-                moved[i] += by;
-                evaluate(&moved)
-            };
-            match (moved(step), moved(-step)) {
-                (Some(up), Some(down)) => up.iter().zip(&down).map(|(u, d)| (u - d) / (2.0 * step)).collect(),
-                (Some(up), None) => up.iter().zip(current).map(|(u, c)| (u - c) / step).collect(),
-                (None, Some(down)) => current.iter().zip(&down).map(|(c, d)| (c - d) / step).collect(),
-                (None, None) => vec![0.0; current.len()],
-            }
-        })
-        .collect()
+    // Only the proportions count: every candidate is brought back to the model's own size.
+    let resize = |free: [f64; MEASURED_NODES]| {
+        let norm = free.iter().map(|m| m * m).sum::<f64>().sqrt();
+        free.map(|m| m * size / norm)
+    };
+    let free = minimise(start, evaluate, resize, SETTINGS)?;
+    let rms_after = rms(&evaluate(&free)?);
+    Some(GrowthFit { mults: with(&free), configured, rms_before, rms_after })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::muscle::comparison::tests::real_config;
+
+    fn squared(residuals: &[f64]) -> f64 {
+        residuals.iter().map(|r| r * r).sum()
+    }
 
     #[test]
     fn the_fit_keeps_the_volume_and_comes_nearer_the_real_biceps() {
@@ -170,7 +112,7 @@ mod tests {
         let fitted = model.with_mults(fit.mults.clone()).unwrap();
         // The figures are the fitted model's own.
         let residuals = residuals(&fitted, &carcass).unwrap();
-        assert!((((squared(&residuals) / 36.0).sqrt()) - fit.rms_after).abs() < 1e-12);
+        assert!((rms(&residuals) - fit.rms_after).abs() < 1e-12 && residuals.len() == 36);
         for angle in [0.0f64, 30.0, 60.0, 90.0] {
             let mut flexed = fitted.clone();
             flexed.set_length(carcass.length_from_flexion(angle.to_radians()).value).unwrap();

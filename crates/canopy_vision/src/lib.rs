@@ -18,7 +18,7 @@
 //! | [`steady`] | poses followed from frame to frame without flipping between the two solutions |
 //! | [`synth`] | printable markers and synthetic camera frames with known poses |
 //! | [`sweep`] | harder frames swept one condition at a time: detection rate and pose error at each step |
-//! | [`linear`] | small dense linear systems solved by elimination |
+//! | [`least_squares`] | Levenberg-Marquardt on small problems, the Jacobian by central differences |
 //! | [`evaluate`] | the detector and pose measured against a synthetic sequence's known answers |
 //!
 //! Pixel coordinates are OpenCV's throughout: pixel `(x, y)`'s centre is at `(x, y)`.
@@ -35,7 +35,8 @@ pub mod evaluate;
 pub mod fit;
 pub mod gray;
 pub mod grid;
-pub mod linear;
+pub mod least_squares;
+mod linear;
 pub mod pose;
 pub mod saddle;
 pub mod steady;

@@ -1,10 +1,9 @@
-//! Small dense linear systems, as the pose and the calibration solve them (and, outside
-//! tracking, the muscle's fitted growth).
+//! Small dense linear systems, as the pose and the calibration solve them.
 
 /// Solves the square system `a x = b` by Gaussian elimination with partial pivoting and back
 /// substitution (`a` and `b` are overwritten); `None` when a pivot is smaller than `tiny` in
 /// magnitude (the system is singular, as far as that says).
-pub fn solve<R: AsRef<[f64]> + AsMut<[f64]>>(a: &mut [R], b: &mut [f64], tiny: f64) -> Option<Vec<f64>> {
+pub(crate) fn solve<R: AsRef<[f64]> + AsMut<[f64]>>(a: &mut [R], b: &mut [f64], tiny: f64) -> Option<Vec<f64>> {
     let n = b.len();
     for col in 0..n {
         let pivot = (col..n).max_by(|&i, &j| a[i].as_ref()[col].abs().total_cmp(&a[j].as_ref()[col].abs()))?;

@@ -8,6 +8,7 @@
 //! bottom-right, bottom-left as printed).
 
 use crate::camera::Intrinsics;
+use crate::least_squares::{Settings, minimise};
 use crate::linear::solve;
 use bevy_math::{DMat2, DMat3, DQuat, DVec2, DVec3};
 
@@ -197,58 +198,8 @@ pub(crate) fn refine(start: Pose, object: &[DVec3], pixels: &[DVec2], camera: &I
         }
         Some(out)
     };
-    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-    let mut x = pack(&start);
-    let Some(mut r) = residuals(&x) else { return start };
-    let mut lambda = 1e-3;
-    let mut jacobian = vec![[0.0; 6]; r.len()];
-    for _ in 0..50 {
-        // The Jacobian by central differences.
-        for k in 0..6 {
-            let step = 1e-7 * x[k].abs().max(1e-2);
-            let (mut plus, mut minus) = (x, x);
-            plus[k] += step;
-            minus[k] -= step;
-            let (Some(rp), Some(rm)) = (residuals(&plus), residuals(&minus)) else { return unpack(&x) };
-            for (row, (p, m)) in jacobian.iter_mut().zip(rp.iter().zip(&rm)) {
-                row[k] = (p - m) / (2.0 * step);
-            }
-        }
-        let mut jtj = [[0.0; 6]; 6];
-        let mut jtr = [0.0; 6];
-        for (row, residual) in jacobian.iter().zip(&r) {
-            for a in 0..6 {
-                jtr[a] += row[a] * residual;
-                for b in 0..6 {
-                    jtj[a][b] += row[a] * row[b];
-                }
-            }
-        }
-        let mut improved = false;
-        while lambda < 1e10 {
-            let mut system = jtj;
-            for (a, row) in system.iter_mut().enumerate() {
-                row[a] *= 1.0 + lambda;
-            }
-            let Some(delta) = solve(&mut system, &mut jtr.clone(), 1e-30) else { break };
-            let candidate: [f64; 6] = std::array::from_fn(|k| x[k] - delta[k]);
-            if let Some(rc) = residuals(&candidate)
-                && cost(&rc) < cost(&r)
-            {
-                let small = delta.iter().map(|d| d * d).sum::<f64>() < 1e-24;
-                x = candidate;
-                r = rc;
-                lambda = (lambda * 0.1).max(1e-12);
-                improved = !small;
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
-            break;
-        }
-    }
-    unpack(&x)
+    let settings = Settings { max_steps: 50, step_rate: 1e-7, least_step: 1e-2 };
+    minimise(pack(&start), residuals, |x| x, settings).map_or(start, |x| unpack(&x))
 }
 
 #[cfg(test)]
