@@ -95,15 +95,13 @@ impl<'a> Area<'a> {
         }
         Self { surface, triangles_of }
     }
+}
 
-    /// Triangle `t`'s share of the gradient at its corner `v`: `1/2 n x (c - b)` for the
-    /// counter-clockwise triangle `v b c` with unit normal `n`.
-    fn corner_gradient(&self, t: [u32; 3], v: usize, positions: &[Vec3]) -> Vec3 {
-        let n = triangle_cross(positions, t).normalize_or_zero();
-        let corner = t.iter().position(|&c| c as usize == v).unwrap_or(0);
-        let (b, c) = (t[(corner + 1) % 3] as usize, t[(corner + 2) % 3] as usize);
-        n.cross(positions[c] - positions[b]) * 0.5
-    }
+/// Triangle `t`'s share of the area's gradient at its `corner`-th corner: `1/2 n x (c - b)`
+/// for the counter-clockwise triangle `a b c` (`a` that corner) with unit normal `n`.
+fn corner_gradient(n: Vec3, t: [u32; 3], corner: usize, positions: &[Vec3]) -> Vec3 {
+    let (b, c) = (t[(corner + 1) % 3] as usize, t[(corner + 2) % 3] as usize);
+    n.cross(positions[c] - positions[b]) * 0.5
 }
 
 impl GlobalConstraint for Area<'_> {
@@ -114,8 +112,9 @@ impl GlobalConstraint for Area<'_> {
     fn gradient(&self, positions: &[Vec3]) -> Vec<Vec3> {
         let mut gradient = vec![Vec3::ZERO; positions.len()];
         for &t in &self.surface.triangles {
-            for v in t {
-                gradient[v as usize] += self.corner_gradient(t, v as usize, positions);
+            let n = triangle_cross(positions, t).normalize_or_zero();
+            for (corner, v) in t.into_iter().enumerate() {
+                gradient[v as usize] += corner_gradient(n, t, corner, positions);
             }
         }
         gradient
@@ -132,7 +131,11 @@ impl GlobalConstraint for Area<'_> {
     fn gradient_at(&self, v: usize, positions: &[Vec3]) -> Vec3 {
         self.triangles_of[v]
             .iter()
-            .map(|&t| self.corner_gradient(self.surface.triangles[t as usize], v, positions))
+            .map(|&t| {
+                let t = self.surface.triangles[t as usize];
+                let corner = t.iter().position(|&c| c as usize == v).unwrap_or(0);
+                corner_gradient(triangle_cross(positions, t).normalize_or_zero(), t, corner, positions)
+            })
             .sum()
     }
 }
