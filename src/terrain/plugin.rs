@@ -141,8 +141,8 @@ pub struct TerrainBody {
 #[derive(Debug)]
 struct PendingMap {
     task: Task<(Result<Heightmap, String>, Duration)>,
+    /// The recipe being made, its seed the one it is made with.
     recipe: Recipe,
-    seed: u64,
     frames_left: u32,
 }
 
@@ -391,13 +391,13 @@ impl TerrainBody {
 
     /// Starts generating `recipe` (checked, its seed not negative) on the async compute pool.
     fn start(&mut self, recipe: Recipe) {
-        let (job, seed) = (recipe.clone(), recipe.seed as u64);
+        let job = recipe.clone();
         let task = AsyncComputeTaskPool::get().spawn(async move {
             let started = Instant::now();
-            let map = job.generate(seed).map_err(|e| e.to_string());
+            let map = job.generate(job.seed as u64).map_err(|e| e.to_string());
             (map, started.elapsed())
         });
-        self.pending = Some(PendingMap { task, recipe, seed, frames_left: GENERATION_FRAMES });
+        self.pending = Some(PendingMap { task, recipe, frames_left: GENERATION_FRAMES });
         self.message = None;
     }
 }
@@ -418,13 +418,14 @@ fn regenerate(mut terrains: Query<(&mut TerrainParams, &mut TerrainBody)>) {
             body.generation_time = time;
             match result {
                 Ok(map) => {
-                    body.generated = noise_params(Some(&pending.recipe), Some(pending.seed));
+                    let seed = pending.recipe.seed as u64;
+                    body.generated = noise_params(Some(&pending.recipe), Some(seed));
                     if params.noise != body.generated {
                         params.noise = body.generated;
                     }
                     body.map = Arc::new(map);
                     body.recipe = Some(pending.recipe);
-                    body.seed = Some(pending.seed);
+                    body.seed = Some(seed);
                     body.shown = None;
                     body.regenerated = true;
                     body.message = None;
