@@ -11,6 +11,7 @@
 //! is taken, as Dijkstra's would. Along the edges alone a grid's diagonal comes out up to 8 %
 //! too long; across the triangles it does not.
 
+use super::surface::triangles_at;
 use bevy::math::{DVec2, Vec3};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -22,14 +23,7 @@ pub fn along_surface(positions: &[Vec3], triangles: &[[u32; 3]], from: u32, to: 
     if from >= positions.len() || to >= positions.len() {
         return None;
     }
-    let mut triangles_of = vec![Vec::new(); positions.len()];
-    for (t, triangle) in triangles.iter().enumerate() {
-        for &v in triangle {
-            if let Some(list) = triangles_of.get_mut(v as usize) {
-                list.push(t);
-            }
-        }
-    }
+    let triangles_of = triangles_at(positions.len(), triangles);
     let mut distance = vec![f64::INFINITY; positions.len()];
     let mut settled = vec![false; positions.len()];
     // Distances are never negative, so their bits order as they do.
@@ -45,7 +39,7 @@ pub fn along_surface(positions: &[Vec3], triangles: &[[u32; 3]], from: u32, to: 
             return Some(distance[v]);
         }
         for &t in &triangles_of[v] {
-            let triangle = triangles[t].map(|c| c as usize);
+            let triangle = triangles[t as usize].map(|c| c as usize);
             if triangle.iter().any(|&c| c >= positions.len()) {
                 continue;
             }

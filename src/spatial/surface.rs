@@ -149,6 +149,20 @@ impl Surface {
     }
 }
 
+/// The triangles at each of `vertices` vertices, by their index in `triangles` (a corner
+/// beyond the vertices is left out).
+pub fn triangles_at(vertices: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut at = vec![Vec::new(); vertices];
+    for (t, triangle) in triangles.iter().enumerate() {
+        for &v in triangle {
+            if let Some(list) = at.get_mut(v as usize) {
+                list.push(t as u32);
+            }
+        }
+    }
+    at
+}
+
 /// Twice the area vector of triangle `t` at `positions`: its normal times twice its area.
 pub fn triangle_cross(positions: &[Vec3], [a, b, c]: [u32; 3]) -> Vec3 {
     let [a, b, c] = [a, b, c].map(|v| positions[v as usize]);

@@ -16,7 +16,7 @@
 //!   step is small enough.)
 
 use super::relative;
-use crate::spatial::surface::{Surface, triangle_cross};
+use crate::spatial::surface::{Surface, triangle_cross, triangles_at};
 use bevy::math::Vec3;
 
 /// One of the source's step rules.
@@ -87,13 +87,7 @@ pub(super) struct Area<'a> {
 
 impl<'a> Area<'a> {
     pub(super) fn new(surface: &'a Surface) -> Self {
-        let mut triangles_of = vec![Vec::new(); surface.positions.len()];
-        for (t, triangle) in surface.triangles.iter().enumerate() {
-            for &v in triangle {
-                triangles_of[v as usize].push(t as u32);
-            }
-        }
-        Self { surface, triangles_of }
+        Self { surface, triangles_of: triangles_at(surface.positions.len(), &surface.triangles) }
     }
 }
 
